@@ -1,0 +1,3 @@
+from wheelsoil.cli import main
+
+raise SystemExit(main())
