@@ -1,0 +1,275 @@
+"""Wong's rigid-wheel model (paper Eqs. 1-10), vectorised over samples.
+
+Equations (paper numbering; the two printed typos fixed as in hardware.md):
+
+- (1)  theta1 = arccos(1 - z/r)  (computed as 2 asin(sqrt(z/2r)), same value)
+- (2)  sigma(theta) = (kc/b + kphi) z(theta)^n          [typo kc/(b+kphi) fixed]
+- (3)  z(theta) = r (cos theta - cos theta1)            [sign typo fixed]
+- (4)  tau = (c + sigma tan phi) (1 - exp(-j/K))
+- (5)  j(theta) = r [theta1 - theta - (1 - s)(sin theta1 - sin theta)]
+- (7)  W  = r b (int sigma cos + int tau sin)
+- (8)  Dp = r b (int tau cos - int sigma sin)
+- (9)  T  = r^2 b int tau
+- (10) z0 = [3 W / (sqrt(2r) (kc + b kphi) (3 - n))]^(2/(2n+1))
+  integrals over theta in [0, theta1] (exit angle theta2 = 0).
+
+Quadrature. sigma ~ (theta1 - theta)^n near the entrance angle, an endpoint
+singularity for n < 1 that limits plain Gauss-Legendre to ~1e-5 with 32
+points. We substitute theta1 - theta = theta1 u^3, dtheta = 3 theta1 u^2 du,
+u in [0, 1]: the integrand becomes smooth times u^(3n+2), and a fixed
+Gauss-Legendre rule in u (``QUAD_ORDER`` points) reaches < 1e-9 relative
+against scipy.integrate.quad on the built-in terrains (tests/test_model_wong.py).
+All trigonometric terms are formed from sin/cos of (theta1 - theta)/2 and
+theta1 by angle-sum identities, which avoids the cancellation in
+cos(theta) - cos(theta1) and sin(theta1) - sin(theta) near theta1.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+
+from .terrain import Terrain, Wheel
+
+__all__ = ["WheelForces", "wong_forces", "sinkage_eq10", "QUAD_ORDER", "SINKAGE_MODES"]
+
+#: Gauss-Legendre points in the substituted variable u.
+QUAD_ORDER = 24
+#: Exponent q of the substitution theta1 - theta = theta1 * u**q.
+_Q = 3
+_U, _WU = np.polynomial.legendre.leggauss(QUAD_ORDER)
+_U = 0.5 * (_U + 1.0)
+_WU = 0.5 * _WU
+#: d = theta1 * _UQ; the integral's weight per theta1 is _G = q u^(q-1) w.
+_UQ = _U**_Q
+_G = _Q * _U ** (_Q - 1) * _WU
+
+#: Samples per block (keeps the (block, QUAD_ORDER) temporaries in cache).
+_BLOCK = 2048
+
+SINKAGE_MODES = ("eq10", "balance")
+
+ZFn = Callable[[np.ndarray, np.ndarray], np.ndarray]
+NFn = Callable[[np.ndarray], np.ndarray]
+
+
+@dataclass(frozen=True)
+class WheelForces:
+    """Model output per sample, every field a float array of shape (N,).
+
+    ``sinkage_m`` z [m] (after any slip-sinkage transform), ``theta1_rad``
+    entrance angle [rad] (Eq. 1), ``load_model_n`` the model's vertical load
+    W [N] (Eq. 7), ``drawbar_pull_n`` Dp [N] (Eq. 8), ``torque_nm`` T [N m]
+    (Eq. 9).
+    """
+
+    sinkage_m: np.ndarray
+    theta1_rad: np.ndarray
+    load_model_n: np.ndarray
+    drawbar_pull_n: np.ndarray
+    torque_nm: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.sinkage_m)
+
+
+def _first_bad(mask: np.ndarray) -> tuple[int, int]:
+    idx = np.flatnonzero(mask)
+    return int(idx[0]), len(idx)
+
+
+def _check(mask: np.ndarray, name: str, values: np.ndarray, rule: str) -> None:
+    """Raise ValueError naming the first element where ``mask`` is True."""
+    if mask.any():
+        i, count = _first_bad(mask)
+        more = f" ({count} elements violate this)" if count > 1 else ""
+        raise ValueError(f"{name}[{i}] = {values[i]!r}: {rule}{more}")
+
+
+def _as_samples(load_n, slip) -> tuple[np.ndarray, np.ndarray]:
+    """Validate and broadcast load W [N] and slip s [-] to float arrays of shape (N,)."""
+    w = np.asarray(load_n, dtype=float)
+    s = np.asarray(slip, dtype=float)
+    try:
+        w, s = np.broadcast_arrays(w, s)
+    except ValueError:
+        raise ValueError(f"load_n shape {w.shape} and slip shape {s.shape} do not match") from None
+    if w.ndim > 1:
+        raise ValueError(f"load_n and slip must be 1-D arrays of samples, got shape {w.shape}")
+    w = np.atleast_1d(w).astype(float, copy=True)
+    s = np.atleast_1d(s).astype(float, copy=True)
+    _check(~np.isfinite(w), "load_n", w, "load W must be a finite number (NaN/inf given)")
+    _check(~np.isfinite(s), "slip", s, "slip s must be a finite number (NaN/inf given)")
+    _check(w <= 0, "load_n", w, "vertical load W must be > 0 N")
+    _check(s < 0, "slip", s, "slip s must be >= 0: skid (braking, s < 0) is outside this "
+           "driving-wheel model; filter those samples out")
+    _check(s >= 1, "slip", s, "slip s must be < 1")
+    return w, s
+
+
+def sinkage_eq10(terrain: Terrain, wheel: Wheel, load_n, n=None) -> np.ndarray:
+    """Static sinkage z0 [m] from paper Eq. (10), shape (N,) like ``load_n``.
+
+    z0 = [3 W / (sqrt(2r) (kc + b kphi) (3 - n))]^(2/(2n+1)); ``n`` (scalar or
+    (N,)) overrides the terrain's exponent (Ding's N, Eq. 13). No input
+    validation beyond what numpy does; ``wong_forces`` validates.
+    Source: paper Eq. (10); Wong, Theory of Ground Vehicles, Eq. 2.?? (Bekker).
+    """
+    n = terrain.n if n is None else n
+    r, b = wheel.radius, wheel.width
+    k = terrain.kc + b * terrain.kphi
+    return (3.0 * np.asarray(load_n, float) / (math.sqrt(2.0 * r) * k * (3.0 - n))) ** (2.0 / (2.0 * n + 1.0))
+
+
+def _integrals(terrain: Terrain, wheel: Wheel, z, s, n, load_only: bool = False):
+    """Eqs. (1)-(9) by substituted Gauss-Legendre quadrature; z, s, n of shape (N,).
+
+    Returns theta1 and W (Eq. 7), and unless ``load_only`` also Dp, T; all (N,).
+    """
+    r, b = wheel.radius, wheel.width
+    k = terrain.kc / b + terrain.kphi
+    c, tanphi, inv_k = terrain.c, math.tan(terrain.phi), 1.0 / terrain.K
+    size = len(z)
+    theta1 = 2.0 * np.arcsin(np.sqrt(z / (2.0 * r)))
+    w_out = np.empty(size)
+    dp_out = None if load_only else np.empty(size)
+    t_out = None if load_only else np.empty(size)
+    n = np.broadcast_to(np.asarray(n, dtype=float), (size,))
+    for lo in range(0, size, _BLOCK):
+        sl = slice(lo, lo + _BLOCK)
+        t1 = theta1[sl, None]
+        nn = n[sl, None]
+        s1 = np.sin(t1)
+        c1 = np.cos(t1)
+        half = (0.5 * t1) * _UQ  # (theta1 - theta)/2
+        sh = np.sin(half)
+        ch = np.cos(half)
+        sin_m = s1 * ch - c1 * sh  # sin((theta1 + theta)/2)
+        cos_m = c1 * ch + s1 * sh  # cos((theta1 + theta)/2)
+        # Eq. (3): z(theta) = r (cos theta - cos theta1) = 2 r sin(m) sin(d/2)
+        ztheta = (2.0 * r) * sin_m * sh
+        with np.errstate(divide="ignore"):
+            sigma = k * np.exp(nn * np.log(ztheta))  # Eq. (2)
+        # Eq. (5): j = r [(theta1 - theta) - (1 - s)(sin theta1 - sin theta)]
+        j = r * (2.0 * half - (1.0 - s[sl, None]) * (2.0 * cos_m * sh))
+        tau = (c + sigma * tanphi) * -np.expm1(-j * inv_k)  # Eq. (4)
+        # theta = theta1 - d with sin d = 2 sh ch, cos d = 1 - 2 sh^2
+        sin_d = 2.0 * sh * ch
+        cos_d = 1.0 - 2.0 * sh * sh
+        cos_t = c1 * cos_d + s1 * sin_d
+        sin_t = s1 * cos_d - c1 * sin_d
+        scale = t1[:, 0]
+        w_out[sl] = (r * b) * scale * ((sigma * cos_t + tau * sin_t) @ _G)  # Eq. (7)
+        if not load_only:
+            dp_out[sl] = (r * b) * scale * ((tau * cos_t - sigma * sin_t) @ _G)  # Eq. (8)
+            t_out[sl] = (r * r * b) * scale * (tau @ _G)  # Eq. (9)
+    return theta1, w_out, dp_out, t_out
+
+
+def _balance_sinkage(terrain, wheel, w, s, n, z_start) -> np.ndarray:
+    """z0 with Eq. (7)(z0, s) = W, per sample; safeguarded secant in log z vs log W.
+
+    Raises ValueError naming the first sample whose load exceeds what the
+    wheel can carry with sinkage < r.
+    """
+    r = wheel.radius
+    size = len(w)
+    n = np.broadcast_to(np.asarray(n, dtype=float), (size,)).copy()
+    x_hi = np.full(size, math.log(r * (1.0 - 1e-9)))
+    _, w_hi, _, _ = _integrals(terrain, wheel, np.exp(x_hi), s, n, load_only=True)
+    _check(w > w_hi, "load_n", w, "load too large: balance-mode sinkage would reach the wheel "
+           f"radius r = {r} m (theta1 >= 90 deg)")
+    log_w = np.log(w)
+    x_lo = np.full(size, -np.inf)
+    x = np.log(np.minimum(z_start, 0.9 * r))
+    slope = n + 0.5  # d log W / d log z of Eq. (10)
+    x_prev = g_prev = None
+    active = np.arange(size)
+    out = np.empty(size)
+    for _ in range(100):
+        _, wm, _, _ = _integrals(terrain, wheel, np.exp(x), s[active], n[active], load_only=True)
+        g = np.log(wm) - log_w[active]
+        done = np.abs(g) < 1e-13
+        if x_prev is not None:
+            dx = x - x_prev
+            ok = np.abs(dx) > 0
+            slope = np.where(ok, (g - g_prev) / np.where(ok, dx, 1.0), slope)
+            slope = np.where(slope > 1e-3, slope, n[active] + 0.5)
+        x_lo = np.where(g < 0, x, x_lo)
+        x_hi = np.where(g > 0, x, x_hi)
+        done |= (x_hi - x_lo) < 1e-15 * np.maximum(1.0, np.abs(x))
+        out[active[done]] = np.exp(x[done])
+        keep = ~done
+        if not keep.any():
+            return out
+        active, x, g, slope = active[keep], x[keep], g[keep], np.broadcast_to(slope, keep.shape)[keep]
+        x_lo, x_hi = x_lo[keep], x_hi[keep]
+        x_new = x - g / slope
+        outside = ~((x_new > x_lo) & (x_new < x_hi))
+        mid = np.where(np.isfinite(x_lo), 0.5 * (x_lo + x_hi), x_hi - 2.0)
+        x_prev, g_prev = x, g
+        x = np.where(outside, mid, x_new)
+    raise RuntimeError("balance-mode sinkage did not converge")  # pragma: no cover
+
+
+def wong_forces(
+    terrain: Terrain,
+    wheel: Wheel,
+    load_n,
+    slip,
+    *,
+    sinkage: str = "eq10",
+    z_fn: ZFn | None = None,
+    n_fn: NFn | None = None,
+) -> WheelForces:
+    """Wong's rigid-wheel forces for each sample (paper Eqs. 1-10).
+
+    Inputs: ``load_n`` W [N] and ``slip`` s [-], arrays of shape (N,) (scalars
+    broadcast). ``sinkage`` chooses the static sinkage z0:
+    ``"eq10"`` Eq. (10) (small-angle closed form, the paper's choice), or
+    ``"balance"`` solve Eq. (7)(z0, s) = W per sample (the exact vertical
+    balance at the sample's slip; Eq. (10) differs from it by several
+    percent for n < 0.8). ``n_fn(slip) -> N`` replaces the sinkage exponent in
+    both Eq. (2) and Eq. (10) (Ding, Eq. 13); ``z_fn(z0, slip) -> z`` maps the
+    static sinkage to the sinkage used in Eqs. (1)-(9) (Vasil'ev Eq. 11,
+    Lyasko Eq. 12). In balance mode the transform is applied to the balanced
+    z0, so the model's W equals the input W only without ``z_fn``.
+
+    Returns ``WheelForces`` with (N,) arrays: sinkage_m, theta1_rad,
+    load_model_n (Eq. 7), drawbar_pull_n (Eq. 8), torque_nm (Eq. 9).
+
+    Raises ``ValueError`` naming the element and the rule for: NaN/inf load
+    or slip, W <= 0, s < 0 (skid is not modelled), s >= 1, a sinkage exponent
+    outside (0, 3), kc/b + kphi <= 0, a sinkage < 0 or >= r (theta1 >= 90 deg),
+    an unknown ``sinkage`` mode.
+    """
+    if sinkage not in SINKAGE_MODES:
+        raise ValueError(f"sinkage mode must be one of {', '.join(SINKAGE_MODES)}, got {sinkage!r}")
+    w, s = _as_samples(load_n, slip)
+    r, b = wheel.radius, wheel.width
+    if terrain.kc / b + terrain.kphi <= 0:
+        raise ValueError(
+            f"terrain {terrain.name!r}: kc/b + kphi = {terrain.kc / b + terrain.kphi!r} must be > 0 "
+            f"for wheel width b = {b} m (Eq. 2)"
+        )
+    if n_fn is None:
+        n = np.full(len(w), terrain.n)
+    else:
+        n = np.broadcast_to(np.asarray(n_fn(s), dtype=float), w.shape).copy()
+        _check(~np.isfinite(n) | (n <= 0) | (n >= 3), "sinkage_exponent", n,
+               "sinkage exponent N must be in (0, 3) (Eqs. 2, 10)")
+    z0 = sinkage_eq10(terrain, wheel, w, n)
+    if sinkage == "balance":
+        z0 = _balance_sinkage(terrain, wheel, w, s, n, z0)
+    z = z0 if z_fn is None else np.broadcast_to(np.asarray(z_fn(z0, s), dtype=float), w.shape).copy()
+    _check(~np.isfinite(z), "sinkage_m", z, "sinkage is not finite")
+    _check(z < 0, "sinkage_m", z, "sinkage must be >= 0 m")
+    _check(z >= r, "sinkage_m", z, f"sinkage must be < wheel radius r = {r} m "
+           "(theta1 >= 90 deg is outside the model)")
+    theta1, w_model, dp, t = _integrals(terrain, wheel, z, s, n)
+    return WheelForces(
+        sinkage_m=z, theta1_rad=theta1, load_model_n=w_model, drawbar_pull_n=dp, torque_nm=t
+    )
