@@ -86,7 +86,7 @@ def _check(mask: np.ndarray, name: str, values: np.ndarray, rule: str) -> None:
     if mask.any():
         i, count = _first_bad(mask)
         more = f" ({count} elements violate this)" if count > 1 else ""
-        raise ValueError(f"{name}[{i}] = {values[i]!r}: {rule}{more}")
+        raise ValueError(f"{name}[{i}] = {float(values[i])!r}: {rule}{more}")
 
 
 def _as_samples(load_n, slip) -> tuple[np.ndarray, np.ndarray]:
@@ -273,3 +273,45 @@ def wong_forces(
     return WheelForces(
         sinkage_m=z, theta1_rad=theta1, load_model_n=w_model, drawbar_pull_n=dp, torque_nm=t
     )
+
+
+def wong_forces_quad(terrain: Terrain, wheel: Wheel, load_n, slip, *, sinkage_m=None, n=None) -> WheelForces:
+    """Reference: Eqs. (1)-(10) written literally, one ``scipy.integrate.quad`` per integral and sample.
+
+    Slow (about 1e3 samples/s); for tests and benchmarks only. ``sinkage_m``
+    (N,) overrides Eq. (10); ``n`` overrides the exponent. Same shapes and
+    output as ``wong_forces``; no input validation.
+    Source: paper Eqs. (1)-(10), typos fixed; scipy.integrate.quad (QUADPACK QAGS).
+    """
+    from scipy.integrate import quad
+
+    w = np.atleast_1d(np.asarray(load_n, dtype=float))
+    s_all = np.broadcast_to(np.atleast_1d(np.asarray(slip, dtype=float)), w.shape)
+    nn = terrain.n if n is None else n
+    n_all = np.broadcast_to(np.asarray(nn, dtype=float), w.shape)
+    r, b = wheel.radius, wheel.width
+    c, phi, K, kc, kphi = terrain.c, terrain.phi, terrain.K, terrain.kc, terrain.kphi
+    out = np.empty((5, len(w)))
+    for i in range(len(w)):
+        s, ni = float(s_all[i]), float(n_all[i])
+        if sinkage_m is None:  # Eq. (10)
+            z0 = (3 * w[i] / (math.sqrt(2 * r) * (kc + b * kphi) * (3 - ni))) ** (2 / (2 * ni + 1))
+        else:
+            z0 = float(np.broadcast_to(sinkage_m, w.shape)[i])
+        th1 = math.acos(1 - z0 / r)  # Eq. (1)
+
+        def sigma(th):  # Eqs. (2), (3)
+            return (kc / b + kphi) * max(r * (math.cos(th) - math.cos(th1)), 0.0) ** ni
+
+        def tau(th):  # Eqs. (4), (5)
+            j = r * (th1 - th - (1 - s) * (math.sin(th1) - math.sin(th)))
+            return (c + sigma(th) * math.tan(phi)) * (1 - math.exp(-j / K))
+
+        def integral(f):
+            return quad(f, 0.0, th1, epsabs=0.0, epsrel=1e-12, limit=200)[0]
+
+        w_m = r * b * (integral(lambda t: sigma(t) * math.cos(t)) + integral(lambda t: tau(t) * math.sin(t)))
+        dp = r * b * (integral(lambda t: tau(t) * math.cos(t)) - integral(lambda t: sigma(t) * math.sin(t)))
+        tq = r * r * b * integral(tau)
+        out[:, i] = (z0, th1, w_m, dp, tq)
+    return WheelForces(*out)
