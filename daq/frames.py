@@ -1,0 +1,198 @@
+"""Raw CAN frames as column arrays: :class:`FrameBatch`.
+
+A batch holds N frames of one bus as numpy columns, the unit in which
+recordings are written, read and handed to processing. Conversions to and from
+python-can's :class:`can.Message` live here too (import/export/replay use them);
+the hot paths (logger, reader) never build per-frame Python objects.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Iterable, Sequence
+
+import numpy as np
+
+#: Bits of :attr:`FrameBatch.flags` (see docs/mcap-layout.md).
+FLAG_EXTENDED = 0x01
+FLAG_REMOTE = 0x02
+FLAG_ERROR = 0x04
+FLAG_FD = 0x08
+FLAG_BRS = 0x10
+FLAG_ESI = 0x20
+#: Frame was transmitted by the logging host (python-can ``is_rx=False``).
+FLAG_TX = 0x40
+
+#: Bytes per frame in ``FrameBatch.data``: classic CAN and CAN FD.
+CLASSIC_WIDTH = 8
+FD_WIDTH = 64
+
+
+@dataclass
+class FrameBatch:
+    """N raw CAN frames of one bus, as column arrays (all of length N).
+
+    Attributes:
+        bus: bus name (``can0``, ``can1``, ... as in the vehicle configuration).
+        timestamp_ns: int64 (N,), host receive time in ns since the Unix epoch
+            (the kernel's SocketCAN receive timestamp in the field).
+        arbitration_id: uint32 (N,), 11- or 29-bit identifier (no flag bits).
+        is_extended: bool (N,), 29-bit identifier (same as ``flags & 1``).
+        flags: uint8 (N,), bit0 extended, bit1 remote, bit2 error, bit3 FD,
+            bit4 BRS, bit5 ESI, bit6 transmitted by the host (not received).
+        dlc: uint8 (N,), python-can's ``dlc``: payload length in bytes (0..8,
+            up to 64 for FD frames); for remote frames the requested length.
+        data: uint8 (N, 8) for classic CAN, (N, 64) if any frame is FD; bytes
+            past the payload length are zero.
+    """
+
+    bus: str
+    timestamp_ns: np.ndarray
+    arbitration_id: np.ndarray
+    is_extended: np.ndarray
+    flags: np.ndarray
+    dlc: np.ndarray
+    data: np.ndarray
+
+    def __len__(self) -> int:
+        return int(self.timestamp_ns.shape[0])
+
+    @property
+    def data_width(self) -> int:
+        """Bytes per frame in :attr:`data` (8 or 64)."""
+        return int(self.data.shape[1])
+
+    @classmethod
+    def empty(cls, bus: str, width: int = CLASSIC_WIDTH) -> "FrameBatch":
+        """A batch with no frames."""
+        return cls.from_columns(bus, np.zeros(0, np.int64), np.zeros(0, np.uint32),
+                                np.zeros(0, np.uint8), np.zeros(0, np.uint8),
+                                np.zeros((0, width), np.uint8))
+
+    @classmethod
+    def from_columns(cls, bus: str, timestamp_ns, arbitration_id, flags, dlc, data) -> "FrameBatch":
+        """Build a batch from columns; ``is_extended`` is derived from ``flags``.
+
+        Raises:
+            ValueError: when the column lengths differ or ``data`` is not (N, 8|64).
+        """
+        ts = np.ascontiguousarray(timestamp_ns, dtype=np.int64)
+        ids = np.ascontiguousarray(arbitration_id, dtype=np.uint32)
+        fl = np.ascontiguousarray(flags, dtype=np.uint8)
+        dl = np.ascontiguousarray(dlc, dtype=np.uint8)
+        d = np.ascontiguousarray(data, dtype=np.uint8)
+        n = ts.shape[0]
+        if not (ids.shape == fl.shape == dl.shape == (n,)) or d.ndim != 2 or d.shape[0] != n:
+            raise ValueError(
+                f"FrameBatch {bus!r}: column lengths differ (timestamps {ts.shape}, ids {ids.shape}, "
+                f"flags {fl.shape}, dlc {dl.shape}, data {d.shape})")
+        if d.shape[1] not in (CLASSIC_WIDTH, FD_WIDTH):
+            raise ValueError(f"FrameBatch {bus!r}: data must have 8 or 64 columns, not {d.shape[1]}")
+        return cls(bus, ts, ids, (fl & FLAG_EXTENDED).astype(bool), fl, dl, d)
+
+    @classmethod
+    def concat(cls, batches: Sequence["FrameBatch"], bus: str | None = None) -> "FrameBatch":
+        """Concatenate batches of one bus in the given order (widening data to 64 if needed)."""
+        if not batches:
+            return cls.empty(bus or "")
+        width = max(b.data_width for b in batches)
+        data = [b.data if b.data_width == width else _widen(b.data, width) for b in batches]
+        return cls.from_columns(
+            bus if bus is not None else batches[0].bus,
+            np.concatenate([b.timestamp_ns for b in batches]),
+            np.concatenate([b.arbitration_id for b in batches]),
+            np.concatenate([b.flags for b in batches]),
+            np.concatenate([b.dlc for b in batches]),
+            np.concatenate(data),
+        )
+
+    def select(self, index) -> "FrameBatch":
+        """Frames at ``index`` (slice, boolean mask or integer array) as a new batch."""
+        return FrameBatch(self.bus, self.timestamp_ns[index], self.arbitration_id[index],
+                          self.is_extended[index], self.flags[index], self.dlc[index], self.data[index])
+
+    def payload_lengths(self) -> np.ndarray:
+        """int64 (N,): bytes of payload per frame (0 for remote frames, dlc capped at the width)."""
+        n = np.minimum(self.dlc.astype(np.int64), self.data_width)
+        n[(self.flags & FLAG_REMOTE) != 0] = 0
+        return n
+
+    @classmethod
+    def from_messages(cls, bus: str, msgs: Iterable) -> "FrameBatch":
+        """Columns from python-can :class:`can.Message` objects (timestamps in s -> ns).
+
+        Payload bytes beyond 64 are dropped (impossible on a real bus); a payload
+        shorter than ``dlc`` is zero-padded, ``dlc`` is kept as given.
+        """
+        ts, ids, fl, dl = [], [], [], []
+        payload = bytearray()
+        width = CLASSIC_WIDTH
+        rows = []
+        for m in msgs:
+            ts.append(m.timestamp)
+            ids.append(m.arbitration_id)
+            fl.append(message_flags(m))
+            dl.append(m.dlc)
+            d = bytes(m.data or b"")
+            rows.append(d)
+            if len(d) > CLASSIC_WIDTH:
+                width = FD_WIDTH
+        for d in rows:
+            payload += d[:width].ljust(width, b"\0")
+        n = len(ts)
+        data = np.frombuffer(bytes(payload), np.uint8).reshape(n, width) if n else np.zeros((0, width), np.uint8)
+        return cls.from_columns(bus, seconds_to_ns(np.asarray(ts, dtype=np.float64)), ids, fl,
+                                np.minimum(np.asarray(dl, dtype=np.int64), 255), data)
+
+    def to_messages(self, channel=None):
+        """Yield python-can :class:`can.Message` objects (timestamp in float seconds).
+
+        ``channel`` defaults to the bus name. Payload length per frame is
+        :meth:`payload_lengths`.
+        """
+        import can
+
+        ch = self.bus if channel is None else channel
+        lengths = self.payload_lengths().tolist()
+        ts = ns_to_seconds(self.timestamp_ns).tolist()
+        for t, i, f, dlc, n, row in zip(ts, self.arbitration_id.tolist(), self.flags.tolist(),
+                                        self.dlc.tolist(), lengths, self.data):
+            yield can.Message(
+                timestamp=t, arbitration_id=i, is_extended_id=bool(f & FLAG_EXTENDED),
+                is_remote_frame=bool(f & FLAG_REMOTE), is_error_frame=bool(f & FLAG_ERROR),
+                is_fd=bool(f & FLAG_FD), bitrate_switch=bool(f & FLAG_BRS),
+                error_state_indicator=bool(f & FLAG_ESI), is_rx=not (f & FLAG_TX),
+                dlc=dlc, data=bytes(row[:n]), channel=ch, check=False)
+
+
+def message_flags(m) -> int:
+    """The :attr:`FrameBatch.flags` byte of one python-can :class:`can.Message`."""
+    return ((FLAG_EXTENDED if m.is_extended_id else 0) | (FLAG_REMOTE if m.is_remote_frame else 0)
+            | (FLAG_ERROR if m.is_error_frame else 0) | (FLAG_FD if m.is_fd else 0)
+            | (FLAG_BRS if m.bitrate_switch else 0) | (FLAG_ESI if m.error_state_indicator else 0)
+            | (0 if m.is_rx else FLAG_TX))
+
+
+def seconds_to_ns(seconds: np.ndarray) -> np.ndarray:
+    """float64 seconds (python-can timestamps) -> int64 ns, exact to the ns of the double.
+
+    Splits into whole seconds and fraction so the product keeps sub-microsecond
+    resolution at Unix-epoch magnitudes (a plain ``t*1e9`` is only good to 256 ns).
+    """
+    seconds = np.asarray(seconds, dtype=np.float64)
+    whole = np.floor(seconds)
+    frac_ns = np.rint((seconds - whole) * 1e9).astype(np.int64)
+    return whole.astype(np.int64) * 1_000_000_000 + frac_ns
+
+
+def ns_to_seconds(ns: np.ndarray) -> np.ndarray:
+    """int64 ns -> float64 seconds, correctly rounded (inverse of :func:`seconds_to_ns`)."""
+    ns = np.asarray(ns, dtype=np.int64)
+    whole = ns // 1_000_000_000
+    return whole.astype(np.float64) + (ns - whole * 1_000_000_000).astype(np.float64) * 1e-9
+
+
+def _widen(data: np.ndarray, width: int) -> np.ndarray:
+    out = np.zeros((data.shape[0], width), np.uint8)
+    out[:, : data.shape[1]] = data
+    return out
