@@ -1,0 +1,203 @@
+"""The field-test simulator's frames: rates, counters, quantisation, timing, latency.
+
+Every check decodes the simulator's raw frames independently (cantools, the
+sensors' own DBCs) and compares them with the simulator's hidden truth.
+"""
+
+from __future__ import annotations
+
+import math
+from importlib import resources
+
+import cantools
+import numpy as np
+import pytest
+
+from wheelsoil.model import load_terrain
+from wheelsoil.simulate import GPS_LEAP_S, GPS_UNIX_EPOCH_S, pack_signals, simulate_run
+
+
+def _db(stem):
+    text = (resources.files("wheelsoil.dbc") / f"{stem}.dbc").read_text()
+    return cantools.database.load_string(text, database_format="dbc", strict=False)
+
+
+WFT, WSS, GPS = _db("wft"), _db("wheel_speed"), _db("gps_rt_speedbox")
+
+
+@pytest.fixture(scope="module")
+def run():
+    return simulate_run(load_terrain("clay"), effect="vasilev", params={"H": 0.05}, seed=11,
+                        duration_s=60.0, gnss_latency_s=0.12, drop_rate=0.02)
+
+
+def _frames_of(run, bus, frame_id):
+    f = run.frames[bus]
+    sel = f["arbitration_id"] == frame_id
+    return f["timestamp_ns"][sel], f["data"][sel], f["dlc"][sel]
+
+
+def _decode(db, frame_id, data, dlc):
+    msg = db.get_message_by_frame_id(frame_id)
+    return [msg.decode(bytes(d[:n]), decode_choices=False) for d, n in zip(data, dlc)]
+
+
+def test_rates_per_message_match_hardware_contract(run):
+    dur = run.duration_s
+    expected = {  # hardware.md: id -> (bus, rate Hz)
+        0x120: ("can0", 500), 0x121: ("can0", 500), 0x122: ("can0", 500), 0x123: ("can0", 3),
+        0x300: ("can1", 100), 0x301: ("can1", 10),
+        0x9567C22: ("can1", 20), 0x9588322: ("can1", 20), 0x9566D22: ("can1", 20), 0x9566C22: ("can1", 1),
+    }
+    for fid, (bus, rate) in expected.items():
+        ts, _, _ = _frames_of(run, bus, fid)
+        got = len(ts) / dur
+        tol = 0.05 if fid in (0x120, 0x121, 0x122) else 0.03  # 2 % of WFT samples dropped
+        assert abs(got - rate) <= tol * rate + 1.5 / dur, (hex(fid), got, rate)
+    ext = run.frames["can1"]["is_extended"]
+    ids = run.frames["can1"]["arbitration_id"]
+    assert np.all(ext == (ids > 0x7FF))
+    assert not run.frames["can0"]["is_extended"].any()
+
+
+def test_host_timestamps_monotonic_with_jitter(run):
+    for bus, f in run.frames.items():
+        ts = f["timestamp_ns"]
+        assert np.all(np.diff(ts) >= 0), bus
+    ts, _, _ = _frames_of(run, "can1", 0x300)
+    period = np.diff(ts) * 1e-9
+    assert abs(np.median(period) - 0.01) < 2e-4
+    assert period.std() > 1e-6  # jittered, not an ideal clock
+
+
+def test_counter_shared_and_gaps_match_dropped_samples(run):
+    counters = {}
+    for fid in (0x120, 0x121, 0x122):
+        ts, data, dlc = _frames_of(run, "can0", fid)
+        byte = 6 if fid != 0x122 else 2
+        counters[fid] = data[:, byte].astype(int)
+    assert np.array_equal(counters[0x120], counters[0x121])
+    assert np.array_equal(counters[0x120], counters[0x122])
+    steps = np.diff(counters[0x120]) % 256
+    assert steps.min() >= 1
+    lost = int((steps - 1).sum())
+    assert lost == run.info["lost_wft_samples"]
+    n_samples = len(run.truth)
+    assert 0.01 < lost / n_samples < 0.03  # drop_rate 0.02
+    clean = simulate_run(load_terrain("clay"), seed=11, duration_s=40.0)
+    _, data, _ = _frames_of(clean, "can0", 0x120)
+    assert np.all(np.diff(data[:, 6].astype(int)) % 256 == 1)
+
+
+def test_pack_signals_equals_cantools_encode():
+    rng = np.random.default_rng(0)
+    for db in (WFT, WSS, GPS):
+        for msg in db.messages:
+            if msg.is_multiplexed():
+                continue
+            n = 50
+            vals = {}
+            for sig in msg.signals:
+                lo = sig.minimum if sig.minimum is not None else 0
+                hi = sig.maximum if sig.maximum is not None else 1
+                vals[sig.name] = np.round(rng.uniform(lo, hi, n) / sig.scale) * sig.scale
+            data, sat = pack_signals(msg, vals, n)
+            assert not sat.any()
+            for i in range(n):
+                ref = msg.encode({k: v[i] for k, v in vals.items()}, scaling=True, strict=False)
+                assert bytes(data[i, :msg.length]) == ref, (msg.name, i)
+    diag = WFT.get_message_by_name("WFT_RL_Diag")
+    data, _ = pack_signals(diag, {"DiagMux": 1, "SerialNumber": 140321}, 1)
+    assert diag.decode(bytes(data[0]))["SerialNumber"] == 140321
+
+
+def test_wft_frames_decode_to_truth_in_hub_frame(run):
+    n = 3000
+    tf, fdat, fdlc = _frames_of(run, "can0", 0x120)
+    _, mdat, mdlc = _frames_of(run, "can0", 0x121)
+    _, adat, adlc = _frames_of(run, "can0", 0x122)
+    force = _decode(WFT, 0x120, fdat[:n], fdlc[:n])
+    moment = _decode(WFT, 0x121, mdat[:n], mdlc[:n])
+    angle = _decode(WFT, 0x122, adat[:n], adlc[:n])
+    a = np.radians([d["WheelAngle"] for d in angle])
+    fx_w = np.array([d["Fx_w"] for d in force])
+    fz_w = np.array([d["Fz_w"] for d in force])
+    fx = fx_w * np.cos(a) + fz_w * np.sin(a)   # hardware.md
+    fz = -fx_w * np.sin(a) + fz_w * np.cos(a)
+    my = np.array([d["My"] for d in moment])
+    # which truth sample: the counter (no drops among the first frames is not assumed)
+    cnt = np.array([d["Counter"] for d in force])
+    k = np.concatenate([[0], np.cumsum(np.diff(cnt) % 256)])
+    truth = run.truth.iloc[k]
+    # 20 N noise per component -> residual std ~20 N; angle quantisation adds < 1 N
+    for meas, true, sd in ((fx, truth.drawbar_pull_n, 20.0), (fz, truth.load_n, 20.0), (my, truth.torque_nm, 4.0)):
+        res = meas - true.to_numpy()
+        assert abs(res.mean()) < 3 * sd / math.sqrt(n) + 1.0
+        assert 0.7 * sd < res.std() < 1.4 * sd
+    # the angle frame is the integral of omega, within quantisation
+    d_ang = np.degrees(np.unwrap(a[:2000]))
+    ang_true = np.unwrap(np.radians(truth.wheel_angle_deg.to_numpy()[:2000]))
+    assert np.max(np.abs(d_ang - np.degrees(ang_true))) <= 360.0 / 65536 + 1e-9
+
+
+def test_wheel_speed_frames_decode_to_truth(run):
+    ts, data, dlc = _frames_of(run, "can1", 0x300)
+    dec = _decode(WSS, 0x300, data[::5], dlc[::5])
+    t = (ts[::5] - run.truth.t_host_ns.iloc[0]) * 1e-9
+    rpm_rl = np.array([d["WheelSpeed_RL"] for d in dec])
+    om = rpm_rl * 2 * np.pi / 60
+    om_true = np.interp(t, (run.truth.t_host_ns - run.truth.t_host_ns.iloc[0]) * 1e-9, run.truth.omega_radps)
+    moving = om_true > 2.0
+    rel = (om[moving] - om_true[moving]) / om_true[moving]
+    assert np.sqrt(np.mean(rel**2)) < 0.01
+    # front wheels roll freely: r*omega_f ~ V while driving
+    v_true = np.interp(t, (run.truth.t_host_ns - run.truth.t_host_ns.iloc[0]) * 1e-9, run.truth.speed_mps)
+    om_f = np.array([d["WheelSpeed_FL"] for d in dec]) * 2 * np.pi / 60
+    drive = (v_true > 1.0) & (np.interp(t, (run.truth.t_host_ns - run.truth.t_host_ns.iloc[0]) * 1e-9,
+                                         np.nan_to_num(run.truth.slip)) > 0)
+    assert np.median(np.abs(0.47 * om_f[drive] - v_true[drive]) / v_true[drive]) < 0.02
+
+
+def test_gnss_latency_and_gps_clock(run):
+    ts, data, dlc = _frames_of(run, "can1", 0x9588322)
+    dec = _decode(GPS, 0x9588322, data, dlc)
+    v = np.array([d["INS_Vel_Forwards_2D"] for d in dec])
+    t_host = ts * 1e-9
+    t_truth = run.truth.t_host_ns.to_numpy() * 1e-9
+    lags = np.arange(0.0, 0.3, 0.005)
+    err = [np.mean((v - np.interp(t_host - lag, t_truth, run.truth.speed_mps)) ** 2) for lag in lags]
+    best = lags[int(np.argmin(err))]
+    assert abs(best - 0.12) <= 0.01
+    # GPS time of the fix = host time of the fix + leap + offset (+ drift)
+    ts_t, data_t, dlc_t = _frames_of(run, "can1", 0x9566D22)
+    dec = _decode(GPS, 0x9566D22, data_t, dlc_t)
+    gps = np.array([d["GPS_Week"] * 604800 + d["GPS_Time"] for d in dec])
+    fix_host = ts_t * 1e-9 - 0.12
+    diff = gps - (fix_host - GPS_UNIX_EPOCH_S + GPS_LEAP_S)
+    assert abs(np.median(diff) - run.info["gps_clock_offset_s"]) < 0.01
+    assert np.all(np.abs(np.round(np.mod(gps, 0.05) / 0.05) - np.mod(gps, 0.05) / 0.05) < 0.03)
+
+
+def test_slip_truth_is_eq6_and_sweeps_to_high_slip(run):
+    tr = run.truth
+    mv = tr.speed_mps > 0.1
+    s = (0.47 * tr.omega_radps[mv] - tr.speed_mps[mv]) / (0.47 * tr.omega_radps[mv])
+    assert np.allclose(s, tr.slip[mv], atol=1e-9)
+    acc = tr[tr.phase == "accel"]
+    assert acc.slip.max() > 0.8 and acc.slip.min() < 0.1
+    assert (tr[tr.phase == "brake"].slip < 0).mean() > 0.5
+    assert (tr.phase == "standstill").any()
+    assert tr.load_n.mean() == pytest.approx(11000, rel=0.03)
+
+
+def test_same_seed_same_frames_and_bad_input():
+    a = simulate_run(load_terrain("sand"), effect="ding", seed=5, duration_s=30.0)
+    b = simulate_run(load_terrain("sand"), effect="ding", seed=5, duration_s=30.0)
+    assert a.info == b.info
+    assert np.array_equal(a.frames["can0"]["data"], b.frames["can0"]["data"])
+    with pytest.raises(ValueError, match="effect"):
+        simulate_run(load_terrain("sand"), effect="magic")
+    with pytest.raises(ValueError, match="no parameter"):
+        simulate_run(load_terrain("sand"), effect="lyasko", params={"H": 0.1})
+    with pytest.raises(ValueError, match="drop_rate"):
+        simulate_run(load_terrain("sand"), drop_rate=0.9)
