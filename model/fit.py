@@ -356,3 +356,666 @@ def _covariance(J, d, cost, dof, absolute_sigma):
         cov[bad, :] = np.nan
         cov[:, bad] = np.nan
     return cov, cond
+
+
+# --------------------------------------------------------------------------------------
+# Fitting the wheel–soil models to measured data
+# --------------------------------------------------------------------------------------
+
+#: Terrain parameters ``fit_model`` can fit: name -> (unit, doc).  ``k_eq`` is the
+#: combined modulus ``kc/b + kphi`` [N/m^(n+2)]: with one wheel width kc and kphi
+#: enter the model only through it (Eq. 2 uses kc/b + kphi, Eq. 10 b times it),
+#: so they cannot be separated; a fitted terrain has ``kc = 0, kphi = k_eq``.
+TERRAIN_PARAMS: dict[str, tuple[str, str]] = {
+    "k_eq": ("N/m^(n+2)", "combined pressure-sinkage modulus kc/b + kphi (Eq. 2)"),
+    "n": ("-", "sinkage exponent (Eq. 2)"),
+    "c": ("Pa", "cohesion (Eq. 4)"),
+    "phi": ("rad", "internal friction angle (Eq. 4)"),
+    "K": ("m", "shear deformation modulus (Eq. 4)"),
+}
+
+#: Candidate models of the diagnosis: name -> (model core name, terrain parameters
+#: re-fitted).  ``terrain_mismatch`` keeps Wong's structure and re-fits the lab
+#: terrain's shear parameters K and phi.
+CANDIDATES: dict[str, tuple[str, tuple[str, ...]]] = {
+    "wong": ("wong", ()),
+    "vasilev": ("vasilev", ()),
+    "lyasko": ("lyasko", ()),
+    "ding": ("ding", ()),
+    "terrain_mismatch": ("wong", ("K", "phi")),
+}
+
+#: Measured channels a model is fitted against, in order: data column -> WheelForces field.
+CHANNELS: dict[str, str] = {
+    "drawbar_pull_n": "drawbar_pull_n",
+    "torque_nm": "torque_nm",
+    "sinkage_m": "sinkage_m",
+}
+
+_ZERO_SLIP = 0.02  # |s| below this counts as "s ~ 0" in the exclusion notes
+
+
+def estimate_noise(values: np.ndarray, slip: np.ndarray, load_n: np.ndarray | None = None,
+                   groups: np.ndarray | None = None) -> float:
+    """Noise standard deviation of one measured channel, model-free.
+
+    Nearest-neighbour local-difference estimator (von Neumann / Rice, in the
+    model's input space): for every sample take its nearest neighbour in
+    standardised (slip, load) and ``sigma = 1.4826 * MAD(y_i - y_nn(i)) / sqrt(2)``.
+    With ``groups`` (time series) the neighbour must come from another group
+    (accelerate cycle / block), so the autocorrelation of filtered 100 Hz data
+    does not shrink the estimate.  It contains measurement noise plus any
+    variation the inputs (s, W) do not explain.  Used for the relative weights
+    of the channels (Dp, T, z); parameter standard errors use the fitted
+    residual variance instead (reduced chi-square scaling), so a misestimated
+    level does not make them over-confident.
+
+    values, slip, load_n, groups : (N,) arrays; NaNs in ``values`` are ignored.
+    Returns a positive float (falls back to the std of the differences, then to
+    ``1e-6 * max|values|``).  Raises ValueError with fewer than 2 finite values.
+    """
+    from scipy.spatial import cKDTree
+
+    v = np.asarray(values, dtype=float)
+    cols = [np.asarray(slip, dtype=float)]
+    if load_n is not None:
+        cols.append(np.asarray(load_n, dtype=float))
+    ok = np.isfinite(v)
+    for c in cols:
+        ok &= np.isfinite(c)
+    if ok.sum() < 2:
+        raise ValueError("estimate_noise: fewer than 2 finite values")
+    X = []
+    for c in cols:
+        c = c[ok]
+        sd = np.std(c)
+        if sd > 1e-9 * max(1.0, np.max(np.abs(c))):
+            X.append((c - c.mean()) / sd)
+    X = np.column_stack(X) if X else np.zeros((int(ok.sum()), 1))
+    y = v[ok]
+    X = X + 1e-12 * np.arange(len(y))[:, None]  # break exact ties deterministically
+    tree = cKDTree(X)
+    k = min(len(y), 21 if groups is not None else 2)
+    _, nb = tree.query(X, k=k)
+    nb = nb.reshape(len(y), -1)[:, 1:]
+    if groups is not None:
+        g = np.asarray(groups)[ok]
+        other = g[nb] != g[:, None]
+        first = np.where(other.any(axis=1), other.argmax(axis=1), 0)
+        nn = nb[np.arange(len(y)), first]
+    else:
+        nn = nb[:, 0]
+    dv = y - y[nn]
+    s = 1.4826 * np.median(np.abs(dv - np.median(dv))) / math.sqrt(2)
+    if not (np.isfinite(s) and s > 0):
+        s = float(np.std(dv)) / math.sqrt(2)
+    if not (np.isfinite(s) and s > 0):
+        s = 1e-6 * max(float(np.max(np.abs(y))), 1e-9)
+    return float(s)
+
+
+@dataclass(frozen=True)
+class FitData:
+    """Measured samples prepared for fitting (the rows actually used).
+
+    slip, load_n : (N,) arrays.
+    channels : data column -> (N,) measured values (``drawbar_pull_n`` always;
+        ``torque_nm``/``sinkage_m`` when measured), NaN where missing.
+    sigma : data column -> noise std (:func:`estimate_noise`).
+    groups : (N,) int cross-validation groups (accelerate cycles, or contiguous blocks).
+    units : (N,) int "independent units" for aggregation: table rows, or
+        (group, slip-decile) cells of a time series.
+    run : (N,) int input index (0 when one input).
+    t_s : (N,) time or None (tables).
+    kind : "table" or "timeseries".
+    notes : list of plain-English notes on excluded rows and choices.
+    n_input : rows before filtering; slip_min : threshold used.
+    """
+
+    slip: np.ndarray
+    load_n: np.ndarray
+    channels: dict
+    sigma: dict
+    groups: np.ndarray
+    units: np.ndarray
+    run: np.ndarray
+    t_s: np.ndarray | None
+    kind: str
+    notes: list
+    n_input: int
+    slip_min: float
+    group_kind: str = "blocks"
+
+    @property
+    def n(self) -> int:
+        """Number of samples used."""
+        return int(self.slip.size)
+
+    @property
+    def n_units(self) -> int:
+        """Number of independent units (rows of a table, cells of a time series)."""
+        return int(np.unique(self.units).size)
+
+    def subset(self, mask: np.ndarray) -> "FitData":
+        """The samples where ``mask`` (N,) bool is True (same noise levels)."""
+        return dataclasses_replace(
+            self,
+            slip=self.slip[mask],
+            load_n=self.load_n[mask],
+            channels={k: v[mask] for k, v in self.channels.items()},
+            groups=self.groups[mask],
+            units=self.units[mask],
+            run=self.run[mask],
+            t_s=None if self.t_s is None else self.t_s[mask],
+        )
+
+
+def dataclasses_replace(obj, **kw):
+    """``dataclasses.replace`` (kept local to avoid shadowing the field name)."""
+    import dataclasses
+
+    return dataclasses.replace(obj, **kw)
+
+
+def prepare_data(df, *, slip_min: float = 0.1, source: str = "data", n_blocks: int | None = None) -> FitData:
+    """Select and check the samples a driving model is fitted to.
+
+    ``df``: pandas DataFrame with columns ``slip``, ``load_n``, ``drawbar_pull_n``
+    and optionally ``torque_nm``, ``sinkage_m``, ``valid`` (bool), ``cycle``
+    (accelerate-cycle id, -1 outside), ``run`` (input index), ``t_s`` (time; its
+    presence marks a time series).  Kept: rows marked valid, with finite slip,
+    load and drawbar pull, ``slip_min < s < 1`` and ``W > 0``.  Skid rows
+    (s < 0) and rows with s ~ 0 are excluded from a driving model with a note.
+
+    Cross-validation groups: accelerate cycles (``cycle >= 0``; samples outside a
+    cycle join the nearest block), else contiguous blocks in row order (tables:
+    ``max(2, min(5, N // 3))`` blocks; time series: 5 blocks per run).
+
+    Raises
+    ------
+    ValueError
+        (naming ``source``) for a missing column, an empty table, no rows left
+        after the selection, or only one distinct slip value (no slip
+        dependence can be fitted).
+    """
+    import pandas as pd
+
+    if not isinstance(df, pd.DataFrame):
+        raise ValueError(f"{source}: expected a pandas DataFrame, got {type(df).__name__}")
+    missing = [c for c in ("slip", "load_n", "drawbar_pull_n") if c not in df.columns]
+    if missing:
+        raise ValueError(
+            f"{source}: missing column(s) {', '.join(missing)}; a table needs slip, load_n, "
+            "drawbar_pull_n (optional torque_nm, sinkage_m)"
+        )
+    n_input = len(df)
+    if n_input == 0:
+        raise ValueError(f"{source}: the table is empty (no rows)")
+    notes: list[str] = []
+    s = pd.to_numeric(df["slip"], errors="coerce").to_numpy(float)
+    w = pd.to_numeric(df["load_n"], errors="coerce").to_numpy(float)
+    dp = pd.to_numeric(df["drawbar_pull_n"], errors="coerce").to_numpy(float)
+    keep = np.ones(n_input, bool)
+    if "valid" in df.columns:
+        valid = df["valid"].fillna(False).astype(bool).to_numpy()
+        if (~valid).any():
+            notes.append(f"{int((~valid).sum())} of {n_input} samples marked invalid by processing were excluded.")
+        keep &= valid
+    bad = ~(np.isfinite(s) & np.isfinite(w) & np.isfinite(dp))
+    if (bad & keep).any():
+        rows = np.flatnonzero(bad & keep)
+        notes.append(
+            f"{rows.size} row(s) with NaN or non-numeric slip/load_n/drawbar_pull_n excluded "
+            f"(first at row {int(rows[0])})."
+        )
+    keep &= ~bad
+    if not keep.any():
+        raise ValueError(f"{source}: no row has finite slip, load_n and drawbar_pull_n")
+    with np.errstate(invalid="ignore"):
+        skid = keep & (s < -_ZERO_SLIP)
+        zero = keep & (np.abs(s) <= _ZERO_SLIP)
+        low = keep & (s > _ZERO_SLIP) & (s <= slip_min)
+        high = keep & (s >= 1.0)
+        noload = keep & (w <= 0)
+    if skid.any():
+        notes.append(f"{int(skid.sum())} skid row(s) (s < 0, braked or locked wheel) excluded: the models are for a driven wheel.")
+    if zero.any():
+        notes.append(f"{int(zero.sum())} row(s) with s ~ 0 (|s| <= {_ZERO_SLIP}) excluded.")
+    if low.any():
+        notes.append(f"{int(low.sum())} row(s) with 0 < s <= slip_min = {slip_min:g} excluded (small Dp is dominated by measurement uncertainty, paper §3).")
+    if high.any():
+        notes.append(f"{int(high.sum())} row(s) with s >= 1 excluded (slip must be < 1).")
+    if noload.any():
+        notes.append(f"{int(noload.sum())} row(s) with load_n <= 0 excluded.")
+    keep &= (s > slip_min) & (s < 1.0) & (w > 0)
+    n = int(keep.sum())
+    if n == 0:
+        raise ValueError(
+            f"{source}: no sample with slip_min = {slip_min:g} < s < 1, a finite positive load and a "
+            f"finite drawbar pull ({n_input} rows read); lower --slip-min or check the slip column"
+        )
+    if np.unique(np.round(s[keep], 4)).size < 2:
+        raise ValueError(
+            f"{source}: only one slip value (s = {s[keep][0]:.4g}) above slip_min = {slip_min:g}; "
+            "a slip dependence cannot be fitted from one slip"
+        )
+    channels = {"drawbar_pull_n": dp[keep]}
+    for col in ("torque_nm", "sinkage_m"):
+        if col in df.columns:
+            v = pd.to_numeric(df[col], errors="coerce").to_numpy(float)[keep]
+            n_ok = int(np.isfinite(v).sum())
+            if n_ok >= max(3, n // 2):
+                channels[col] = v
+                if n_ok < n:
+                    notes.append(f"{col}: {n - n_ok} of {n} used rows have no value; fitted where present.")
+            elif n_ok:
+                notes.append(f"{col}: only {n_ok} of {n} used rows have a value; channel not used.")
+    slip = s[keep]
+    run = (
+        pd.to_numeric(df["run"], errors="coerce").fillna(0).to_numpy(int)[keep]
+        if "run" in df.columns
+        else np.zeros(n, int)
+    )
+    t_s = pd.to_numeric(df["t_s"], errors="coerce").to_numpy(float)[keep] if "t_s" in df.columns else None
+    kind = "timeseries" if t_s is not None else "table"
+    groups, group_kind = _cv_groups(df, keep, run, kind, n_blocks)
+    sigma = {
+        c: estimate_noise(v, slip, w[keep], groups if kind == "timeseries" else None)
+        for c, v in channels.items()
+    }
+    if kind == "table":
+        units = np.arange(n)
+    else:
+        edges = np.quantile(slip, np.linspace(0, 1, 11)[1:-1])
+        units = groups * 16 + np.searchsorted(edges, slip)
+        _, units = np.unique(units, return_inverse=True)
+    return FitData(
+        slip=slip,
+        load_n=w[keep],
+        channels=channels,
+        sigma=sigma,
+        groups=groups,
+        units=units,
+        run=run,
+        t_s=t_s,
+        kind=kind,
+        notes=notes,
+        n_input=n_input,
+        slip_min=float(slip_min),
+        group_kind=group_kind,
+    )
+
+
+def _cv_groups(df, keep, run, kind, n_blocks):
+    """Cross-validation groups for the kept rows: (groups (N,), description)."""
+    n = int(keep.sum())
+    if "cycle" in df.columns:
+        cyc = np.asarray(df["cycle"].to_numpy(), dtype=float)[keep]
+        cyc = np.where(np.isfinite(cyc), cyc, -1).astype(int)
+        key = run * 1_000_000 + cyc
+        ok = cyc >= 0
+        if np.unique(key[ok]).size >= 2:
+            # samples outside a cycle join the previous cycle (row order)
+            filled = np.where(ok, key, -1)
+            last = -1
+            for i in range(n):
+                if filled[i] < 0:
+                    filled[i] = last if last >= 0 else key[ok][0]
+                last = filled[i]
+            _, g = np.unique(filled, return_inverse=True)
+            return g, "accelerate cycles"
+    k = n_blocks or (max(2, min(5, n // 3)) if kind == "table" else 5)
+    k = max(1, min(k, n))
+    g = np.zeros(n, int)
+    nxt = 0
+    for r in np.unique(run):
+        idx = np.flatnonzero(run == r)
+        kr = k if np.unique(run).size == 1 else max(1, min(k, idx.size // 2))
+        g[idx] = nxt + (np.arange(idx.size) * kr) // idx.size
+        nxt += kr
+    return g, "contiguous blocks"
+
+
+@dataclass(frozen=True)
+class ModelFit:
+    """One candidate model fitted to :class:`FitData`.
+
+    name : candidate name (``wong``, ``vasilev``, ``lyasko``, ``ding``,
+        ``terrain_mismatch``); model : model-core name; terrain : the terrain used
+        (with fitted parameters substituted); params/stderr : fitted values
+        (model and terrain parameters, SI units; ``phi`` in rad);
+    fixed_terrain : terrain parameters tried but not identified by the data
+        (held at their start values); result : the :class:`FitResult` (None when
+        nothing was free); predictions : channel -> (N,) model values on the
+        used samples; metrics : Dp metrics ``M0_pct``, ``R0_n``, ``R2`` (paper
+        §1.3); channel_metrics : channel -> {R0, R2}; cv : cross-validation
+        summary (``cv_R0_n`` on Dp, ``cv_score`` weighted RMS over channels) or
+        None; bic : BIC with the effective sample size ``n_eff``; k : number of
+        fitted parameters; success/message : fit status.
+    """
+
+    name: str
+    model: str
+    terrain: object
+    params: dict
+    stderr: dict
+    fixed_terrain: tuple
+    result: FitResult | None
+    predictions: dict
+    metrics: dict
+    channel_metrics: dict
+    bic: float
+    n_eff: float
+    k: int
+    success: bool
+    message: str
+    cv: dict | None = None
+    notes: tuple = ()
+
+    @property
+    def cv_R0_n(self) -> float | None:
+        """Out-of-sample R0 of the drawbar pull [N] (None before cross-validation)."""
+        return None if self.cv is None else self.cv["cv_R0_n"]
+
+    def weighted_residuals(self, data: FitData) -> dict:
+        """channel -> (N,) residuals (measured - model) / sigma."""
+        return {c: (data.channels[c] - self.predictions[c]) / data.sigma[c] for c in data.channels}
+
+
+def _terrain_with(terrain, wheel, values: Mapping[str, float]):
+    """The terrain with fitted terrain parameters substituted (``k_eq`` -> kc=0, kphi=k_eq)."""
+    kw = {k: v for k, v in values.items() if k in ("n", "c", "phi", "K")}
+    if "k_eq" in values:
+        kw["kc"] = 0.0
+        kw["kphi"] = float(values["k_eq"])
+    return terrain.replace(**kw) if kw else terrain
+
+
+def _terrain_start(terrain, wheel, name):
+    """(start, lower, upper, scale) of a terrain parameter, from the lab/start terrain."""
+    if name == "k_eq":
+        k0 = terrain.k_eq(wheel.width)
+        k0 = k0 if k0 > 0 else 1e5
+        return k0, k0 / 1e3, k0 * 1e3, k0
+    v = float(getattr(terrain, name))
+    if name == "n":
+        return v, 0.2, 2.5, max(v, 0.1)
+    if name == "c":
+        return v, 0.0, 100e3, max(v, 1e3)
+    if name == "phi":
+        return v, math.radians(1.0), math.radians(60.0), max(v, 0.1)
+    if name == "K":
+        return v, 1e-4, 0.3, max(v, 1e-3)
+    raise ValueError(f"unknown terrain parameter {name!r}; choose from {', '.join(TERRAIN_PARAMS)}")
+
+
+def _predict(model_obj, terrain, wheel, data: FitData, mp: Mapping[str, float], tv: Mapping[str, float], sinkage):
+    """Model forces on the used samples, as a dict of (N,) arrays per channel."""
+    t = _terrain_with(terrain, wheel, tv)
+    f = model_obj.predict(t, wheel, data.load_n, data.slip, dict(mp), sinkage=sinkage)
+    return {c: np.asarray(getattr(f, field), dtype=float) for c, field in CHANNELS.items()}
+
+
+def _metrics(measured, predicted) -> dict:
+    """Paper §1.3 metrics on finite pairs: M0 (%), R0, R^2 (None when undefined)."""
+    from wheelsoil.model import m0_pct, r0, r2
+
+    ok = np.isfinite(measured) & np.isfinite(predicted)
+    out = {"M0_pct": None, "R0_n": None, "R2": None}
+    if ok.sum() < 1:
+        return out
+    y, p = measured[ok], predicted[ok]
+    for key, fn in (("M0_pct", m0_pct), ("R0_n", r0), ("R2", r2)):
+        try:
+            v = float(fn(y, p))
+            out[key] = v if math.isfinite(v) else None
+        except (ValueError, ZeroDivisionError, FloatingPointError):
+            out[key] = None
+    return out
+
+
+def fit_model(
+    data,
+    terrain,
+    wheel,
+    model: str = "lyasko",
+    *,
+    slip_min: float = 0.1,
+    terrain_params: Sequence[str] = (),
+    prune: bool = True,
+    sinkage: str = "eq10",
+    start: Mapping[str, float] | None = None,
+    max_iter: int = 60,
+    eps: float = 1e-6,
+    name: str | None = None,
+) -> ModelFit:
+    """Fit a model's parameters (and optionally terrain parameters) by Gauss–Newton.
+
+    The objective stacks, for every measured channel (drawbar pull always, torque
+    and sinkage when present), ``(measured - model) / sigma_channel`` over the
+    used samples, ``sigma`` from :func:`estimate_noise` (paper §1.2, with the
+    channels weighted by their noise).
+
+    Parameters
+    ----------
+    data : pandas DataFrame (see :func:`prepare_data`) or a prepared :class:`FitData`.
+    terrain, wheel : ``wheelsoil.model.Terrain`` / ``Wheel`` (lab or start values).
+    model : a model-core name (``wong``, ``vasilev``, ``lyasko``, ``ding``) or a
+        candidate of :data:`CANDIDATES` (``terrain_mismatch`` = Wong with K and phi
+        re-fitted).
+    slip_min : samples with s <= slip_min are not used (DataFrame input only).
+    terrain_params : extra terrain parameters to fit, from :data:`TERRAIN_PARAMS`
+        (``k_eq`` = kc/b + kphi, ``n``, ``c``, ``phi``, ``K``).
+    prune : drop terrain parameters the data does not identify (relative
+        standard error > 0.5, or |correlation| > 0.995 with another), holding
+        them at their start values, and refit; they are listed in ``fixed_terrain``.
+    sinkage : ``"eq10"`` or ``"balance"`` (passed to the model core).
+    start : optional start values (name -> value).
+    max_iter, eps : Gauss–Newton limits.
+
+    Returns
+    -------
+    ModelFit (``success`` False, with the solver's message, when it did not converge).
+
+    Raises
+    ------
+    ValueError
+        Unknown model or terrain parameter; bad data (see :func:`prepare_data`).
+    """
+    from wheelsoil.model import get_model
+
+    if not isinstance(data, FitData):
+        data = prepare_data(data, slip_min=slip_min)
+    cand_name = name or model
+    if model in CANDIDATES and model not in ("wong",):
+        core, extra = CANDIDATES[model]
+    else:
+        core, extra = model, ()
+    model_obj = get_model(core)
+    tparams = list(dict.fromkeys([*extra, *terrain_params]))
+    for p in tparams:
+        if p not in TERRAIN_PARAMS:
+            raise ValueError(f"unknown terrain parameter {p!r}; choose from {', '.join(TERRAIN_PARAMS)}")
+    start = dict(start or {})
+    fixed: list[str] = []
+    notes: list[str] = []
+    while True:
+        fit = _fit_once(model_obj, terrain, wheel, data, tparams, start, sinkage, max_iter, eps)
+        if not (prune and tparams and fit[0] is not None and fit[0].success):
+            break
+        drop = _least_identified(fit[0], [t for t in tparams if t not in extra], terrain, wheel)
+        if drop is None:
+            break
+        tparams.remove(drop)
+        fixed.append(drop)
+        notes.append(f"terrain parameter {drop} not identified by the data; held at {start.get(drop, _terrain_start(terrain, wheel, drop)[0]):.4g}")
+    res, mp, tv = fit
+    return _make_model_fit(cand_name, core, model_obj, terrain, wheel, data, res, mp, tv, tuple(fixed), sinkage, notes)
+
+
+def _fit_once(model_obj, terrain, wheel, data, tparams, start, sinkage, max_iter, eps):
+    """One Gauss–Newton run: returns (FitResult | None, model params, terrain values)."""
+    names, x0, lo, hi, sc = [], [], [], [], []
+    for p in model_obj.params:
+        names.append(p.name)
+        x0.append(float(start.get(p.name, p.default)))
+        lo.append(float(p.lower))
+        hi.append(float(p.upper))
+        sc.append(max(abs(x0[-1]), (float(p.upper) - float(p.lower)) / 10 if math.isfinite(p.upper - p.lower) else 1.0))
+    n_model = len(names)
+    for t in tparams:
+        v0, a, b, s = _terrain_start(terrain, wheel, t)
+        names.append(t)
+        x0.append(float(start.get(t, v0)))
+        lo.append(a)
+        hi.append(b)
+        sc.append(s)
+    chans = list(data.channels)
+    meas = np.concatenate([data.channels[c] for c in chans])
+    sig = np.concatenate([np.full(data.n, data.sigma[c]) for c in chans])
+    okm = np.isfinite(meas)
+    meas, sig = meas[okm], sig[okm]
+
+    def split(x):
+        return dict(zip(names[:n_model], x[:n_model])), dict(zip(names[n_model:], x[n_model:]))
+
+    def fun(x):
+        mp, tv = split(x)
+        try:
+            pred = _predict(model_obj, terrain, wheel, data, mp, tv, sinkage)
+        except (ValueError, FloatingPointError):
+            return np.full(meas.size, np.inf)
+        return np.concatenate([pred[c] for c in chans])[okm] - meas
+
+    if not names:
+        return None, {}, {}
+    res = gauss_newton(fun, x0, bounds=(lo, hi), x_scale=sc, sigma=sig, names=names, eps=eps, max_iter=max_iter)
+    mp, tv = split(res.x)
+    return res, mp, tv
+
+
+def _least_identified(res: FitResult, tparams, terrain, wheel):
+    """The terrain parameter the data identifies worst, or None when all are fine."""
+    worst, worst_score = None, 0.0
+    idx = {n: i for i, n in enumerate(res.names)}
+    for t in tparams:
+        i = idx[t]
+        se = res.stderr[t]
+        scale = max(abs(res.x[i]), _terrain_start(terrain, wheel, t)[3])
+        rel = se / scale if np.isfinite(se) else np.inf
+        corr = np.nan_to_num(np.abs(res.correlation[i]), nan=1.0)
+        corr[i] = 0
+        score = rel if rel > 0.5 else (rel + 1.0 if corr.max() > 0.995 else 0.0)
+        if rel > 0.5 or corr.max() > 0.995:
+            score = max(score, 1e-9)
+            if score > worst_score:
+                worst, worst_score = t, score
+    return worst
+
+
+def _make_model_fit(cand_name, core, model_obj, terrain, wheel, data, res, mp, tv, fixed, sinkage, notes):
+    """Assemble a :class:`ModelFit` (predictions, metrics, BIC) from a fit."""
+    try:
+        pred = _predict(model_obj, terrain, wheel, data, mp, tv, sinkage)
+        ok_pred = True
+    except (ValueError, FloatingPointError) as exc:
+        pred = {c: np.full(data.n, np.nan) for c in CHANNELS}
+        ok_pred = False
+        notes = [*notes, f"model could not be evaluated: {exc}"]
+    metrics = _metrics(data.channels["drawbar_pull_n"], pred["drawbar_pull_n"])
+    chm = {}
+    rss, nobs = 0.0, 0
+    for c, y in data.channels.items():
+        m = _metrics(y, pred[c])
+        chm[c] = {"R0": m["R0_n"], "R2": m["R2"]}
+        e = (y - pred[c]) / data.sigma[c]
+        e = e[np.isfinite(e)] if ok_pred else e
+        rss += float(np.sum(e**2))
+        nobs += int(np.sum(np.isfinite(y)))
+    k = 0 if res is None else len(res.x)
+    n_eff = nobs * data.n_units / max(data.n, 1)
+    bic = n_eff * math.log(max(rss, 1e-300) / max(nobs, 1)) + k * math.log(max(n_eff, 1.0)) if ok_pred else float("nan")
+    if res is None:
+        params, stderr, success, message = {}, {}, ok_pred, "no free parameters" if ok_pred else notes[-1]
+    else:
+        params, stderr = dict(res.params), dict(res.stderr)
+        success, message = res.success and ok_pred, res.message
+    return ModelFit(
+        name=cand_name,
+        model=core,
+        terrain=_terrain_with(terrain, wheel, tv),
+        params=params,
+        stderr=stderr,
+        fixed_terrain=tuple(fixed),
+        result=res,
+        predictions=pred,
+        metrics=metrics,
+        channel_metrics=chm,
+        bic=bic,
+        n_eff=n_eff,
+        k=k,
+        success=success,
+        message=message,
+        notes=tuple(notes),
+    )
+
+
+def cross_validate(data: FitData, fit: ModelFit, terrain, wheel, *, sinkage: str = "eq10",
+                   max_iter: int = 20, eps: float = 1e-5) -> ModelFit:
+    """Leave-one-group-out cross-validation of a fitted model.
+
+    For each group of ``data.groups`` (accelerate cycles, or contiguous blocks
+    for tables), the same parameters are re-fitted on the other groups (started
+    from the full-data optimum) and the held-out group is predicted.  Pooled
+    held-out errors give ``cv_R0_n`` (RMS error of Dp [N]) and ``cv_score`` (RMS
+    of the noise-weighted residuals over all channels).  Returns a copy of
+    ``fit`` with ``cv`` set; with one group, or no free parameters, the held-out
+    predictions are the model's predictions (nothing is re-fitted).
+    """
+    from wheelsoil.model import get_model
+
+    model_obj = get_model(fit.model)
+    groups = np.unique(data.groups)
+    held = {c: np.full(data.n, np.nan) for c in data.channels}
+    free_t = [n for n in fit.params if n in TERRAIN_PARAMS]
+    failed = 0
+    if fit.k == 0 or groups.size < 2:
+        for c in data.channels:
+            held[c] = fit.predictions[c]
+    else:
+        base_t = fit.terrain if not free_t else terrain
+        for g in groups:
+            test = data.groups == g
+            train = data.subset(~test)
+            res, mp, tv = _fit_once(model_obj, base_t if not free_t else terrain, wheel, train, free_t,
+                                    fit.params, sinkage, max_iter, eps)
+            if res is None or not np.all(np.isfinite(res.x)):
+                failed += 1
+                mp = {k: v for k, v in fit.params.items() if k not in TERRAIN_PARAMS}
+                tv = {k: v for k, v in fit.params.items() if k in TERRAIN_PARAMS}
+            try:
+                pred = _predict(model_obj, base_t if not free_t else terrain, wheel, data.subset(test), mp, tv, sinkage)
+            except (ValueError, FloatingPointError):
+                failed += 1
+                continue
+            for c in data.channels:
+                held[c][test] = pred[c]
+    dp = data.channels["drawbar_pull_n"]
+    e = dp - held["drawbar_pull_n"]
+    ok = np.isfinite(e)
+    cv_r0 = float(np.sqrt(np.mean(e[ok] ** 2))) if ok.any() else None
+    ws = []
+    for c, y in data.channels.items():
+        w = (y - held[c]) / data.sigma[c]
+        ws.append(w[np.isfinite(w)])
+    wcat = np.concatenate(ws) if ws else np.zeros(0)
+    score = float(np.sqrt(np.mean(wcat**2))) if wcat.size else None
+    cv = {
+        "cv_R0_n": cv_r0,
+        "cv_score": score,
+        "n_groups": int(groups.size),
+        "group_kind": data.group_kind,
+        "failed_folds": failed,
+        "held_out": held,
+    }
+    return dataclasses_replace(fit, cv=cv)
