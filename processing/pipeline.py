@@ -1,0 +1,501 @@
+"""From an MCAP recording to the signals of the wheel-soil fit: :func:`process_recording`.
+
+Steps (each in its own module):
+
+1. decode the frames the vehicle configuration names, streaming, with the
+   vectorised decoder (:mod:`.decode`);
+2. WFT: unwrap the sample counters, match the force/moment/angle frames of
+   one sample, report lost frames, rotate to the hub frame (:mod:`.wft`);
+   lost runs of at most ``MAX_FILL_SAMPLES`` samples are interpolated,
+   longer ones split the data into segments;
+3. clocks: host->GPS time mapping, GNSS latency from the free-rolling front
+   wheels (or the measured wheel when it is nearly unloaded), removed from
+   the GNSS timestamps (:mod:`.timesync`);
+4. per source and per contiguous segment: uniform resampling at the source's
+   own rate, zero-phase Butterworth low-pass (:mod:`.filters`), linear
+   interpolation onto the output grid (``rate_hz``, from the first frame);
+5. slip (Eq. 6), phase, cycle id, ``valid`` (:mod:`.slip`).
+
+Every problem met on the way is appended to ``ProcessResult.warnings`` with
+what is missing and what was still computed; nothing silently turns into
+numbers.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from .decode import DecodedMessage, Decoder, decode_batches
+from .filters import DEFAULT_CUTOFF_HZ, lowpass, segments
+from .slip import accel_cycles, classify_phases, slip_ratio
+from .timesync import LatencyEstimate, estimate_latency, fit_gps_time_mapping
+from .wft import assemble_wft_samples, rotate_to_hub
+
+__all__ = ["ProcessResult", "process_recording", "COLUMNS", "MAX_FILL_SAMPLES"]
+
+#: The columns of ``ProcessResult.signals``, in order (docs/architecture.md).
+COLUMNS = ("t_s", "slip", "load_n", "drawbar_pull_n", "torque_nm", "speed_mps", "omega_radps",
+           "phase", "valid")
+#: Lost samples bridged by linear interpolation; longer gaps split segments.
+MAX_FILL_SAMPLES = 3
+#: r*omega below this [m/s] leaves the slip undefined (NaN).
+MIN_WHEEL_SPEED_MPS = 0.1
+#: WFT Status bits that invalidate a sample (overload, bridge fault, encoder fault).
+WFT_STATUS_BAD = 0x07
+#: Reference speed deceleration [m/s^2] beyond which front wheels may skid (not used for latency).
+LATENCY_MAX_DECEL_MPS2 = 0.3
+#: |T| [N m] under which the measured wheel counts as free rolling (latency fallback).
+FREE_ROLLING_TORQUE_NM = 150.0
+
+
+@dataclass
+class ProcessResult:
+    """Output of :func:`process_recording`.
+
+    ``signals``: DataFrame with exactly :data:`COLUMNS` (``t_s`` s since the
+    first frame, slip [-], load_n W [N], drawbar_pull_n Dp [N], torque_nm T
+    [N m], speed_mps V [m/s], omega_radps [rad/s], phase str, valid bool);
+    ``gnss_latency_s`` / ``gnss_latency_stderr_s`` (None if not estimated);
+    ``gps_time_mapping`` dict (see :func:`.timesync.fit_gps_time_mapping`) or
+    None; ``lost_frames`` message -> dict(lost, gaps, longest_gap_s, received,
+    method); ``warnings`` list of sentences; ``cycle`` int64 (N,)
+    accelerate-cycle id (-1 outside); plus ``t0_ns`` (host time of the first
+    frame), ``rate_hz``, ``cutoff_hz``, ``wheel_radius_m``, ``latency_reference``.
+    """
+
+    signals: pd.DataFrame
+    gnss_latency_s: float | None
+    gnss_latency_stderr_s: float | None
+    gps_time_mapping: dict | None
+    lost_frames: dict
+    warnings: list[str]
+    cycle: np.ndarray
+    t0_ns: int = 0
+    rate_hz: float = 100.0
+    cutoff_hz: float = DEFAULT_CUTOFF_HZ
+    wheel_radius_m: float = float("nan")
+    latency_reference: str = ""
+    latency_detail: LatencyEstimate | None = field(default=None, repr=False)
+
+    def summary(self) -> str:
+        """Human-readable report: latency, GPS time mapping, lost frames, valid share, warnings."""
+        s = self.signals
+        lines = [f"samples: {len(s)} at {self.rate_hz:g} Hz ({len(s) / self.rate_hz:.1f} s), "
+                 f"low-pass {self.cutoff_hz:g} Hz (zero-phase Butterworth, order 4 x2), "
+                 f"wheel radius {self.wheel_radius_m:g} m"]
+        if self.gnss_latency_s is not None:
+            lines.append(f"GNSS latency: {self.gnss_latency_s * 1e3:.1f} ms +- "
+                         f"{self.gnss_latency_stderr_s * 1e3:.1f} ms (reference: {self.latency_reference}; removed)")
+        else:
+            lines.append("GNSS latency: not estimated (see warnings); GNSS timestamps used as received")
+        g = self.gps_time_mapping
+        if g:
+            lines.append(
+                f"GPS time: host t0 = GPS week {g['gps_week_at_t0']} tow {g['gps_tow_at_t0_s']:.3f} s; "
+                f"GPS - host = {g['offset_s']:+.3f} s, drift {g['drift_ppm']:+.2f} ppm, residual rms "
+                f"{g['residual_rms_s'] * 1e3:.2f} ms (max {g['residual_max_s'] * 1e3:.2f} ms, "
+                f"{g['n']} fixes, {g['n_outliers']} outliers)")
+        else:
+            lines.append("GPS time: no mapping (see warnings)")
+        if self.lost_frames:
+            lines.append("lost frames:")
+            for name, d in self.lost_frames.items():
+                lines.append(f"  {name}: {d['lost']} lost in {d['gaps']} gaps (longest "
+                             f"{d['longest_gap_s'] * 1e3:.0f} ms), {d['received']} received [{d['method']}]")
+        n = len(s)
+        share = float(s["valid"].mean()) if n else 0.0
+        counts = s["phase"].value_counts().to_dict() if n else {}
+        n_cycles = int(self.cycle.max()) + 1 if self.cycle.size and self.cycle.max() >= 0 else 0
+        lines.append(f"valid samples: {share * 100:.1f} % of {n}; phases: "
+                     + ", ".join(f"{k} {counts.get(k, 0)}" for k in ("accel", "brake", "standstill", "other"))
+                     + f"; accelerate cycles: {n_cycles}")
+        for w in self.warnings:
+            lines.append(f"warning: {w}")
+        return "\n".join(lines)
+
+
+# --------------------------------------------------------------------------- configuration
+def _resolve_config(path: Path, config: Any, warnings: list[str]):
+    """VehicleConfig from an object, a TOML path, the recording's attachment, or the default."""
+    from wheelsoil.daq import VehicleConfig, load_vehicle_config
+
+    if isinstance(config, VehicleConfig):
+        return config
+    if config is not None:
+        return load_vehicle_config(config)
+    try:
+        from mcap.reader import make_reader
+
+        from wheelsoil.daq.info import config_from_attachments
+
+        with open(path, "rb") as f:
+            att = {a.name: a.data for a in make_reader(f).iter_attachments()}
+        cfg = config_from_attachments(att)
+        if cfg is not None:
+            return cfg
+        warnings.append(f"{path}: no vehicle configuration attached; using the shipped default")
+    except OSError:
+        raise
+    except Exception as exc:  # damaged file or attachment: fall back, say so
+        warnings.append(f"{path}: attached vehicle configuration not readable ({exc}); "
+                        "using the shipped default")
+    return load_vehicle_config()
+
+
+def _front_wheel_refs(config) -> list:
+    """SignalRefs of the free-rolling front wheels: config keys ``wheel_speed_fl``/``_fr``,
+    else signals ending in FL/FR in the message of ``wheel_speed`` (same unit)."""
+    from wheelsoil.daq import SignalRef
+
+    refs = [config.signals[k] for k in ("wheel_speed_fl", "wheel_speed_fr") if k in config.signals]
+    if refs:
+        return refs
+    ws = config.signals["wheel_speed"]
+    try:
+        msg = config.database(ws.bus).get_message_by_name(ws.message)
+    except (KeyError, ValueError, OSError):
+        return []
+    return [SignalRef(ws.bus, ws.message, s.name, ws.unit, ws.scale_to_si)
+            for s in msg.signals if s.name.upper().endswith(("FL", "FR")) and s.name != ws.signal]
+
+
+# --------------------------------------------------------------------------- resampling
+def _to_grid(t_s: np.ndarray, x: np.ndarray, period_s: float, t_grid: np.ndarray,
+             cutoff_hz: float) -> np.ndarray:
+    """Filter a source series per segment and interpolate it onto the output grid.
+
+    ``t_s`` (n,) sorted times [s], ``x`` (n,) values (NaN = lost sample);
+    segments break where more than ``MAX_FILL_SAMPLES`` consecutive samples
+    are missing. Within a segment the series is resampled uniformly at
+    ``period_s`` (lost samples linearly bridged), low-passed zero-phase and
+    interpolated onto the ``t_grid`` points inside it; others stay NaN.
+    """
+    out = np.full(t_grid.shape[0], np.nan)
+    ok = np.isfinite(x) & np.isfinite(t_s)
+    t, v = t_s[ok], x[ok]
+    if t.shape[0] < 2:
+        return out
+    brk = np.flatnonzero(np.diff(t) > (MAX_FILL_SAMPLES + 1.5) * period_s) + 1
+    fs = 1.0 / period_s
+    for a, b in zip(np.concatenate([[0], brk]), np.concatenate([brk, [t.shape[0]]])):
+        if b - a < 2:
+            continue
+        n_u = int(math.floor((t[b - 1] - t[a]) / period_s)) + 1
+        tu = t[a] + np.arange(n_u) * period_s
+        xu = lowpass(np.interp(tu, t[a:b], v[a:b]), fs, cutoff_hz)
+        lo = np.searchsorted(t_grid, tu[0], side="left")
+        hi = np.searchsorted(t_grid, tu[-1], side="right")
+        if hi > lo:
+            out[lo:hi] = np.interp(t_grid[lo:hi], tu, xu)
+    return out
+
+
+def _time_gaps(name: str, ts_ns: np.ndarray) -> tuple[dict, float]:
+    """Lost frames of a message without counter, from time gaps > 1.5 nominal periods."""
+    if ts_ns.shape[0] < 3:
+        return {"lost": 0, "gaps": 0, "longest_gap_s": 0.0, "received": int(ts_ns.shape[0]),
+                "method": "too few frames"}, float("nan")
+    dt = np.diff(np.sort(ts_ns)) * 1e-9
+    period = float(np.median(dt))
+    steps = np.round(dt / period)
+    big = steps > 1.5
+    return {"lost": int(np.sum(steps[big] - 1)), "gaps": int(np.count_nonzero(big)),
+            "longest_gap_s": float(dt[big].max()) if big.any() else 0.0,
+            "received": int(ts_ns.shape[0]), "method": f"time gaps, period {period * 1e3:.1f} ms"}, period
+
+
+# --------------------------------------------------------------------------- main entry
+def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: float | None = None,
+                      progress: bool = False) -> ProcessResult:
+    """Decode, synchronise, filter and compute slip for one MCAP recording.
+
+    Parameters: ``path`` ``.mcap`` recording (``wheelsoil log``/``import``);
+    ``config`` a ``VehicleConfig``, a vehicle TOML path, or None (the
+    configuration attached to the recording, else ``dbc/vehicle.toml``);
+    ``rate_hz`` output grid rate [Hz] (default 100); ``cutoff_hz`` low-pass
+    cutoff [Hz] (default :data:`~.filters.DEFAULT_CUTOFF_HZ` = 5 Hz, capped at
+    0.4 x ``rate_hz`` so it also serves as anti-alias filter); ``progress``
+    shows a tqdm bar over the frames read.
+
+    Returns :class:`ProcessResult` (columns :data:`COLUMNS`, one row per grid
+    point from the first frame of the recording to the last). Slip is Eq. (6)
+    of the seed paper with r = ``config.wheel_radius_m``.
+
+    Raises: ``OSError`` unreadable file; ``ValueError`` not an MCAP
+    recording, bad options, or a recording holding none of the configured
+    messages (names what was looked for). Missing parts (no GNSS, no wheel
+    speed, no WFT, lost frames) are reported in ``warnings`` instead.
+    """
+    from wheelsoil.daq import iter_frame_batches
+
+    path = Path(path)
+    if not rate_hz > 0:
+        raise ValueError(f"rate must be > 0 Hz, not {rate_hz}")
+    cutoff = DEFAULT_CUTOFF_HZ if cutoff_hz is None else float(cutoff_hz)
+    if not cutoff > 0:
+        raise ValueError(f"cutoff must be > 0 Hz, not {cutoff_hz}")
+    warns: list[str] = []
+    if cutoff > 0.4 * rate_hz:
+        warns.append(f"cutoff {cutoff:g} Hz lowered to {0.4 * rate_hz:g} Hz (0.4 x the output rate, anti-alias)")
+        cutoff = 0.4 * rate_hz
+    if not path.exists():
+        raise OSError(f"{path}: no such file")
+    cfg = _resolve_config(path, config, warns)
+    r = float(cfg.wheel_radius_m)
+    sig = cfg.signals
+    fronts = _front_wheel_refs(cfg)
+
+    # ---- 1. decode only what is needed --------------------------------------------------
+    refs = {k: sig[k] for k in ("wft_fx_w", "wft_fz_w", "wft_my", "wft_angle", "wft_counter_force",
+                                "wft_counter_moment", "wft_counter_angle", "wheel_speed",
+                                "gnss_speed", "gnss_forward_velocity", "gnss_time_week", "gnss_time_tow")}
+    select: dict[str, set[str]] = {}
+    for ref in list(refs.values()) + fronts:
+        select.setdefault(ref.message, set()).add(ref.signal)
+    for key in ("wft_fx_w", "wft_my", "wft_angle"):  # WFT Status, if the DBC has it
+        msg = cfg.database(sig[key].bus).get_message_by_name(sig[key].message)
+        if "Status" in [s.name for s in msg.signals]:
+            select[sig[key].message].add("Status")
+    decoder = Decoder({bus: [cfg.database(bus)] for bus in cfg.buses}, select=select)
+
+    span = [None, None]
+    n_frames = [0]
+
+    def batches():
+        it = iter_frame_batches(path)
+        bar = None
+        if progress:
+            from tqdm import tqdm
+            bar = tqdm(unit=" frames", unit_scale=True, desc=f"decode {path.name}")
+        try:
+            for b in it:
+                if len(b):
+                    lo, hi = int(b.timestamp_ns.min()), int(b.timestamp_ns.max())
+                    span[0] = lo if span[0] is None else min(span[0], lo)
+                    span[1] = hi if span[1] is None else max(span[1], hi)
+                    n_frames[0] += len(b)
+                    if bar is not None:
+                        bar.update(len(b))
+                yield b
+        finally:
+            if bar is not None:
+                bar.close()
+
+    import warnings as _w
+
+    with _w.catch_warnings(record=True) as caught:
+        _w.simplefilter("always", RuntimeWarning)
+        dec = decode_batches(batches(), decoder)
+    warns += [str(c.message) for c in caught if issubclass(c.category, RuntimeWarning)]
+    if span[0] is None:
+        raise ValueError(f"{path}: the recording holds no CAN frames")
+
+    def get(key_or_ref) -> tuple[np.ndarray, np.ndarray] | None:
+        ref = sig[key_or_ref] if isinstance(key_or_ref, str) else key_or_ref
+        m: DecodedMessage | None = dec.get(ref.message)
+        if m is None or len(m) == 0:
+            return None
+        return m.timestamp_ns, m.signals[ref.signal] * ref.scale_to_si
+
+    def label(key: str) -> str:
+        return f"{sig[key].message}.{sig[key].signal} ({sig[key].bus})"
+
+    if not any(sig[k].message in dec for k in refs):
+        looked = ", ".join(sorted({f"{sig[k].message} on {sig[k].bus}" for k in refs}))
+        raise ValueError(f"{path}: none of the configured messages found in {n_frames[0]} frames "
+                         f"(looked for {looked}); wrong vehicle configuration or bus names?")
+
+    t0_ns = int(span[0])
+    n_grid = int(math.floor((span[1] - t0_ns) * 1e-9 * rate_hz)) + 1
+    t_grid = np.arange(n_grid) / rate_hz
+
+    def rel_s(ts_ns: np.ndarray) -> np.ndarray:
+        return (ts_ns - t0_ns) * 1e-9
+
+    lost_frames: dict[str, dict] = {}
+    nan = np.full(n_grid, np.nan)
+
+    # ---- 2. WFT -------------------------------------------------------------------------
+    load = dp = torque = nan
+    wft_period = None
+    streams = {}
+    for ckey, cols in (("wft_counter_force", ("wft_fx_w", "wft_fz_w")), ("wft_counter_moment", ("wft_my",)),
+                       ("wft_counter_angle", ("wft_angle",))):
+        cref = sig[ckey]
+        m = dec.get(cref.message)
+        if m is None or len(m) < 2:
+            warns.append(f"no {cref.message} frames on {cref.bus}: "
+                         + ", ".join(label(c) for c in cols) + " missing")
+            continue
+        columns = {}
+        for c in cols + ((None,) if "Status" in m.signals else ()):
+            if c is None:
+                columns[f"status:{cref.message}"] = m.signals["Status"]
+            elif sig[c].message == cref.message:
+                columns[c] = m.signals[sig[c].signal] * sig[c].scale_to_si
+        streams[cref.message] = (m.timestamp_ns, m.signals[cref.signal], columns)
+    force_msg = sig["wft_counter_force"].message
+    if streams:
+        ref_msg = force_msg if force_msg in streams else next(iter(streams))
+        try:
+            ws = assemble_wft_samples(streams, reference=ref_msg)
+        except ValueError as exc:
+            ws = None
+            warns.append(f"WFT counters unusable ({exc}): load, drawbar pull and torque not computed")
+        if ws is not None:
+            wft_period = ws.period_s
+            for name, rep in ws.reports.items():
+                longest = max(((b - a) * 1e-9 for a, b, _ in rep.gaps), default=0.0)
+                lost_frames[name] = {"lost": rep.lost, "gaps": len(rep.gaps), "longest_gap_s": longest,
+                                     "received": int(streams[name][0].shape[0]),
+                                     "method": f"counter, period {ws.period_s * 1e3:.2f} ms"}
+            cols = ws.columns
+            bad = np.zeros(ws.index.shape[0], dtype=bool)
+            for k, v in cols.items():
+                if k.startswith("status:"):
+                    st = np.nan_to_num(v, nan=0).astype(np.int64)
+                    bad |= (st & WFT_STATUS_BAD) != 0
+                    if np.any(st & 0x80):
+                        warns.append(f"{k[7:]}: WFT reports 'not zeroed since power-up' (Status bit 7) in "
+                                     f"{np.count_nonzero(st & 0x80)} samples: force offsets may be wrong")
+            if bad.any():
+                warns.append(f"WFT Status flags overload/bridge/encoder fault in {np.count_nonzero(bad)} "
+                             "samples: those samples are treated as lost")
+            t_w = rel_s(ws.timestamp_ns)
+            if all(k in cols for k in ("wft_fx_w", "wft_fz_w", "wft_angle")):
+                fx, fz = rotate_to_hub(cols["wft_fx_w"], cols["wft_fz_w"], cols["wft_angle"])
+                fx[bad] = np.nan
+                fz[bad] = np.nan
+                dp = _to_grid(t_w, fx, ws.period_s, t_grid, cutoff)
+                load = _to_grid(t_w, fz, ws.period_s, t_grid, cutoff)
+            else:
+                warns.append("WFT force or angle frames missing: load_n and drawbar_pull_n not computed (NaN)")
+            if "wft_my" in cols:
+                my = np.where(bad, np.nan, cols["wft_my"])
+                torque = _to_grid(t_w, my, ws.period_s, t_grid, cutoff)
+            else:
+                warns.append("WFT moment frames missing: torque_nm not computed (NaN)")
+            total_lost = sum(rep.lost for rep in ws.reports.values())
+            if total_lost:
+                long_gaps = sum(1 for rep in ws.reports.values() for g in rep.gaps if g[2] > MAX_FILL_SAMPLES)
+                warns.append(f"WFT: {total_lost} frames lost (counter gaps); gaps of up to {MAX_FILL_SAMPLES} "
+                             f"samples interpolated, {long_gaps} longer gaps left as invalid")
+    else:
+        warns.append("no WFT frames at all: load_n, drawbar_pull_n and torque_nm are NaN; slip and speed "
+                     "still computed")
+
+    # ---- 3a. wheel speeds -----------------------------------------------------------------
+    omega = nan
+    ws_ref = sig["wheel_speed"]
+    got = get("wheel_speed")
+    wss_t = wss_rel = None
+    if got is None:
+        warns.append(f"no wheel speed ({label('wheel_speed')}): omega_radps and slip are NaN; "
+                     "forces and speed still computed")
+    else:
+        wss_t, w_rl = got
+        rep, period = _time_gaps(ws_ref.message, wss_t)
+        lost_frames[ws_ref.message] = rep
+        wss_rel = rel_s(wss_t)
+        omega = _to_grid(wss_rel, w_rl, period, t_grid, cutoff)
+
+    # ---- 3b. GNSS speed, GPS time, latency ---------------------------------------------
+    speed = nan
+    latency: LatencyEstimate | None = None
+    lat_ref = ""
+    g_fwd, g_spd = get("gnss_forward_velocity"), get("gnss_speed")
+    if g_fwd is not None:
+        g_t, g_v = g_fwd
+        g_msg = sig["gnss_forward_velocity"].message
+    elif g_spd is not None:
+        g_t, g_v = g_spd
+        g_msg = sig["gnss_speed"].message
+        warns.append(f"no {label('gnss_forward_velocity')}: using the unsigned ground speed "
+                     f"{label('gnss_speed')} as V (reversing cannot be told apart)")
+    else:
+        g_t = g_v = None
+        g_msg = ""
+        warns.append(f"no GNSS velocity ({label('gnss_forward_velocity')} or {label('gnss_speed')}): "
+                     "speed_mps, slip and the latency are not computed, all samples invalid; load, "
+                     "drawbar pull, torque and wheel speed still computed")
+    gps_map = None
+    gt = get("gnss_time_tow")
+    gw = get("gnss_time_week")
+    if gt is None or gw is None or len(gt[0]) != len(gw[0]):
+        warns.append(f"no GPS time frames ({label('gnss_time_tow')}): no host->GPS time mapping")
+    else:
+        try:
+            gps_map = fit_gps_time_mapping(gt[0], gw[1], gt[1], t0_ns=t0_ns)
+        except ValueError as exc:
+            warns.append(f"GPS time mapping not possible: {exc}")
+    if g_t is not None:
+        rep, g_period = _time_gaps(g_msg, g_t)
+        lost_frames[g_msg] = rep
+        g_rel = rel_s(g_t)
+        # latency reference: free-rolling front wheels, else the measured wheel at low torque
+        ref_t = ref_v = usable = None
+        f_series = [s for s in (get(f) for f in fronts) if s is not None]
+        if f_series:
+            ft = f_series[0][0]
+            fv = np.nanmean(np.vstack([np.interp(ft, s[0], s[1]) for s in f_series]), axis=0) * r
+            ref_t, ref_v = rel_s(ft), fv
+            lat_ref = "front wheels r*omega (" + ", ".join(f.signal for f in fronts) + ")"
+        elif wss_t is not None and np.isfinite(torque).any():
+            ref_t, ref_v = wss_rel, got[1] * r
+            tq = np.interp(ref_t, t_grid, np.nan_to_num(torque, nan=1e9))
+            usable = np.abs(tq) < FREE_ROLLING_TORQUE_NM
+            lat_ref = f"measured wheel r*omega where |T| < {FREE_ROLLING_TORQUE_NM:g} N m"
+        if ref_t is not None:
+            _, ref_period = _time_gaps("ref", (ref_t * 1e9).astype(np.int64))
+            ref_f = _to_grid(ref_t, ref_v, ref_period, ref_t, cutoff)
+            dv = np.gradient(np.nan_to_num(ref_f), ref_t)
+            use = dv > -LATENCY_MAX_DECEL_MPS2
+            usable = use if usable is None else (usable & use)
+            try:
+                latency = estimate_latency(g_rel, g_v, ref_t, ref_f, usable_ref=usable)
+                if latency.note:
+                    warns.append(f"GNSS latency: {latency.note}")
+            except ValueError as exc:
+                warns.append(f"GNSS latency not estimated ({exc}); GNSS timestamps used as received")
+        else:
+            warns.append("GNSS latency not estimated: no free-rolling wheel speed to compare with; "
+                         "GNSS timestamps used as received")
+        shift = latency.latency_s if latency is not None else 0.0
+        speed = _to_grid(g_rel - shift, g_v, g_period, t_grid, min(cutoff, 0.4 / g_period))
+
+    # ---- 4. slip, phase, cycles, valid --------------------------------------------------------
+    rw = r * omega
+    slip, in_range = slip_ratio(rw, speed, min_wheel_speed_mps=MIN_WHEEL_SPEED_MPS)
+    phase = classify_phases(t_grid, speed, rw, torque)
+    cycle = accel_cycles(t_grid, phase)
+    valid = in_range & np.isfinite(load) & np.isfinite(dp) & np.isfinite(torque)
+    moving = np.isfinite(rw) & np.isfinite(speed)
+    undefined = moving & (np.abs(rw) < MIN_WHEEL_SPEED_MPS)
+    if undefined.any():
+        runs = segments(undefined)
+        longest = max(b - a for a, b in runs) / rate_hz
+        warns.append(f"slip undefined (NaN) for {np.count_nonzero(undefined) / rate_hz:.1f} s where "
+                     f"r*omega < {MIN_WHEEL_SPEED_MPS} m/s (longest {longest:.1f} s: standstill or locked "
+                     "wheel); other columns computed there")
+    out_range = np.isfinite(slip) & ~in_range
+    if out_range.any():
+        warns.append(f"slip outside [-1, 1) in {np.count_nonzero(out_range)} samples: flagged invalid")
+
+    df = pd.DataFrame({
+        "t_s": t_grid, "slip": slip, "load_n": load, "drawbar_pull_n": dp, "torque_nm": torque,
+        "speed_mps": speed, "omega_radps": omega, "phase": phase.astype(object), "valid": valid,
+    }, columns=list(COLUMNS))
+    return ProcessResult(
+        signals=df,
+        gnss_latency_s=None if latency is None else latency.latency_s,
+        gnss_latency_stderr_s=None if latency is None else latency.stderr_s,
+        gps_time_mapping=gps_map, lost_frames=lost_frames, warnings=warns, cycle=cycle,
+        t0_ns=t0_ns, rate_hz=float(rate_hz), cutoff_hz=cutoff, wheel_radius_m=r,
+        latency_reference=lat_ref if latency is not None else "", latency_detail=latency,
+    )

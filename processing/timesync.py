@@ -1,0 +1,167 @@
+"""Clocks: host -> GPS time mapping, and the GNSS velocity latency.
+
+All signals stay on the host timebase (kernel receive time, int64 ns since
+the Unix epoch; both buses share it, hardware.md "Buses"). Two things are
+estimated from the data:
+
+* :func:`fit_gps_time_mapping` — a robust straight line from host time to the
+  receiver's GPS time (``RT_SB_GPS_Time``: GPS week and time of week of the
+  fix): ``gps_s = gps_at_t0_s + (1 + drift) * (host_s - t0_s)``. Robust by an
+  initial Theil-Sen line (scipy.stats.theilslopes on at most 400 points) and
+  least squares on the points within 5 MADs (at least 2 ms) of it.
+* :func:`estimate_latency` — the delay of the GNSS velocity behind a
+  reference speed measured without delay: ``v_gnss(t) = a * v_ref(t - tau) + b``
+  (the gain ``a`` absorbs an effective rolling radius different from r, ``b``
+  small offsets). ``tau`` minimises the sum of squares over a grid
+  (2 ms steps) and then by a bounded scalar minimisation; its standard error is
+  the Gauss-Newton one, ``sigma^2 / sum((a dv_ref/dt)^2)``, inflated by
+  ``(1 + rho)/(1 - rho)`` for the lag-1 autocorrelation ``rho`` of the residuals.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import optimize, stats
+
+__all__ = ["GPS_EPOCH_UNIX_S", "fit_gps_time_mapping", "LatencyEstimate", "estimate_latency"]
+
+#: 1980-01-06T00:00:00 (GPS epoch) in Unix seconds (UTC, no leap seconds).
+GPS_EPOCH_UNIX_S = 315_964_800
+SECONDS_PER_WEEK = 604_800
+
+
+def fit_gps_time_mapping(host_ns: np.ndarray, gps_week: np.ndarray, gps_tow_s: np.ndarray,
+                         *, t0_ns: int | None = None) -> dict:
+    """Fit host receive time -> GPS time of the fix, robustly.
+
+    Parameters: ``host_ns`` int64 (N,) host receive times of ``RT_SB_GPS_Time``
+    frames; ``gps_week`` (N,) GPS week numbers; ``gps_tow_s`` (N,) time of week
+    [s]; ``t0_ns`` the host time the offset is reported at (default the first
+    frame).
+
+    Returns a dict: ``t0_ns``; ``gps_at_t0_s`` GPS seconds since the GPS epoch
+    at host ``t0``; ``offset_s`` = GPS time minus host time read as GPS time
+    (``host Unix s - 315964800``); a host clock synchronised to UTC gives the
+    GPS-UTC leap seconds (18 s since 2017) plus the receiver's output latency;
+    ``drift_ppm`` rate difference of the clocks; ``residual_rms_s``,
+    ``residual_max_s`` of the inliers; ``n``, ``n_outliers``.
+    Frames with week 0 and time 0 (no fix) are ignored. Raises ``ValueError``
+    with fewer than 3 usable frames.
+    """
+    host_ns = np.asarray(host_ns, dtype=np.int64)
+    week = np.asarray(gps_week, dtype=np.float64)
+    tow = np.asarray(gps_tow_s, dtype=np.float64)
+    ok = np.isfinite(week) & np.isfinite(tow) & ((week > 0) | (tow > 0))
+    if np.count_nonzero(ok) < 3:
+        raise ValueError(f"only {np.count_nonzero(ok)} usable GPS time frames (need 3)")
+    if t0_ns is None:
+        t0_ns = int(host_ns[ok][0])
+    x = (host_ns[ok] - t0_ns) * 1e-9
+    gps = week[ok] * SECONDS_PER_WEEK + tow[ok]
+    # subtract a whole-second reference so the fit works on small numbers
+    ref = float(np.floor(np.median(gps - x)))
+    y = gps - ref
+    step = max(1, x.shape[0] // 400)
+    slope, intercept, _, _ = stats.theilslopes(y[::step], x[::step])
+    res = y - (intercept + slope * x)
+    mad = float(np.median(np.abs(res - np.median(res)))) * 1.4826
+    inl = np.abs(res) <= max(5 * mad, 2e-3)
+    if np.count_nonzero(inl) >= 3:
+        slope, intercept = np.polyfit(x[inl], y[inl], 1)
+        res = y - (intercept + slope * x)
+    gps_at_t0 = ref + float(intercept)
+    host_as_gps = t0_ns * 1e-9 - GPS_EPOCH_UNIX_S
+    r = res[inl]
+    return {
+        "t0_ns": int(t0_ns),
+        "gps_at_t0_s": gps_at_t0,
+        "gps_week_at_t0": int(gps_at_t0 // SECONDS_PER_WEEK),
+        "gps_tow_at_t0_s": float(gps_at_t0 % SECONDS_PER_WEEK),
+        "offset_s": gps_at_t0 - host_as_gps,
+        "drift_ppm": (float(slope) - 1.0) * 1e6,
+        "residual_rms_s": float(np.sqrt(np.mean(r**2))) if r.size else float("nan"),
+        "residual_max_s": float(np.max(np.abs(r))) if r.size else float("nan"),
+        "n": int(x.shape[0]),
+        "n_outliers": int(np.count_nonzero(~inl)),
+    }
+
+
+@dataclass
+class LatencyEstimate:
+    """Result of :func:`estimate_latency`: ``latency_s``, ``stderr_s``, gain ``a``,
+    offset ``b`` [m/s], residual RMS [m/s], points used ``n``, and a ``note``."""
+
+    latency_s: float
+    stderr_s: float
+    gain: float
+    offset_mps: float
+    residual_rms_mps: float
+    n: int
+    note: str = ""
+
+
+def _fit_at(tau: float, t_g: np.ndarray, v_g: np.ndarray, t_ref: np.ndarray, v_ref: np.ndarray,
+            keep_ref: np.ndarray):
+    """Linear fit v_g ~ a*v_ref(t_g - tau) + b on usable points; returns (sse, a, b, mask, x)."""
+    x = np.interp(t_g - tau, t_ref, v_ref, left=np.nan, right=np.nan)
+    k = np.interp(t_g - tau, t_ref, keep_ref.astype(np.float64), left=0.0, right=0.0) > 0.999
+    m = k & np.isfinite(x) & np.isfinite(v_g)
+    if np.count_nonzero(m) < 10:
+        return np.inf, np.nan, np.nan, m, x
+    A = np.column_stack([x[m], np.ones(np.count_nonzero(m))])
+    coef, *_ = np.linalg.lstsq(A, v_g[m], rcond=None)
+    r = v_g[m] - A @ coef
+    return float(r @ r) / np.count_nonzero(m), float(coef[0]), float(coef[1]), m, x
+
+
+def estimate_latency(t_gnss_s: np.ndarray, v_gnss: np.ndarray, t_ref_s: np.ndarray, v_ref: np.ndarray,
+                     *, usable_ref: np.ndarray | None = None, max_latency_s: float = 0.5,
+                     min_speed_mps: float = 0.3) -> LatencyEstimate:
+    """Estimate how late the GNSS velocity arrives relative to a reference speed.
+
+    Parameters: ``t_gnss_s`` (N,) host receive times [s] of the GNSS speed,
+    ``v_gnss`` (N,) [m/s]; ``t_ref_s`` (M,) sorted host times [s] of a
+    reference speed with negligible delay (r*omega of free-rolling wheels,
+    filtered), ``v_ref`` (M,) [m/s]; ``usable_ref`` (M,) bool: where the
+    reference may be trusted (e.g. no hard braking); points with reference
+    speed below ``min_speed_mps`` are not used; search range
+    ``0..max_latency_s``.
+
+    Returns :class:`LatencyEstimate` (``latency_s`` positive = GNSS late).
+    Raises ``ValueError`` when fewer than 10 usable points overlap or the
+    speed never varies (nothing to align).
+    """
+    t_g = np.asarray(t_gnss_s, dtype=np.float64)
+    v_g = np.asarray(v_gnss, dtype=np.float64)
+    t_r = np.asarray(t_ref_s, dtype=np.float64)
+    v_r = np.asarray(v_ref, dtype=np.float64)
+    keep = np.isfinite(v_r) & (v_r >= min_speed_mps)
+    if usable_ref is not None:
+        keep &= np.asarray(usable_ref, dtype=bool)
+    taus = np.arange(0.0, max_latency_s + 1e-9, 0.002)
+    sse = np.array([_fit_at(t, t_g, v_g, t_r, v_r, keep)[0] for t in taus])
+    if not np.isfinite(sse).any():
+        raise ValueError("fewer than 10 GNSS samples overlap a usable reference speed")
+    i = int(np.nanargmin(sse))
+    lo, hi = taus[max(i - 2, 0)], taus[min(i + 2, taus.size - 1)]
+    res = optimize.minimize_scalar(lambda t: _fit_at(t, t_g, v_g, t_r, v_r, keep)[0],
+                                   bounds=(lo, hi), method="bounded", options={"xatol": 1e-5})
+    tau = float(res.x)
+    mse, a, b, m, _ = _fit_at(tau, t_g, v_g, t_r, v_r, keep)
+    dv = np.gradient(v_r, t_r)
+    slope = a * np.interp(t_g - tau, t_r, dv)[m]
+    resid = v_g[m] - (a * np.interp(t_g - tau, t_r, v_r)[m] + b)
+    n = int(np.count_nonzero(m))
+    s2 = float(resid @ resid) / max(n - 3, 1)
+    info = float(slope @ slope)
+    if info <= 0:
+        raise ValueError("the reference speed never changes: the latency cannot be estimated")
+    rho = float(np.corrcoef(resid[:-1], resid[1:])[0, 1]) if n > 3 else 0.0
+    rho = min(max(rho, 0.0), 0.95) if np.isfinite(rho) else 0.0
+    stderr = float(np.sqrt(s2 / info * (1 + rho) / (1 - rho)))
+    note = ""
+    if tau <= 0.004 or tau >= max_latency_s - 0.004:
+        note = f"latency at the edge of the search range 0..{max_latency_s:g} s"
+    return LatencyEstimate(tau, stderr, a, b, float(np.sqrt(mse)), n, note)

@@ -1,0 +1,179 @@
+"""Wheel force transducer: sample counters, lost frames, rotation to the hub frame.
+
+The WFT sends three frames per sample (force, moment, angle), all carrying
+the same 8-bit ``Counter`` (0..255, wrapping). This module
+
+1. unwraps each message's counter into a sample index, using the host
+   receive time to count whole wraps across long gaps
+   (:func:`unwrap_counter`);
+2. aligns the three messages' indices (same counter, nearest in time) and
+   builds one table of samples, reporting lost frames
+   (:func:`assemble_wft_samples`);
+3. rotates the wheel-fixed forces into the hub frame with the wheel angle of
+   the same sample (:func:`rotate_to_hub`, hardware.md "Frames and signs").
+
+Source: ``docs`` of the WFT DBC (``dbc/wft.dbc``) and ``/work/shared/hardware.md``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+__all__ = ["unwrap_counter", "rotate_to_hub", "WftSamples", "assemble_wft_samples", "GapReport"]
+
+
+def unwrap_counter(timestamp_ns: np.ndarray, counter: np.ndarray, *, modulo: int = 256,
+                   period_s: float | None = None) -> tuple[np.ndarray, float]:
+    """Unwrap a wrapping sample counter into a monotonic sample index.
+
+    Parameters: ``timestamp_ns`` int64 (N,) host receive times (sorted);
+    ``counter`` (N,) values in ``0..modulo-1`` (floats allowed, NaN not);
+    ``period_s`` the nominal sample period (estimated as the median time step
+    between frames whose counter advanced by one when None).
+
+    Returns ``(index, period_s)``: ``index`` int64 (N,) starting at
+    ``counter[0]``; a step of ``k`` between frames means ``k - 1`` lost
+    samples (0 = repeated frame). The number of whole wraps in a step is
+    chosen so the step is closest to ``dt / period_s``: gaps longer than one
+    wrap (0.512 s at 500 Hz) are counted correctly.
+    Raises ``ValueError`` for fewer than 2 frames or no usable period.
+    """
+    ts = np.asarray(timestamp_ns, dtype=np.int64)
+    c = np.asarray(counter).astype(np.int64) % modulo
+    if ts.shape[0] < 2:
+        raise ValueError("need at least 2 frames to unwrap a counter")
+    dt = np.diff(ts) * 1e-9
+    d = np.diff(c) % modulo
+    if period_s is None:
+        ones = dt[d == 1]
+        if ones.size == 0:
+            raise ValueError("counter never advances by one: cannot estimate the sample period")
+        period_s = float(np.median(ones))
+        if not period_s > 0:
+            raise ValueError("frames with consecutive counters share one timestamp: no sample period")
+    expected = dt / period_s
+    steps = d + modulo * np.round((expected - d) / modulo).astype(np.int64)
+    steps = np.maximum(steps, 0)
+    index = np.empty(ts.shape[0], dtype=np.int64)
+    index[0] = c[0]
+    np.cumsum(steps, out=index[1:])
+    index[1:] += c[0]
+    return index, period_s
+
+
+def rotate_to_hub(fx_w: np.ndarray, fz_w: np.ndarray, angle_rad: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Rotate wheel-fixed forces into the non-rotating hub frame.
+
+    ``Fx = Fx_w cos a + Fz_w sin a``, ``Fz = -Fx_w sin a + Fz_w cos a`` with
+    ``a`` the wheel angle of the same sample [rad] (hardware.md, "Frames and
+    signs"; wft.dbc comment of ``WFT_RL_Force``). All arrays (N,) in N;
+    returns ``(Fx, Fz)`` (N,): Fx > 0 drawbar pull, Fz > 0 vertical load.
+    """
+    ca, sa = np.cos(angle_rad), np.sin(angle_rad)
+    return fx_w * ca + fz_w * sa, -fx_w * sa + fz_w * ca
+
+
+@dataclass
+class GapReport:
+    """Lost WFT samples: ``lost`` count, ``gaps`` list of (t_start_ns, t_end_ns, n_lost)."""
+
+    lost: int = 0
+    gaps: list[tuple[int, int, int]] = field(default_factory=list)
+    repeated: int = 0
+
+
+@dataclass
+class WftSamples:
+    """One row per WFT sample index (from the first to the last sample seen).
+
+    ``index`` int64 (M,) unwrapped sample index; ``timestamp_ns`` int64 (M,)
+    (mean host time of the sample's frames; interpolated for missing
+    samples); ``complete`` bool (M,) all three frames present;
+    ``columns`` name -> float64 (M,) (NaN where the frame was lost);
+    ``period_s``; ``reports`` message name -> :class:`GapReport`.
+    """
+
+    index: np.ndarray
+    timestamp_ns: np.ndarray
+    complete: np.ndarray
+    columns: dict[str, np.ndarray]
+    period_s: float
+    reports: dict[str, GapReport]
+
+
+def _gap_report(ts: np.ndarray, idx: np.ndarray) -> GapReport:
+    steps = np.diff(idx)
+    rep = GapReport(repeated=int(np.count_nonzero(steps == 0)))
+    where = np.flatnonzero(steps > 1)
+    rep.lost = int(np.sum(steps[where] - 1))
+    rep.gaps = [(int(ts[i]), int(ts[i + 1]), int(steps[i] - 1)) for i in where]
+    return rep
+
+
+def assemble_wft_samples(streams: dict[str, tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]],
+                         *, reference: str, modulo: int = 256) -> WftSamples:
+    """Match the frames of one WFT sample across messages by counter and time.
+
+    ``streams``: message name -> ``(timestamp_ns (n,), counter (n,),
+    {column: (n,) values})``; ``reference`` the message whose counter defines
+    the sample grid (the force message). Each other message's unwrapped index
+    is shifted by the whole number of wraps that puts its frames on the
+    reference frames nearest in time with the same counter value.
+
+    Returns :class:`WftSamples` covering every index from the first to the
+    last sample of any message. Raises ``ValueError`` if the reference
+    message has fewer than 2 frames.
+    """
+    ts_ref, c_ref, _ = streams[reference]
+    order = np.argsort(ts_ref, kind="stable")
+    idx_ref, period = unwrap_counter(ts_ref[order], c_ref[order], modulo=modulo)
+    t_ref = ts_ref[order]
+    unwrapped: dict[str, tuple[np.ndarray, np.ndarray, np.ndarray]] = {reference: (t_ref, idx_ref, order)}
+    for name, (ts, c, _) in streams.items():
+        if name == reference or ts.shape[0] == 0:
+            continue
+        o = np.argsort(ts, kind="stable")
+        t = ts[o]
+        if t.shape[0] >= 2:
+            idx, _ = unwrap_counter(t, c[o], modulo=modulo, period_s=period)
+        else:
+            idx = np.asarray(c[o], dtype=np.int64) % modulo
+        # reference index expected at these times (interpolated) -> whole wraps
+        k_at = np.interp(t.astype(np.float64), t_ref.astype(np.float64), idx_ref.astype(np.float64))
+        shift = int(np.median(np.round((k_at - idx) / modulo))) * modulo
+        unwrapped[name] = (t, idx + shift, o)
+
+    lo = min(int(u[1][0]) for u in unwrapped.values())
+    hi = max(int(u[1][-1]) for u in unwrapped.values())
+    m = hi - lo + 1
+    index = np.arange(lo, hi + 1, dtype=np.int64)
+    t_sum = np.zeros(m)
+    t_cnt = np.zeros(m)
+    present = np.ones(m, dtype=bool)
+    columns: dict[str, np.ndarray] = {}
+    reports: dict[str, GapReport] = {}
+    for name, (t, idx, o) in unwrapped.items():
+        rows = idx - lo
+        keep = np.ones(rows.shape[0], dtype=bool)
+        keep[1:] = np.diff(rows) > 0  # repeated counter values: keep the first frame
+        here = np.zeros(m, dtype=bool)
+        here[rows[keep]] = True
+        present &= here
+        t_sum[rows[keep]] += t[keep] - t_ref[0]
+        t_cnt[rows[keep]] += 1
+        for col, values in streams[name][2].items():
+            arr = np.full(m, np.nan)
+            arr[rows[keep]] = np.asarray(values)[o][keep]
+            columns[col] = arr
+        reports[name] = _gap_report(t, idx)
+        # frames missing at the ends of this stream relative to the others
+        reports[name].lost += int(idx[0] - lo) + int(hi - idx[-1])
+    have = t_cnt > 0
+    rel = np.full(m, np.nan)
+    rel[have] = t_sum[have] / t_cnt[have]
+    if not have.all():
+        rel = np.interp(index.astype(np.float64), index[have].astype(np.float64), rel[have])
+    timestamp_ns = t_ref[0] + np.round(rel).astype(np.int64)
+    return WftSamples(index, timestamp_ns, present, columns, period, reports)
