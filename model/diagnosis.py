@@ -507,8 +507,10 @@ def _confidence(effect, best, fits, wong, n_units, sink_ev, reasons, structured,
             why.append("some structure remains")
         if effect == "slip_sinkage" and sink_ev is not None:
             if sink_ev["significant"]:
-                down -= 1
-                why.append("measured sinkage grows with slip (direct evidence)")
+                strong = sink_ev["p_positive"] < 1e-4
+                down -= 2 if strong else 1
+                why.append(("strong " if strong else "") + "direct evidence: the measured sinkage grows with slip "
+                           f"(one-sided p = {sink_ev['p_positive']:.2g})")
             else:
                 down += 1
                 why.append("measured sinkage does not grow significantly with slip")
@@ -599,11 +601,35 @@ def _summary(d: Diagnosis, tests_w: dict, load_struct: bool) -> str:
                          "the cause is unexplained.")
     g = d.gain
     if d.model != "wong":
+        f = d.fits[d.model]
         parts.append(
-            f"Gain: R0 {_fmt(g['R0_n_before'])} -> {_fmt(g['R0_n_after'])} in sample, "
+            f"Gain on the drawbar pull: R0 {_fmt(g['R0_n_before'])} -> {_fmt(g['R0_n_after'])} in sample, "
             f"{_fmt(g['cv_R0_n_before'])} -> {_fmt(g['cv_R0_n_after'])} out of sample "
-            f"({data.group_kind}, {d.fits[d.model].cv['n_groups']} folds)."
+            f"({data.group_kind}, {f.cv['n_groups']} folds)."
         )
+        for c, unit, k in (("torque_nm", "N m", 1.0), ("sinkage_m", "mm", 1e3)):
+            if c in data.channels:
+                a, b = wong.cv["cv_R0"].get(c), f.cv["cv_R0"].get(c)
+                if a is not None and b is not None:
+                    parts.append(f"Out-of-sample {CHANNEL_TITLES[c]} error: {a * k:.3g} -> {b * k:.3g} {unit}.")
+        a, b = g["cv_R0_n_before"], g["cv_R0_n_after"]
+        if a is not None and b is not None and b > a:
+            parts.append(
+                f"Note: {TITLES[d.model]} does not improve the out-of-sample drawbar pull; the choice rests on the "
+                "other channels" + (" (the measured sinkage)" if "sinkage_m" in data.channels else "")
+                + ". In Wong's equations extra sinkage adds compaction resistance; the measured Dp does not drop "
+                "that way, so part of what Wong's model gets wrong in Dp is not explained by the candidates."
+            )
+    if d.fit_terrain and d.identifiability:
+        f = d.fits.get(d.model, wong)
+        idf = d.identifiability.get(d.model, {})
+        parts.append(
+            "Terrain fitted from these data: " + (", ".join(idf.get("fitted", [])) or "none")
+            + "; not identified (held at the given terrain's values): " + (", ".join(idf.get("fixed", [])) or "none")
+            + ". kc and kphi cannot be separated with one wheel width (only k_eq = kc/b + kphi enters the model)."
+        )
+    if "torque_nm" not in data.channels:
+        parts.append("No torque was measured, so the torque check of the cause is not available.")
     parts.append(f"Confidence: {d.confidence} ({'; '.join(d.confidence_reasons) or 'clear margins'}).")
     if d.failures:
         parts.append("Not done: " + " ".join(d.failures))

@@ -806,9 +806,10 @@ def fit_model(
     slip_min : samples with s <= slip_min are not used (DataFrame input only).
     terrain_params : extra terrain parameters to fit, from :data:`TERRAIN_PARAMS`
         (``k_eq`` = kc/b + kphi, ``n``, ``c``, ``phi``, ``K``).
-    prune : drop terrain parameters the data does not identify (relative
-        standard error > 0.5, or |correlation| > 0.995 with another), holding
-        them at their start values, and refit; they are listed in ``fixed_terrain``.
+    prune : select the terrain parameters the data identifies by forward
+        selection (:func:`_select_terrain`: BIC must drop by >= 2 and the relative
+        standard error stay < 0.5); the others are held at the given terrain's
+        values and listed in ``fixed_terrain``.  False: fit all of them.
     sinkage : ``"eq10"`` or ``"balance"`` (passed to the model core).
     start : optional start values (name -> value).
     max_iter, eps : Gauss–Newton limits.
@@ -839,16 +840,13 @@ def fit_model(
     start = dict(start or {})
     fixed: list[str] = []
     notes: list[str] = []
-    while True:
-        fit = _fit_once(model_obj, terrain, wheel, data, tparams, start, sinkage, max_iter, eps)
-        if not (prune and tparams and fit[0] is not None and fit[0].success):
-            break
-        drop = _least_identified(fit[0], [t for t in tparams if t not in extra], terrain, wheel)
-        if drop is None:
-            break
-        tparams.remove(drop)
-        fixed.append(drop)
-        notes.append(f"terrain parameter {drop} not identified by the data; held at {start.get(drop, _terrain_start(terrain, wheel, drop)[0]):.4g}")
+    user = [t for t in tparams if t not in extra]
+    if user and prune:
+        chosen, fixed, notes = _select_terrain(model_obj, terrain, wheel, data, list(extra), user, start,
+                                               sinkage, max(max_iter, 200), eps)
+        tparams = [*extra, *chosen]
+    fit = _fit_once(model_obj, terrain, wheel, data, tparams, start, sinkage,
+                    max(max_iter, 200) if tparams else max_iter, eps)
     res, mp, tv = fit
     return _make_model_fit(cand_name, core, model_obj, terrain, wheel, data, res, mp, tv, tuple(fixed), sinkage, notes)
 
@@ -863,10 +861,15 @@ def _fit_once(model_obj, terrain, wheel, data, tparams, start, sinkage, max_iter
         hi.append(float(p.upper))
         sc.append(max(abs(x0[-1]), (float(p.upper) - float(p.lower)) / 10 if math.isfinite(p.upper - p.lower) else 1.0))
     n_model = len(names)
+    log_idx = []  # k_eq is fitted as ln(k_eq): it spans decades and trades off with n
     for t in tparams:
         v0, a, b, s = _terrain_start(terrain, wheel, t)
         names.append(t)
-        x0.append(float(start.get(t, v0)))
+        v = float(start.get(t, v0))
+        if t == "k_eq":
+            log_idx.append(len(x0))
+            v, a, b, s = math.log(min(max(v, a), b)), math.log(a), math.log(b), 1.0
+        x0.append(v)
         lo.append(a)
         hi.append(b)
         sc.append(s)
@@ -877,6 +880,8 @@ def _fit_once(model_obj, terrain, wheel, data, tparams, start, sinkage, max_iter
     meas, sig = meas[okm], sig[okm]
 
     def split(x):
+        x = np.array(x, dtype=float)
+        x[log_idx] = np.exp(x[log_idx])
         return dict(zip(names[:n_model], x[:n_model])), dict(zip(names[n_model:], x[n_model:]))
 
     def fun(x):
@@ -891,26 +896,90 @@ def _fit_once(model_obj, terrain, wheel, data, tparams, start, sinkage, max_iter
         return None, {}, {}
     res = gauss_newton(fun, x0, bounds=(lo, hi), x_scale=sc, sigma=sig, names=names, eps=eps, max_iter=max_iter)
     mp, tv = split(res.x)
+    if log_idx:  # back to k_eq: delta method, se(k) = k se(ln k); correlations unchanged
+        g = np.ones(len(names))
+        x = res.x.copy()
+        x[log_idx] = np.exp(x[log_idx])
+        g[log_idx] = x[log_idx]
+        cov = res.covariance * np.outer(g, g)
+        se = np.sqrt(np.clip(np.diag(cov), 0, None))
+        se = np.where(np.isfinite(np.diag(cov)), se, np.nan)
+        res = dataclasses_replace(
+            res, x=x, params=dict(zip(names, map(float, x))), stderr=dict(zip(names, map(float, se))),
+            covariance=cov,
+        )
     return res, mp, tv
 
 
-def _least_identified(res: FitResult, tparams, terrain, wheel):
-    """The terrain parameter the data identifies worst, or None when all are fine."""
-    worst, worst_score = None, 0.0
-    idx = {n: i for i, n in enumerate(res.names)}
-    for t in tparams:
-        i = idx[t]
+SELECT_BIC_DROP = 2.0  #: a terrain parameter joins the fit only if BIC drops by at least this
+SELECT_MAX_REL_SE = 0.5  #: ... and its relative standard error stays below this
+
+
+def _bic_of(res: FitResult, data: FitData) -> float:
+    """BIC of a fit with the effective sample size (see :class:`ModelFit`)."""
+    n_eff = res.n_obs * data.n_units / max(data.n, 1)
+    rss = max(2 * res.cost, 1e-300)
+    return n_eff * math.log(rss / res.n_obs) + len(res.x) * math.log(max(n_eff, 1.0))
+
+
+def _identified(res: FitResult, names, terrain, wheel) -> bool:
+    """True when every parameter in ``names`` has a finite relative standard error
+    below SELECT_MAX_REL_SE (relative to max(|value|, typical scale)) and is not on a bound."""
+    for t in names:
         se = res.stderr[t]
-        scale = max(abs(res.x[i]), _terrain_start(terrain, wheel, t)[3])
-        rel = se / scale if np.isfinite(se) else np.inf
-        corr = np.nan_to_num(np.abs(res.correlation[i]), nan=1.0)
-        corr[i] = 0
-        score = rel if rel > 0.5 else (rel + 1.0 if corr.max() > 0.995 else 0.0)
-        if rel > 0.5 or corr.max() > 0.995:
-            score = max(score, 1e-9)
-            if score > worst_score:
-                worst, worst_score = t, score
-    return worst
+        scale = max(abs(res.params[t]), _terrain_start(terrain, wheel, t)[3] if t in TERRAIN_PARAMS else 0.0)
+        if not np.isfinite(se) or scale <= 0 or se / scale > SELECT_MAX_REL_SE or t in res.at_bound:
+            return False
+    return True
+
+
+def _select_terrain(model_obj, terrain, wheel, data, base, pool, start, sinkage, max_iter, eps):
+    """Forward selection of the terrain parameters the data identifies.
+
+    Starting from the model's own parameters (plus ``base``), add, one at a
+    time, the parameter of ``pool`` that lowers the BIC most, as long as the BIC
+    drops by at least SELECT_BIC_DROP, the fit converges, and every added
+    terrain parameter stays identified (relative stderr < SELECT_MAX_REL_SE,
+    not on a bound).  Returns (chosen, not chosen, notes).
+    """
+    chosen: list[str] = []
+    res0, _, _ = _fit_once(model_obj, terrain, wheel, data, base, start, sinkage, max_iter, eps)
+    best_bic = _bic_of(res0, data) if res0 is not None else None
+    if best_bic is None:  # no free parameter at all: compare with the plain prediction
+        chans = list(data.channels)
+        try:
+            pred = _predict(model_obj, terrain, wheel, data, {}, {}, sinkage)
+            e = np.concatenate([(data.channels[c] - pred[c]) / data.sigma[c] for c in chans])
+            e = e[np.isfinite(e)]
+            n_eff = e.size * data.n_units / max(data.n, 1)
+            best_bic = n_eff * math.log(max(float(e @ e), 1e-300) / e.size)
+        except ValueError:
+            best_bic = float("inf")
+    remaining = list(pool)
+    while remaining:
+        trials = []
+        for t in remaining:
+            res, _, _ = _fit_once(model_obj, terrain, wheel, data, [*base, *chosen, t], start, sinkage, max_iter, eps)
+            if res is None or not res.success or not np.isfinite(res.cost):
+                continue
+            if not _identified(res, [*chosen, t], terrain, wheel):
+                continue
+            trials.append((_bic_of(res, data), t))
+        if not trials:
+            break
+        bic, t = min(trials)
+        if bic > best_bic - SELECT_BIC_DROP:
+            break
+        chosen.append(t)
+        remaining.remove(t)
+        best_bic = bic
+    notes = []
+    if remaining:
+        notes.append(
+            "terrain parameter(s) " + ", ".join(remaining) + " not identified by the data (forward selection: "
+            f"BIC drop >= {SELECT_BIC_DROP:g}, relative stderr < {SELECT_MAX_REL_SE:g}); held at the given terrain's values"
+        )
+    return chosen, remaining, notes
 
 
 def _make_model_fit(cand_name, core, model_obj, terrain, wheel, data, res, mp, tv, fixed, sinkage, notes):
@@ -1004,6 +1073,11 @@ def cross_validate(data: FitData, fit: ModelFit, terrain, wheel, *, sinkage: str
     e = dp - held["drawbar_pull_n"]
     ok = np.isfinite(e)
     cv_r0 = float(np.sqrt(np.mean(e[ok] ** 2))) if ok.any() else None
+    cv_ch = {}
+    for c, y in data.channels.items():
+        ec = y - held[c]
+        okc = np.isfinite(ec)
+        cv_ch[c] = float(np.sqrt(np.mean(ec[okc] ** 2))) if okc.any() else None
     ws = []
     for c, y in data.channels.items():
         w = (y - held[c]) / data.sigma[c]
@@ -1013,6 +1087,7 @@ def cross_validate(data: FitData, fit: ModelFit, terrain, wheel, *, sinkage: str
     cv = {
         "cv_R0_n": cv_r0,
         "cv_score": score,
+        "cv_R0": cv_ch,
         "n_groups": int(groups.size),
         "group_kind": data.group_kind,
         "failed_folds": failed,
