@@ -311,7 +311,7 @@ def draw_effect_params(effect: str, terrain, rng: np.random.Generator, *, wheel=
     clipped to the model core's Param bounds); ``terrain_mismatch`` the true
     ``K`` [m] and ``phi_deg`` [deg]; ``none`` no parameters. Values in
     ``given`` are kept. Slip-sinkage draws are repeated (up to 100 times)
-    until the sinkage at s = 0.93 and 1.3 x ``load_n`` [N] stays below 0.8 r
+    until the sinkage at s = 0.93 and 1.15 x ``load_n`` [N] stays below 0.85 r
     of ``wheel`` (default DEFAULT_WHEEL), so the wheel does not bury itself.
     Raises ValueError for an unknown effect.
     """
@@ -329,6 +329,8 @@ def draw_effect_params(effect: str, terrain, rng: np.random.Generator, *, wheel=
 
     wheel = wheel or DEFAULT_WHEEL
     model = get_model(effect)
+    if set(PARAM_RANGES[effect]) <= set(given):
+        return given
     bounds = {p.name: (p.lower, p.upper) for p in model.params}
     out: dict[str, float] = {}
     for _ in range(100):
@@ -338,13 +340,13 @@ def draw_effect_params(effect: str, terrain, rng: np.random.Generator, *, wheel=
             out[name] = float(rng.uniform(max(lo, blo), min(hi, bhi)))
         out.update(given)
         try:
-            z = model.predict(terrain, wheel, np.full(2, 1.3 * load_n), np.array([0.5, 0.93]), out).sinkage_m
+            z = model.predict(terrain, wheel, np.full(2, 1.15 * load_n), np.array([0.5, 0.93]), out).sinkage_m
         except ValueError:
             continue
-        if np.all(z < 0.8 * wheel.radius):
+        if np.all(z < 0.85 * wheel.radius):
             return out
-    raise ValueError(f"{effect}: no coefficients with a sinkage below 0.8 r found for "
-                     f"{terrain.name} at {1.3 * load_n:.0f} N (given {given})")
+    raise ValueError(f"{effect}: no coefficients with a sinkage below 0.85 r found for "
+                     f"{terrain.name} at {1.15 * load_n:.0f} N (given {given})")
 
 
 def _check_params(effect: str, params: Mapping[str, float]) -> None:
@@ -720,39 +722,86 @@ def _vehicle_bus_frames(dbs, rng, t_rel, speed, omega, slip, r, latency_s, start
 
 
 # ------------------------------------------------------------------------ output
-def logger_metadata(run: SimulatedRun) -> dict[str, str]:
-    """The recording facts a field logger writes (start time, host, software), nothing else."""
-    import datetime as _dt
+def logger_metadata(run: SimulatedRun, path) -> dict[str, str]:
+    """The recording facts ``wheelsoil log`` writes (start time, host, command), nothing else.
 
-    from wheelsoil import __version__
+    The start time is the first frame's receive time; the host is the vehicle's
+    logging PC. Nothing about the simulation or its hidden effect.
+    """
+    import time as _time
 
-    start = _dt.datetime.fromtimestamp(run.start_ns / 1e9, tz=_dt.timezone.utc)
+    start_s = run.start_ns / 1e9
+    buses = sorted(run.frames)
     return {
-        "start_time": start.isoformat(),
-        "host": "lr-logger",
-        "software": f"wheelsoil {__version__}",
+        "start_time_ns": str(run.start_ns - 180_000_000),  # logger start, just before the first frame
+        "start_time_utc": _time.strftime("%Y-%m-%dT%H:%M:%SZ", _time.gmtime(start_s)),
+        "host": "wft-logger",
+        "command": "wheelsoil log " + " ".join(f"--bus socketcan:{b}" for b in buses) + f" -o {Path(path).name}",
+        **{f"bus.{b}": f"socketcan:{b}" for b in buses},
     }
+
+
+def _write_mcap(run: SimulatedRun, path: Path, config=None) -> None:
+    """Write ``run`` as ``wheelsoil log`` does: 100 ms batches per bus in receive order,
+    a logger status record every second, the summary counters on close."""
+    from wheelsoil.daq import RecordingWriter, load_vehicle_config
+    from wheelsoil.daq.stats import StatsAccumulator
+
+    config = config or load_vehicle_config()
+    batches = run.frame_batches()
+    acc = StatsAccumulator(config)
+    t_end = max(int(b.timestamp_ns[-1]) for b in batches.values() if len(b)) + 1
+    step = 100_000_000
+    edges = np.arange(run.start_ns, t_end + step, step, dtype=np.int64)
+    cuts = {bus: np.searchsorted(b.timestamp_ns, edges) for bus, b in batches.items()}
+    prev_frames = {bus: 0 for bus in batches}
+    with RecordingWriter(path, config=config, metadata=logger_metadata(run, path)) as writer:
+        for bus in sorted(batches):
+            writer.add_bus(bus, interface="socketcan", channel=bus)
+        for w in range(len(edges) - 1):
+            for bus in sorted(batches):
+                lo, hi = cuts[bus][w], cuts[bus][w + 1]
+                if hi > lo:
+                    part = batches[bus].select(slice(lo, hi))
+                    writer.write_batch(part)
+                    acc.update(part)
+            if (w + 1) % 10 == 0 or w == len(edges) - 2:
+                st = acc.stats
+                status = {"elapsed_s": round((w + 1) * 0.1, 1), "file_bytes": writer.file_size(), "buses": {}}
+                for bus in sorted(batches):
+                    lost = sum(v for k, v in st.lost_frames.items() if st.names.get(bus) and k in st.names[bus].values())
+                    status["buses"][bus] = {
+                        "frames": st.frames.get(bus, 0), "fps": float(st.frames.get(bus, 0) - prev_frames[bus]),
+                        "lost_wft_frames": int(lost), "error_frames": st.error_frames.get(bus, 0),
+                        "bus_errors": 0, "rx_dropped": 0,
+                    }
+                    prev_frames[bus] = st.frames.get(bus, 0)
+                writer.write_status(status, time_ns=int(edges[w + 1]))
+        st = acc.stats
+        writer.summary = {
+            "end_time_ns": str(t_end + 250_000_000),
+            "lost_frames": {k: int(v) for k, v in st.lost_frames.items()},
+            "rx_dropped": {b: 0 for b in batches}, "error_frames": {b: st.error_frames.get(b, 0) for b in batches},
+            "bus_errors": {b: 0 for b in batches}, "bad_frames": {b: 0 for b in batches},
+        }
 
 
 def write_simulation(run: SimulatedRun, path, *, config=None) -> Path:
     """Write a simulated run as a recording, the format chosen by the suffix.
 
     ``.mcap``: through ``wheelsoil.daq.RecordingWriter`` with the vehicle
-    configuration (default: the shipped one), exactly what ``wheelsoil log``
-    writes. ``.log`` (candump -L), ``.asc``, ``.blf``, ``.trc``: python-can's
-    writers (``can.Logger``), exactly what ``wheelsoil import`` reads; channel
-    ``can0`` (WFT) and ``can1`` (wheel speeds, GNSS).
+    configuration (default: the shipped one), laid out as ``wheelsoil log``
+    writes it (100 ms frame batches per bus, a status record per second,
+    logger metadata). ``.log`` (candump -L), ``.asc``, ``.blf``, ``.trc``:
+    python-can's writers (``can.Logger``), exactly what ``wheelsoil import``
+    reads; channel ``can0`` (WFT) and ``can1`` (wheel speeds, GNSS) (numbered
+    0 and 1 in the formats with numeric channels).
     Raises ValueError for an unknown suffix; OSError when the file cannot be written.
     """
     path = Path(path)
     suffix = path.suffix.lower()
     if suffix == ".mcap":
-        from wheelsoil.daq import RecordingWriter, load_vehicle_config
-
-        config = config or load_vehicle_config()
-        with RecordingWriter(path, config=config, metadata=logger_metadata(run)) as writer:
-            for bus, batch in run.frame_batches().items():
-                writer.write_batch(batch)
+        _write_mcap(run, path, config)
         return path
     if suffix not in (".log", ".asc", ".blf", ".trc"):
         raise ValueError(f"{path}: unknown output format {suffix!r}; use .mcap, .log, .asc, .blf or .trc")
