@@ -22,7 +22,7 @@ def _pair(measured, predicted) -> tuple[np.ndarray, np.ndarray]:
     for name, arr in (("measured", ya), ("predicted", yp)):
         bad = np.flatnonzero(~np.isfinite(arr))
         if bad.size:
-            raise ValueError(f"{name}[{bad[0]}] = {arr[bad[0]]!r} is not finite")
+            raise ValueError(f"{name}[{bad[0]}] = {float(arr[bad[0]])!r} is not finite")
     return ya, yp
 
 
