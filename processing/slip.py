@@ -11,11 +11,13 @@ as the wheel-speed module does not sense direction).
 Phases (per sample, on the filtered signals):
 
 * ``standstill``: ``|V| < standstill_mps`` and ``r*omega < standstill_mps``;
-* ``accel``: ``T > torque_min_nm`` and ``dV/dt > accel_min_mps2``;
+* ``accel``: ``T > torque_min_nm`` and (``dV/dt > accel_min_mps2`` or
+  ``d(r*omega)/dt > accel_min_mps2``): the driver opens the throttle, the
+  wheel speeds up first (slip rises) and the vehicle follows;
 * ``brake``: ``dV/dt < -accel_min_mps2`` and ``T <= torque_min_nm``;
 * ``other``: everything else (cruising, coasting, unknown inputs).
 
-``dV/dt`` is the derivative of V smoothed over ``smooth_s``.
+Derivatives are taken of V and r*omega smoothed by a moving average over ``smooth_s``.
 """
 
 from __future__ import annotations
@@ -66,19 +68,10 @@ def classify_phases(t_s: np.ndarray, speed_mps: np.ndarray, wheel_speed_mps: np.
     phase = np.full(n, "other", dtype=object)
     if n == 0:
         return phase
-    dvdt = np.full(n, np.nan)
-    if n >= 3:
-        dt = float(np.median(np.diff(t)))
-        w = max(1, int(round(smooth_s / dt)))
-        kernel = np.ones(w) / w
-        fin = np.isfinite(v)
-        vs = np.convolve(np.where(fin, v, 0.0), kernel, mode="same")
-        cnt = np.convolve(fin.astype(float), kernel, mode="same")
-        with np.errstate(invalid="ignore", divide="ignore"):
-            vs = np.where(cnt > 0.999, vs / cnt, np.nan)
-        dvdt = np.gradient(vs, t)
+    dvdt = _smooth_derivative(t, v, smooth_s)
+    drwdt = _smooth_derivative(t, rw, smooth_s)
     with np.errstate(invalid="ignore"):
-        accel = (T > torque_min_nm) & (dvdt > accel_min_mps2)
+        accel = (T > torque_min_nm) & ((dvdt > accel_min_mps2) | (drwdt > accel_min_mps2))
         brake = (dvdt < -accel_min_mps2) & (T <= torque_min_nm)
         stand = (np.abs(v) < standstill_mps) & (np.abs(rw) < standstill_mps)
     phase[brake] = "brake"
@@ -87,7 +80,24 @@ def classify_phases(t_s: np.ndarray, speed_mps: np.ndarray, wheel_speed_mps: np.
     return phase
 
 
-def accel_cycles(t_s: np.ndarray, phase: np.ndarray, *, max_break_s: float = 0.5,
+def _smooth_derivative(t: np.ndarray, x: np.ndarray, smooth_s: float) -> np.ndarray:
+    """d/dt of ``x`` (N,) after a moving average over ``smooth_s`` (NaN-aware; NaN where
+    the window is not complete)."""
+    n = t.shape[0]
+    if n < 3:
+        return np.full(n, np.nan)
+    dt = float(np.median(np.diff(t)))
+    w = max(1, int(round(smooth_s / dt)))
+    kernel = np.ones(w) / w
+    fin = np.isfinite(x)
+    xs = np.convolve(np.where(fin, x, 0.0), kernel, mode="same")
+    cnt = np.convolve(fin.astype(float), kernel, mode="same")
+    with np.errstate(invalid="ignore", divide="ignore"):
+        xs = np.where(cnt > 0.999, xs / cnt, np.nan)
+    return np.gradient(xs, t)
+
+
+def accel_cycles(t_s: np.ndarray, phase: np.ndarray, *, max_break_s: float = 1.0,
                  min_duration_s: float = 1.0) -> np.ndarray:
     """Accelerate-cycle id per sample, for leave-one-cycle-out cross-validation.
 
