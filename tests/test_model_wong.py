@@ -146,6 +146,9 @@ def test_shear_at_zero_slip_is_only_the_geometric_displacement():
     assert 0 < f.torque_nm[0] <= bound
     assert f.torque_nm[1] == pytest.approx(f.torque_nm[0], rel=1e-6)  # continuous at s -> 0
     assert f.drawbar_pull_n[0] < f.drawbar_pull_n[2]
+    # and it is exactly the integral with j from Eq. (5) at s = 0
+    _assert_close(wong_forces(clay, DEFAULT_WHEEL, [11000.0], [0.0]),
+                  wong_forces_quad(clay, DEFAULT_WHEEL, [11000.0], [0.0]))
 
 
 def test_zero_slip_shear_vanishes_with_the_contact_angle():
