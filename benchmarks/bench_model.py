@@ -24,7 +24,7 @@ for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
 
 import numpy as np  # noqa: E402
 
-from wheelsoil.model import DEFAULT_WHEEL, load_terrain, wong_forces  # noqa: E402
+from wheelsoil.model import DEFAULT_WHEEL, get_model, load_terrain, wong_forces  # noqa: E402
 from wheelsoil.model.wong import QUAD_ORDER, wong_forces_quad  # noqa: E402
 
 
@@ -55,6 +55,9 @@ def main(argv: list[str] | None = None) -> int:
         ours = _best_rate(lambda: wong_forces(terrain, wheel, load, slip), args.samples, args.repeat)
         balance = _best_rate(lambda: wong_forces(terrain, wheel, load, slip, sinkage="balance"),
                              args.samples, max(1, args.repeat // 2))
+        lyasko = get_model("lyasko")
+        lyasko_rate = _best_rate(lambda: lyasko.predict(terrain, wheel, load, slip, {"m1": 0.1, "m2": 0.05}),
+                                 args.samples, args.repeat)
         q = slice(0, args.quad_samples)
         t0 = time.perf_counter()
         ref = wong_forces_quad(terrain, wheel, load[q], slip[q])
@@ -70,6 +73,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"{name:5s}: ours eq10 {ours:12,.0f} samples/s | ours balance {balance:10,.0f} samples/s | "
               f"quad {quad_rate:8,.0f} samples/s | speed-up {ours / quad_rate:8,.0f}x | "
               f"max rel err vs quad {raw:.1e} ({args.quad_samples} samples)")
+        print(f"       lyasko predict (eq10) {lyasko_rate:12,.0f} samples/s")
         print(f"       targets: >= 200,000 samples/s {'OK' if ours >= 2e5 else 'MISSED'}; "
               f">= 100x quad {'OK' if ours >= 100 * quad_rate else 'MISSED'}; "
               f"<= 1e-6 {'OK' if err <= 1e-6 else 'MISSED'}")
