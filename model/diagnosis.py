@@ -231,14 +231,14 @@ def _slope_test(x, y, covariate=None) -> dict:
 def binned_residuals(data: FitData, resid: np.ndarray, n_bins: int = 10, level: float = 0.95) -> dict:
     """Binned means of residuals vs slip with confidence intervals.
 
-    Bins are slip quantiles (at most ``n_bins``, at least 2 units per bin);
+    Bins are slip quantiles (at most ``n_bins``, at least 3 units per bin);
     within a bin the mean and its CI come from the unit means (independent
     units, see module doc), t-distribution with (units - 1) dof.
     Returns dict of lists: ``slip`` (bin mean), ``mean``, ``lo``, ``hi``, ``units``.
     """
     s_u, e_u, _, _, _ = _unit_means(data, resid)
     U = e_u.size
-    nb = int(max(1, min(n_bins, U // 2)))
+    nb = int(max(1, min(n_bins, U // 3)))
     order = np.argsort(s_u, kind="stable")
     chunks = np.array_split(order, nb)
     out = {"slip": [], "mean": [], "lo": [], "hi": [], "units": []}
