@@ -222,6 +222,20 @@ def _bandlimited(rng, n, dt, lo_hz, hi_hz, sigma):
     return x * (sigma / max(np.std(x), 1e-12))
 
 
+def _spatial_field(rng, distance_m, corr_m, sigma):
+    """Zero-mean Gaussian random field of travelled distance (Gaussian kernel of
+    width ``corr_m`` on a 0.25 m grid), sd ``sigma``, sampled at ``distance_m`` (N,)."""
+    if sigma <= 0 or len(distance_m) == 0:
+        return np.zeros(len(distance_m))
+    from scipy.ndimage import gaussian_filter1d
+
+    grid = np.arange(0.0, float(distance_m[-1]) + 1.0, 0.25)
+    white = rng.standard_normal(len(grid) + 80)
+    field_ = gaussian_filter1d(white, corr_m / 0.25, mode="wrap")[40:40 + len(grid)]
+    field_ *= sigma / max(float(np.std(field_)), 1e-12)
+    return np.interp(distance_m, grid, field_)
+
+
 def _drive_profile(rng, dt, n_cycles, duration_s, wheel_radius_m):
     """Vehicle speed V(t), slip s(t), phase and cycle id on a grid of step dt.
 
@@ -393,6 +407,7 @@ def simulate_run(
     seed: int = 0,
     duration_s: float | None = None,
     n_cycles: int = 6,
+    soil_variability: float = 0.03,
 ) -> SimulatedRun:
     """Simulate one field run of the instrumented left-rear wheel (paper section 2.2).
 
@@ -422,6 +437,10 @@ def simulate_run(
         ``n_cycles`` accelerate-brake cycles.
     n_cycles : int
         Number of accelerate-brake cycles when ``duration_s`` is None.
+    soil_variability : float
+        Relative sd of the soil's c, kc, kphi along the track (spatial random
+        field, correlation length 3 m; 0 .. 0.2, default 0.03): the field's
+        soil is never the lab sample.
 
     Returns
     -------
@@ -446,6 +465,8 @@ def simulate_run(
         raise ValueError(f"duration_s={duration_s} is too short: at least 30 s (one accelerate-brake cycle)")
     if duration_s is None and n_cycles < 1:
         raise ValueError("n_cycles must be at least 1")
+    if not 0.0 <= soil_variability <= 0.2:
+        raise ValueError(f"soil_variability={soil_variability} outside 0..0.2")
     if added_load_n < 0 or added_load_n > 15000:
         raise ValueError(f"added_load_n={added_load_n} outside 0..15000 N")
     wheel = wheel or DEFAULT_WHEEL
@@ -486,11 +507,21 @@ def simulate_run(
     load = np.maximum(load, 0.3 * STATIC_LOAD_N)
 
     # -- soil forces: the model with the hidden effect while driving (s >= 0)
+    # Soil variability along the track: c, kc and kphi of the true soil scaled by
+    # a spatial random field (correlation length ~3 m, relative sd soil_variability),
+    # evaluated on a few factor levels to keep the model calls few.
     s_drive = np.clip(slip, 0.0, 0.93)
-    forces = true_forces(terrain_true, wheel, effect, params, load, s_drive)
-    dp = np.asarray(forces.drawbar_pull_n, float).copy()
-    torque = np.asarray(forces.torque_nm, float).copy()
-    sinkage = np.asarray(forces.sinkage_m, float).copy()
+    distance = np.cumsum(speed) * dt
+    soil_factor = 1.0 + _spatial_field(rng, distance, 3.0, soil_variability)
+    levels = np.round(soil_factor / 0.005) * 0.005
+    dp = np.empty(n)
+    torque = np.empty(n)
+    sinkage = np.empty(n)
+    for lev in np.unique(levels):
+        sel = levels == lev
+        t_here = terrain_true.replace(c=terrain_true.c * lev, kc=terrain_true.kc * lev, kphi=terrain_true.kphi * lev)
+        f = true_forces(t_here, wheel, effect, params, load[sel], s_drive[sel])
+        dp[sel], torque[sel], sinkage[sel] = f.drawbar_pull_n, f.torque_nm, f.sinkage_m
     # braking (s < 0): not what the model is for; blend from the model's
     # forces at s = 0 into a brake-slip curve (rolling resistance 6 % of W
     # plus a skid force saturating at 0.45 W), torque r times the brake force
@@ -562,6 +593,7 @@ def simulate_run(
         "gps_clock_drift": gps_drift,
         "gps_leap_s": GPS_LEAP_S,
         "drop_rate": float(drop_rate),
+        "soil_variability": float(soil_variability),
         "lost_wft_samples": lost,
         "seed": int(seed),
         "duration_s": float(n * dt),
