@@ -50,6 +50,9 @@ MIN_WHEEL_SPEED_MPS = 0.1
 WFT_STATUS_BAD = 0x07
 #: Reference speed deceleration [m/s^2] beyond which front wheels may skid (not used for latency).
 LATENCY_MAX_DECEL_MPS2 = 0.3
+#: Low-pass cutoff [Hz] of the reference speed used for the latency estimate (fixed, so the
+#: estimate does not depend on --cutoff/--rate).
+LATENCY_REF_CUTOFF_HZ = 5.0
 #: |T| [N m] under which the measured wheel counts as free rolling (latency fallback).
 FREE_ROLLING_TORQUE_NM = 150.0
 
@@ -353,6 +356,7 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
             for name, rep in ws.reports.items():
                 longest = max(((b - a) * 1e-9 for a, b, _ in rep.gaps), default=0.0)
                 lost_frames[name] = {"lost": rep.lost, "gaps": len(rep.gaps), "longest_gap_s": longest,
+                                     "counter_jumps": rep.jumps,
                                      "received": int(streams[name][0].shape[0]),
                                      "method": f"counter, period {ws.period_s * 1e3:.2f} ms"}
             cols = ws.columns
@@ -383,9 +387,15 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
                 warns.append("WFT moment frames missing: torque_nm not computed (NaN)")
             total_lost = sum(rep.lost for rep in ws.reports.values())
             if total_lost:
-                long_gaps = sum(1 for rep in ws.reports.values() for g in rep.gaps if g[2] > MAX_FILL_SAMPLES)
-                warns.append(f"WFT: {total_lost} frames lost (counter gaps); gaps of up to {MAX_FILL_SAMPLES} "
-                             f"samples interpolated, {long_gaps} longer gaps left as invalid")
+                runs = [b - a for a, b in segments(~ws.complete)]
+                long_gaps = sum(1 for k in runs if k > MAX_FILL_SAMPLES)
+                warns.append(f"WFT: {total_lost} frames lost (counter gaps) in {len(runs)} gaps; gaps of up "
+                             f"to {MAX_FILL_SAMPLES} samples interpolated, {long_gaps} longer ones left invalid")
+            n_jumps = {k: rep.jumps for k, rep in ws.reports.items() if rep.jumps}
+            if n_jumps:
+                warns.append("WFT counter jumped without time passing (" + ", ".join(
+                    f"{k}: {v}x" for k, v in n_jumps.items()) + "): treated as counter errors, the clock's "
+                    "sample count used instead; check the transducer/cabling")
     else:
         warns.append("no WFT frames at all: load_n, drawbar_pull_n and torque_nm are NaN; slip and speed "
                      "still computed")
@@ -453,7 +463,7 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
             lat_ref = f"measured wheel r*omega where |T| < {FREE_ROLLING_TORQUE_NM:g} N m"
         if ref_t is not None:
             _, ref_period = _time_gaps("ref", (ref_t * 1e9).astype(np.int64))
-            ref_f = _to_grid(ref_t, ref_v, ref_period, ref_t, cutoff)
+            ref_f = _to_grid(ref_t, ref_v, ref_period, ref_t, LATENCY_REF_CUTOFF_HZ)
             dv = np.gradient(np.nan_to_num(ref_f), ref_t)
             use = dv > -LATENCY_MAX_DECEL_MPS2
             usable = use if usable is None else (usable & use)
@@ -480,9 +490,12 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
     if undefined.any():
         runs = segments(undefined)
         longest = max(b - a for a, b in runs) / rate_hz
+        fast = undefined & (np.abs(speed) > 0.5)
+        why = (f"; in {np.count_nonzero(fast) / rate_hz:.1f} s of them the vehicle moved (V > 0.5 m/s): "
+               "locked wheel or wheel-speed sensor fault" if fast.any() else " (standstill)")
         warns.append(f"slip undefined (NaN) for {np.count_nonzero(undefined) / rate_hz:.1f} s where "
-                     f"r*omega < {MIN_WHEEL_SPEED_MPS} m/s (longest {longest:.1f} s: standstill or locked "
-                     "wheel); other columns computed there")
+                     f"r*omega < {MIN_WHEEL_SPEED_MPS} m/s (longest run {longest:.1f} s){why}; "
+                     "load, drawbar pull, torque and speed still computed there")
     out_range = np.isfinite(slip) & ~in_range
     if out_range.any():
         warns.append(f"slip outside [-1, 1) in {np.count_nonzero(out_range)} samples: flagged invalid")

@@ -25,20 +25,25 @@ __all__ = ["unwrap_counter", "rotate_to_hub", "WftSamples", "assemble_wft_sample
 
 
 def unwrap_counter(timestamp_ns: np.ndarray, counter: np.ndarray, *, modulo: int = 256,
-                   period_s: float | None = None) -> tuple[np.ndarray, float]:
+                   period_s: float | None = None, window: int = 64) -> tuple[np.ndarray, float, int]:
     """Unwrap a wrapping sample counter into a monotonic sample index.
 
     Parameters: ``timestamp_ns`` int64 (N,) host receive times (sorted);
     ``counter`` (N,) values in ``0..modulo-1`` (floats allowed, NaN not);
     ``period_s`` the nominal sample period (estimated as the median time step
-    between frames whose counter advanced by one when None).
+    between frames whose counter advanced by one when None); ``window``
+    frames on each side used to tell a lost-frame gap from a counter jump.
 
-    Returns ``(index, period_s)``: ``index`` int64 (N,) starting at
+    Returns ``(index, period_s, jumps)``: ``index`` int64 (N,) starting at
     ``counter[0]``; a step of ``k`` between frames means ``k - 1`` lost
     samples (0 = repeated frame). The number of whole wraps in a step is
-    chosen so the step is closest to ``dt / period_s``: gaps longer than one
-    wrap (0.512 s at 500 Hz) are counted correctly.
-    Raises ``ValueError`` for fewer than 2 frames or no usable period.
+    chosen so the step is closest to ``dt / period_s``, so gaps longer than one
+    wrap (0.512 s at 500 Hz) are counted correctly. A step that disagrees with
+    the elapsed time is a lost-frame gap if the frames after it keep the
+    time-vs-index line of the frames before it, and a *counter jump* (a
+    corrupted counter, no time lost) if they keep it only with the step the
+    clock says; jumps are replaced by the clock's step and counted in
+    ``jumps``. Raises ``ValueError`` for fewer than 2 frames or no usable period.
     """
     ts = np.asarray(timestamp_ns, dtype=np.int64)
     c = np.asarray(counter).astype(np.int64) % modulo
@@ -55,12 +60,26 @@ def unwrap_counter(timestamp_ns: np.ndarray, counter: np.ndarray, *, modulo: int
             raise ValueError("frames with consecutive counters share one timestamp: no sample period")
     expected = dt / period_s
     steps = d + modulo * np.round((expected - d) / modulo).astype(np.int64)
+    clock = np.maximum(np.round(expected).astype(np.int64), 0)
+    jumps = 0
+    rel_t = (ts - ts[0]) * 1e-9
+    for i in np.flatnonzero(np.abs(steps - expected) > 1.5):
+        a, b = max(0, i - window), min(ts.shape[0] - 1, i + 1 + window)
+        k_left = -np.cumsum(steps[a:i][::-1])[::-1]            # index of frames a..i-1 relative to frame i
+        k_left = np.concatenate([k_left, [0]])                  # frame i
+        k_right = np.cumsum(steps[i:b])                          # frames i+1..b
+        r_left = float(np.median(rel_t[a:i + 1] - rel_t[i] - k_left * period_s))
+        r_right = float(np.median(rel_t[i + 1:b + 1] - rel_t[i] - k_right * period_s))
+        shift = r_right - r_left
+        if abs(shift + (steps[i] - clock[i]) * period_s) < abs(shift):
+            steps[i] = clock[i]
+            jumps += 1
     steps = np.maximum(steps, 0)
     index = np.empty(ts.shape[0], dtype=np.int64)
     index[0] = c[0]
     np.cumsum(steps, out=index[1:])
     index[1:] += c[0]
-    return index, period_s
+    return index, period_s, jumps
 
 
 def rotate_to_hub(fx_w: np.ndarray, fz_w: np.ndarray, angle_rad: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -77,11 +96,13 @@ def rotate_to_hub(fx_w: np.ndarray, fz_w: np.ndarray, angle_rad: np.ndarray) -> 
 
 @dataclass
 class GapReport:
-    """Lost WFT samples: ``lost`` count, ``gaps`` list of (t_start_ns, t_end_ns, n_lost)."""
+    """Lost WFT samples: ``lost`` count, ``gaps`` list of (t_start_ns, t_end_ns, n_lost),
+    ``repeated`` frames, counter ``jumps`` (no time lost, see :func:`unwrap_counter`)."""
 
     lost: int = 0
     gaps: list[tuple[int, int, int]] = field(default_factory=list)
     repeated: int = 0
+    jumps: int = 0
 
 
 @dataclass
@@ -128,7 +149,8 @@ def assemble_wft_samples(streams: dict[str, tuple[np.ndarray, np.ndarray, dict[s
     """
     ts_ref, c_ref, _ = streams[reference]
     order = np.argsort(ts_ref, kind="stable")
-    idx_ref, period = unwrap_counter(ts_ref[order], c_ref[order], modulo=modulo)
+    idx_ref, period, jumps_ref = unwrap_counter(ts_ref[order], c_ref[order], modulo=modulo)
+    jumps = {reference: jumps_ref}
     t_ref = ts_ref[order]
     unwrapped: dict[str, tuple[np.ndarray, np.ndarray, np.ndarray]] = {reference: (t_ref, idx_ref, order)}
     for name, (ts, c, _) in streams.items():
@@ -137,9 +159,10 @@ def assemble_wft_samples(streams: dict[str, tuple[np.ndarray, np.ndarray, dict[s
         o = np.argsort(ts, kind="stable")
         t = ts[o]
         if t.shape[0] >= 2:
-            idx, _ = unwrap_counter(t, c[o], modulo=modulo, period_s=period)
+            idx, _, jumps[name] = unwrap_counter(t, c[o], modulo=modulo, period_s=period)
         else:
             idx = np.asarray(c[o], dtype=np.int64) % modulo
+            jumps[name] = 0
         # reference index expected at these times (interpolated) -> whole wraps
         k_at = np.interp(t.astype(np.float64), t_ref.astype(np.float64), idx_ref.astype(np.float64))
         shift = int(np.median(np.round((k_at - idx) / modulo))) * modulo
@@ -168,6 +191,7 @@ def assemble_wft_samples(streams: dict[str, tuple[np.ndarray, np.ndarray, dict[s
             arr[rows[keep]] = np.asarray(values)[o][keep]
             columns[col] = arr
         reports[name] = _gap_report(t, idx)
+        reports[name].jumps = jumps[name]
         # frames missing at the ends of this stream relative to the others
         reports[name].lost += int(idx[0] - lo) + int(hi - idx[-1])
     have = t_cnt > 0

@@ -1,0 +1,180 @@
+"""Small field-run simulator for the processing tests (known truth -> MCAP recording).
+
+Truth on a 500 Hz grid: vehicle speed V, slip s (so omega = V / (r (1 - s))),
+load W, drawbar pull Dp, torque T, all smooth (content below ~2 Hz). Frames
+at the hardware rates (hardware.md), encoded one by one with cantools from
+the shipped DBCs: WFT force/moment/angle at 500 Hz in the rotating frame
+with a shared counter, wheel speeds at 100 Hz (free-rolling fronts),
+GNSS velocity/speed/time at 20 Hz arriving ``latency_s`` late, with sensor
+noise, host receive jitter and a GPS clock offset; written with
+``wheelsoil.daq.RecordingWriter``. Options remove or damage parts for the
+bad-input tests.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import cantools
+import numpy as np
+
+from wheelsoil.daq import FrameBatch, RecordingWriter, load_vehicle_config
+
+DBC = Path(__file__).resolve().parents[1] / "dbc"
+R = 0.47
+FORCE_NOISE_N = 30.0
+MOMENT_NOISE_NM = 5.0
+GPS_EPOCH_UNIX_S = 315_964_800
+
+
+@dataclass
+class Truth:
+    t_s: np.ndarray  # (N,) host seconds since the first WFT sample
+    speed_mps: np.ndarray
+    slip: np.ndarray
+    omega_radps: np.ndarray
+    load_n: np.ndarray
+    drawbar_pull_n: np.ndarray
+    torque_nm: np.ndarray
+    phase: np.ndarray
+
+
+def _smooth(u):
+    u = np.clip(u, 0.0, 1.0)
+    return u * u * (3 - 2 * u)
+
+
+def truth_profile(n_cycles: int = 3, dt: float = 0.002, *, standstill_s: float = 1.5) -> Truth:
+    """Accelerate-brake cycles: standstill, accel (slip sweep 0.05->0.8->0.1), cruise, brake."""
+    v_parts, s_parts, ph = [], [], []
+
+    def seg(T, vf, sf, phase):
+        u = np.arange(int(round(T / dt))) / round(T / dt)
+        v_parts.append(vf(u))
+        s_parts.append(sf(u))
+        ph.append(np.full(u.size, phase, dtype=object))
+
+    seg(standstill_s, lambda u: 0 * u, lambda u: 0 * u, "standstill")
+    seg(2.0, lambda u: 1.0 * _smooth(u), lambda u: 0.05 + 0 * u, "other")
+    v = 1.0
+    for _ in range(n_cycles):
+        vb = 3.5
+        seg(8.0, lambda u, va=v, vb=vb: va + (vb - va) * _smooth((u - 0.2) / 0.8),
+            lambda u: 0.05 + 0.75 * np.sin(np.pi * u) ** 2, "accel")
+        seg(1.5, lambda u, vb=vb: vb + 0 * u, lambda u: 0.05 + 0 * u, "other")
+        seg(4.0, lambda u, vb=vb: vb + (1.0 - vb) * _smooth(u),
+            lambda u: 0.05 - 0.2 * np.sin(np.pi * u) ** 2, "brake")
+        seg(1.0, lambda u: 1.0 + 0 * u, lambda u: 0.05 + 0 * u, "other")
+        v = 1.0
+    speed = np.concatenate(v_parts)
+    slip = np.concatenate(s_parts)
+    t = np.arange(speed.size) * dt
+    omega = np.where(speed > 0, speed / (R * (1 - slip)), 0.0)
+    load = 11000.0 + 400.0 * np.sin(2 * np.pi * 0.3 * t) + 200.0 * np.sin(2 * np.pi * 1.1 * t)
+    dp = load * (0.45 * (1 - np.exp(-np.maximum(slip, -0.5) / 0.15)) - 0.08)
+    dp = np.where(speed > 0, dp, 0.0)
+    torque = R * (dp + 0.1 * load) * np.where(speed > 0, 1.0, 0.0)
+    return Truth(t, speed, slip, omega, load, dp, torque, np.concatenate(ph))
+
+
+def write_recording(path, truth: Truth, *, latency_s: float = 0.1, seed: int = 0,
+                    gps_offset_s: float = 1234.5678, no_gnss: bool = False, no_wheel_speed: bool = False,
+                    drop_wft_bursts: int = 0, counter_jumps: int = 0,
+                    wheel_speed_zero: tuple[float, float] | None = None) -> dict:
+    """Encode ``truth`` as frames and write an MCAP recording.
+
+    Returns ``{"path", "lost_samples", "start_ns"}`` (WFT samples dropped).
+
+    ``drop_wft_bursts``: that many runs of 1..12 lost WFT samples;
+    ``counter_jumps``: that many random jumps of the WFT counter (all three
+    messages) by 17..200 without lost time; ``wheel_speed_zero`` (t0, t1):
+    the measured wheel's speed reads 0 rpm in that window.
+    """
+    rng = np.random.default_rng(seed)
+    wft = cantools.database.load_file(str(DBC / "wft.dbc"))
+    wss = cantools.database.load_file(str(DBC / "wheel_speed.dbc"))
+    gps = cantools.database.load_file(str(DBC / "gps_rt_speedbox.dbc"))
+    start_ns = 1_765_000_000_000_000_000
+    t = truth.t_s
+    n = t.size
+
+    def jitter(k):
+        return rng.exponential(1.5e-4, k)
+
+    # ---- WFT, 500 Hz
+    angle = np.cumsum(truth.omega_radps) * (t[1] - t[0])
+    ca, sa = np.cos(angle), np.sin(angle)
+    fx_w = truth.drawbar_pull_n * ca - truth.load_n * sa + rng.normal(0, FORCE_NOISE_N, n)
+    fz_w = truth.drawbar_pull_n * sa + truth.load_n * ca + rng.normal(0, FORCE_NOISE_N, n)
+    my = truth.torque_nm + rng.normal(0, MOMENT_NOISE_NM, n)
+    counter = np.arange(n) % 256
+    for j in rng.integers(100, n - 100, counter_jumps):
+        counter[j:] = (counter[j:] + rng.integers(17, 200)) % 256
+    keep = np.ones(n, bool)
+    for j in rng.integers(100, n - 100, drop_wft_bursts):
+        keep[j:j + rng.integers(1, 13)] = False
+    m_f, m_m, m_a = (wft.get_message_by_name(x) for x in ("WFT_RL_Force", "WFT_RL_Moment", "WFT_RL_Angle"))
+    can0 = []
+    for i in np.flatnonzero(keep):
+        c = int(counter[i])
+        can0.append((t[i] + 1e-4, m_f, m_f.encode({"Fx_w": fx_w[i], "Fy_w": 0.0, "Fz_w": fz_w[i], "Counter": c,
+                                                    "Status": 0}, strict=False)))
+        can0.append((t[i] + 2.3e-4, m_m, m_m.encode({"Mx_w": 0.0, "My": my[i], "Mz_w": 0.0, "Counter": c,
+                                                     "Status": 0}, strict=False)))
+        can0.append((t[i] + 3.6e-4, m_a, m_a.encode({"WheelAngle": np.degrees(angle[i]) % 360.0, "Counter": c,
+                                                     "Status": 0}, strict=False)))
+    # ---- wheel speeds, 100 Hz (Motorola, unsigned rpm)
+    can1 = []
+    m_ws = wss.get_message_by_name("WSS_WheelSpeeds")
+    if not no_wheel_speed:
+        for tw in np.arange(0.003, t[-1], 0.01):
+            v = np.interp(tw, t, truth.speed_mps)
+            om = np.interp(tw, t, truth.omega_radps)
+            if wheel_speed_zero and wheel_speed_zero[0] <= tw < wheel_speed_zero[1]:
+                om = 0.0
+            rpm = lambda w: float(np.clip(abs(w * (1 + rng.normal(0, 0.002))) * 60 / (2 * np.pi), 0, 655))
+            can1.append((tw, m_ws, m_ws.encode({"WheelSpeed_FL": rpm(v / R), "WheelSpeed_FR": rpm(v / R),
+                                                 "WheelSpeed_RL": rpm(om), "WheelSpeed_RR": rpm(om)})))
+    # ---- GNSS, 20 Hz fixes on the GPS clock, received latency_s later
+    if not no_gnss:
+        m_v = gps.get_message_by_name("RT_SB_INS_Vel_Body_Axes")
+        m_s = gps.get_message_by_name("RT_SB_GPS_Speed")
+        m_t = gps.get_message_by_name("RT_SB_GPS_Time")
+        gps0 = start_ns * 1e-9 - GPS_EPOCH_UNIX_S + gps_offset_s
+        first = np.ceil(gps0 * 20) / 20
+        for gfix in np.arange(first, gps0 + t[-1] - 0.3, 0.05):
+            tf = gfix - gps0  # host time of the fix
+            v = float(np.interp(tf, t, truth.speed_mps))
+            rx = tf + latency_s + abs(rng.normal(0, 5e-4))
+            vel = v + rng.normal(0, 0.01)
+            can1.append((rx, m_s, m_s.encode({"GPS_Speed_2D": abs(vel), "GPS_Speed_3D": abs(vel),
+                                               "Accuracy_GPS_Speed": 10, "Validity_GPS_Speed_2D": 1,
+                                               "Validity_GPS_Speed_3D": 1})))
+            can1.append((rx + 2e-4, m_v, m_v.encode({"INS_Vel_Forwards_2D": vel, "INS_Vel_Sideways_2D": 0.0,
+                                                      "Accuracy_INS_Vel_Body": 10, "Validity_INS_Vel_Forwards": 1,
+                                                      "Validity_INS_Vel_Sideways": 1})))
+            week = np.floor(gfix / 604800)
+            can1.append((rx + 4e-4, m_t, m_t.encode({"GPS_Week": week, "GPS_Time": round(gfix - week * 604800, 3),
+                                                      "Accuracy_GPS_Time": 3, "Validity_GPS_Week": 1,
+                                                      "Validity_GPS_Time": 1})))
+    cfg = load_vehicle_config()
+    path = Path(path)
+    with RecordingWriter(path, config=cfg, metadata={"source": "tests/processing_sim.py"}) as w:
+        for bus, frames in (("can0", can0), ("can1", can1)):
+            if not frames:
+                continue
+            frames.sort(key=lambda f: f[0])
+            ts = np.array([f[0] for f in frames]) + jitter(len(frames))
+            ts = np.sort(ts)
+            ids = np.array([f[1].frame_id for f in frames], np.uint32)
+            ext = np.array([f[1].is_extended_frame for f in frames], np.uint8)
+            dlc = np.array([len(f[2]) for f in frames], np.uint8)
+            data = np.zeros((len(frames), 8), np.uint8)
+            for i, f in enumerate(frames):
+                data[i, :len(f[2])] = np.frombuffer(f[2], np.uint8)
+            ts_ns = start_ns + np.round(ts * 1e9).astype(np.int64)
+            for a in range(0, len(frames), 2000):
+                w.write_batch(FrameBatch.from_columns(bus, ts_ns[a:a + 2000], ids[a:a + 2000], ext[a:a + 2000],
+                                                      dlc[a:a + 2000], data[a:a + 2000]))
+    return {"path": path, "lost_samples": int(n - keep.sum()), "start_ns": start_ns}
