@@ -9,7 +9,7 @@ the hot paths (logger, reader) never build per-frame Python objects.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Iterable, Sequence
+from typing import Sequence
 
 import numpy as np
 
@@ -118,31 +118,41 @@ class FrameBatch:
         return n
 
     @classmethod
-    def from_messages(cls, bus: str, msgs: Iterable) -> "FrameBatch":
+    def from_messages(cls, bus: str, msgs) -> "FrameBatch":
         """Columns from python-can :class:`can.Message` objects (timestamps in s -> ns).
 
-        Payload bytes beyond 64 are dropped (impossible on a real bus); a payload
-        shorter than ``dlc`` is zero-padded, ``dlc`` is kept as given.
+        A few list comprehensions per batch, no per-frame numpy calls. Payload
+        bytes beyond 64 are dropped (impossible on a real bus); a payload
+        shorter than the row width is zero-padded; ``dlc`` is kept as given
+        (clamped to 0..255).
         """
-        ts, ids, fl, dl = [], [], [], []
-        payload = bytearray()
-        width = CLASSIC_WIDTH
-        rows = []
-        for m in msgs:
-            ts.append(m.timestamp)
-            ids.append(m.arbitration_id)
-            fl.append(message_flags(m))
-            dl.append(m.dlc)
-            d = bytes(m.data or b"")
-            rows.append(d)
-            if len(d) > CLASSIC_WIDTH:
-                width = FD_WIDTH
-        for d in rows:
-            payload += d[:width].ljust(width, b"\0")
-        n = len(ts)
-        data = np.frombuffer(bytes(payload), np.uint8).reshape(n, width) if n else np.zeros((0, width), np.uint8)
-        return cls.from_columns(bus, seconds_to_ns(np.asarray(ts, dtype=np.float64)), ids, fl,
-                                np.minimum(np.asarray(dl, dtype=np.int64), 255), data)
+        if not isinstance(msgs, list):
+            msgs = list(msgs)
+        n = len(msgs)
+        if n == 0:
+            return cls.empty(bus)
+        ts = np.array([m.timestamp or 0.0 for m in msgs], np.float64)
+        ids = np.array([m.arbitration_id & 0xFFFFFFFF for m in msgs], np.uint32)
+        fl = np.zeros(n, np.uint8)
+        for bit, attr in ((FLAG_EXTENDED, "is_extended_id"), (FLAG_REMOTE, "is_remote_frame"),
+                          (FLAG_ERROR, "is_error_frame"), (FLAG_FD, "is_fd"), (FLAG_BRS, "bitrate_switch"),
+                          (FLAG_ESI, "error_state_indicator")):
+            col = [getattr(m, attr) for m in msgs]
+            if any(col):
+                fl[np.array(col, bool)] |= bit
+        rx = [m.is_rx for m in msgs]
+        if not all(rx):
+            fl[~np.array(rx, bool)] |= FLAG_TX
+        dlc = np.clip(np.array([m.dlc for m in msgs], np.int64), 0, 255).astype(np.uint8)
+        datas = [m.data or b"" for m in msgs]
+        lens = [len(d) for d in datas]
+        width = FD_WIDTH if max(lens) > CLASSIC_WIDTH else CLASSIC_WIDTH
+        if min(lens) == width == max(lens):
+            flat = b"".join(datas)
+        else:
+            flat = b"".join([bytes(d[:width]).ljust(width, b"\0") for d in datas])
+        data = np.frombuffer(flat, np.uint8).reshape(n, width)
+        return cls.from_columns(bus, seconds_to_ns(ts), ids, fl, dlc, data)
 
     def to_messages(self, channel=None):
         """Yield python-can :class:`can.Message` objects (timestamp in float seconds).

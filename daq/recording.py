@@ -140,13 +140,16 @@ class RecordingWriter:
         flush_interval_s: close the chunk in progress and fsync at least this often [s].
         compression: ``"zstd"`` (default), ``"lz4"`` or ``""``.
         fsync: call ``os.fsync`` after each flush (default True).
+        write_facts: write the ``wheelsoil.recording`` metadata (False when
+            copying another recording's records, as ``recover`` does).
 
     Raises:
         OSError: the file cannot be created.
     """
 
     def __init__(self, path, *, config=None, metadata: Mapping | None = None,
-                 flush_interval_s: float = 0.5, compression: str = "zstd", fsync: bool = True):
+                 flush_interval_s: float = 0.5, compression: str = "zstd", fsync: bool = True,
+                 write_facts: bool = True):
         from mcap.writer import CompressionType, Writer
 
         self.path = Path(path)
@@ -182,15 +185,22 @@ class RecordingWriter:
                 "buses": ",".join(config.buses),
             })
         facts.update({str(k): str(v) for k, v in (metadata or {}).items()})
-        self._mcap.add_metadata("wheelsoil.recording", facts)
+        if write_facts:
+            self.add_metadata("wheelsoil.recording", facts)
         if config is not None:
             if config.text:
-                self._mcap.add_attachment(self.start_time_ns, self.start_time_ns, "vehicle.toml",
-                                          "application/toml", config.text.encode())
+                self.add_attachment("vehicle.toml", "application/toml", config.text.encode())
             for name, text in config.dbc_texts().items():
-                self._mcap.add_attachment(self.start_time_ns, self.start_time_ns, f"dbc/{name}",
-                                          "text/x-dbc", text.encode())
+                self.add_attachment(f"dbc/{name}", "text/x-dbc", text.encode())
         self.flush()
+
+    def add_metadata(self, name: str, data: Mapping) -> None:
+        """Add an MCAP metadata record (values converted with ``str``)."""
+        self._mcap.add_metadata(name, {str(k): str(v) for k, v in data.items()})
+
+    def add_attachment(self, name: str, media_type: str, data: bytes) -> None:
+        """Add an MCAP attachment (log/create time = the writer's start time)."""
+        self._mcap.add_attachment(self.start_time_ns, self.start_time_ns, name, media_type, bytes(data))
 
     # -- channels
     def add_bus(self, bus: str, **meta) -> int:
@@ -312,6 +322,7 @@ class _Records:
     attachments: dict[str, bytes] = field(default_factory=dict)
     channels: dict[int, dict] = field(default_factory=dict)
     statuses: list[dict] = field(default_factory=list)
+    status_times: list[int] = field(default_factory=list)
     warnings: list[str] = field(default_factory=list)
     complete: bool = False
     size: int = 0
@@ -347,6 +358,7 @@ def _iter_records(path, state: _Records, *, recover: bool, with_status: bool = F
                     elif with_status and rec.channel_id in status_channels:
                         try:
                             state.statuses.append(json.loads(rec.data))
+                            state.status_times.append(rec.log_time)
                         except ValueError:
                             pass
                 elif isinstance(rec, Schema):

@@ -1,0 +1,247 @@
+"""``wheelsoil log | import | export | info | replay | recover``: thin wrappers over wheelsoil.daq."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+
+_RAW = argparse.RawDescriptionHelpFormatter
+
+_BUS_HELP = ("bus to use, [NAME=]INTERFACE:CHANNEL[,key=value...] (python-can interface and "
+             "channel); repeat for several buses. NAME is the bus name in the recording and the "
+             "vehicle config (default: the channel when it is a plain name like can0)")
+
+
+def register(subparsers) -> None:
+    """Add the daq subcommands to the ``wheelsoil`` parser."""
+    p = subparsers.add_parser(
+        "log", formatter_class=_RAW, help="record CAN buses into an MCAP file (field logger)",
+        description="Record raw CAN frames of one or more python-can buses into an MCAP recording.\n"
+        "Shows a status line every second: frames/s per bus, lost WFT frames (Counter gaps),\n"
+        "error frames/bus errors, kernel receive drops (SocketCAN), file size.\n"
+        "SIGINT/SIGTERM close the file cleanly; after a SIGKILL or power cut everything but the\n"
+        "last ~0.6 s is in the file (chunks are closed and fsynced every 0.5 s).",
+        epilog="examples:\n"
+        "  wheelsoil log --bus socketcan:can0 --bus socketcan:can1 -o run.mcap\n"
+        "  wheelsoil log --bus socketcan:can0 --bus socketcan:can1 -o field.mcap --split-minutes 10\n"
+        "  wheelsoil log --bus can0=udp_multicast:239.0.0.1 --duration 60 -o test.mcap\n"
+        "  wheelsoil log --bus can0=virtual:ch0 -o sim.mcap --vehicle my_vehicle.toml\n"
+        "systemd unit example: daq/wheelsoil-logger.service")
+    p.add_argument("--bus", action="append", required=True, metavar="SPEC", help=_BUS_HELP)
+    p.add_argument("-o", "--output", required=True, help="output .mcap file (overwritten)")
+    p.add_argument("--duration", type=float, default=None, metavar="S", help="stop after S seconds (default: until SIGINT/SIGTERM)")
+    p.add_argument("--split-minutes", type=float, default=None, metavar="M",
+                   help="start a new file every M minutes: OUTPUT_0001.mcap, OUTPUT_0002.mcap, ...")
+    p.add_argument("--vehicle", default=None, metavar="TOML", help="vehicle configuration (default: the shipped dbc/vehicle.toml)")
+    p.add_argument("--rcvbuf-bytes", type=int, default=None, metavar="B",
+                   help="socket receive buffer asked for on socketcan buses (default 8 MiB)")
+    p.add_argument("--max-frames", type=int, default=None, metavar="N", help="stop after N frames (tests)")
+    p.add_argument("-q", "--quiet", action="store_true", help="no status line")
+    p.set_defaults(func=_cmd_log)
+
+    p = subparsers.add_parser(
+        "import", formatter_class=_RAW, help="convert candump .log / .asc / .blf / .trc into MCAP",
+        description="Convert logs of other tools into a wheelsoil MCAP recording (python-can readers).\n"
+        "Channel -> bus: python-can channel c (ASC/BLF/TRC file channel c+1) becomes bus canC;\n"
+        "named channels (candump's can0, vcan1) keep their name. Unparsable lines are skipped\n"
+        "and reported with file:line.",
+        epilog="examples:\n  wheelsoil import candump-2024-05-03.log -o run.mcap\n"
+        "  wheelsoil import drive.asc -o run.mcap --map can0=can1   (ASC channel 1 is the GNSS bus)\n"
+        "  wheelsoil import a.log b.log -o run.mcap --map vcan0=can0 --map vcan1=can1")
+    p.add_argument("inputs", nargs="+", help="input log file(s), format from the suffix")
+    p.add_argument("-o", "--output", required=True, help="output .mcap file")
+    p.add_argument("--map", action="append", default=[], metavar="SRC=BUS",
+                   help="name bus BUS what the file calls SRC (python-can channel or default bus name); repeatable")
+    p.add_argument("--vehicle", default=None, metavar="TOML", help="vehicle configuration to attach (default: shipped)")
+    p.set_defaults(func=_cmd_import)
+
+    p = subparsers.add_parser(
+        "export", formatter_class=_RAW, help="write an MCAP recording as candump .log / .asc / .blf / .trc",
+        description="Write the raw frames of a recording with python-can's writers, all buses merged\n"
+        "by time. Ids, flags, DLC and data are bit-exact; candump .log keeps absolute timestamps\n"
+        "to the microsecond and the bus name as the channel.",
+        epilog="examples:\n  wheelsoil export run.mcap -o run.log\n  wheelsoil export run.mcap -o run.blf --bus can0\n"
+        "  wheelsoil export run.mcap -o run.log --map can0=vcan0")
+    p.add_argument("recording")
+    p.add_argument("-o", "--output", required=True, help="output file; format from the suffix")
+    p.add_argument("--bus", action="append", default=None, metavar="NAME", help="only these buses (repeatable)")
+    p.add_argument("--map", action="append", default=[], metavar="BUS=CHANNEL",
+                   help="channel name written for BUS (default: the bus name); repeatable")
+    p.set_defaults(func=_cmd_export)
+
+    p = subparsers.add_parser(
+        "info", formatter_class=_RAW, help="summarise a recording: buses, ids, duration, losses",
+        description="Summarise a recording: channels, frames per bus and per id with DBC message\n"
+        "names, duration, lost WFT frames (Counter gaps), error frames, unknown ids, DLC\n"
+        "mismatches, kernel drops, damage. DBCs: those attached to the recording.",
+        epilog="examples:\n  wheelsoil info run.mcap\n  wheelsoil info run.mcap --json | jq .lost_frames")
+    p.add_argument("recording")
+    p.add_argument("--json", action="store_true", help="print JSON instead of text")
+    p.add_argument("--vehicle", default=None, metavar="TOML", help="use this vehicle configuration instead of the attached one")
+    p.set_defaults(func=_cmd_info)
+
+    p = subparsers.add_parser(
+        "replay", formatter_class=_RAW, help="send a recording onto CAN buses with the recorded timing",
+        description="Send the frames of a recording onto python-can buses with the recorded timing\n"
+        "(like canplayer). --bus NAME=SPEC sends recorded bus NAME there; unnamed --bus options\n"
+        "take the recorded buses in sorted order, a single unnamed one takes all of them.",
+        epilog="examples:\n  wheelsoil replay run.mcap --bus socketcan:vcan0\n"
+        "  wheelsoil replay run.mcap --bus can0=socketcan:vcan0 --bus can1=socketcan:vcan1 --speed 2\n"
+        "  wheelsoil replay run.mcap --bus can0=udp_multicast:239.0.0.1 --speed 0   (as fast as possible)")
+    p.add_argument("recording")
+    p.add_argument("--bus", action="append", required=True, metavar="SPEC", help=_BUS_HELP)
+    p.add_argument("--speed", type=float, default=1.0, help="time factor (2 = twice as fast; 0 = no waiting). Default 1")
+    p.set_defaults(func=_cmd_replay)
+
+    p = subparsers.add_parser(
+        "recover", formatter_class=_RAW, help="rewrite a truncated/damaged recording into a clean one",
+        description="Rewrite a recording cut short (power loss, SIGKILL) into a complete, indexed MCAP\n"
+        "file with every complete chunk, its metadata and attachments.",
+        epilog="example:\n  wheelsoil recover field_0003.mcap -o field_0003.fixed.mcap")
+    p.add_argument("recording")
+    p.add_argument("-o", "--output", required=True)
+    p.set_defaults(func=_cmd_recover)
+
+
+def _config(path):
+    from .config import load_vehicle_config
+
+    return load_vehicle_config(path)
+
+
+def _cmd_log(args) -> int:
+    from .logger import format_status, log_buses
+
+    tty = sys.stderr.isatty()
+    count = [0]
+
+    def show(st):
+        count[0] += 1
+        if args.quiet:
+            return
+        if tty:
+            print("\r" + format_status(st), end="", file=sys.stderr, flush=True)
+        elif count[0] % 10 == 1:
+            print(format_status(st), file=sys.stderr, flush=True)
+
+    res = log_buses(args.bus, args.output, config=_config(args.vehicle), duration_s=args.duration,
+                    split_minutes=args.split_minutes, max_frames=args.max_frames,
+                    rcvbuf_bytes=args.rcvbuf_bytes, on_status=show, handle_signals=True,
+                    metadata={"command": " ".join(sys.argv)})
+    if tty and not args.quiet:
+        print(file=sys.stderr)
+    st = res.status
+    print(f"recorded {sum(res.frames.values())} frames ({', '.join(f'{b} {n}' for b, n in res.frames.items())}) "
+          f"into {', '.join(map(str, res.files))}; stop: {res.stop_reason}")
+    lost = sum(b["lost_wft_frames"] for b in st["buses"].values())
+    drops = sum(b["rx_dropped"] or 0 for b in st["buses"].values())
+    if lost or drops or st.get("bad_frames"):
+        print(f"warning: lost WFT frames {lost}, kernel rx drops {drops}, unrecordable frames {st.get('bad_frames', 0)}",
+              file=sys.stderr)
+    return 0
+
+
+def _print_warnings(ws, limit=20):
+    for w in ws[:limit]:
+        print(f"warning: {w}", file=sys.stderr)
+    if len(ws) > limit:
+        print(f"warning: ... and {len(ws) - limit} more", file=sys.stderr)
+
+
+def _cmd_import(args) -> int:
+    import warnings
+
+    from .convert import import_log, parse_channel_map
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        res = import_log(args.inputs, args.output, channel_map=parse_channel_map(args.map),
+                         config=_config(args.vehicle))
+    _print_warnings(res.warnings)
+    print(f"imported {res.total} frames ({', '.join(f'{b} {n}' for b, n in res.frames.items())}) into "
+          f"{res.output}" + (f"; skipped {res.skipped} unparsable line(s)" if res.skipped else ""))
+    return 0
+
+
+def _cmd_export(args) -> int:
+    from .convert import export_recording, parse_channel_map
+
+    res = export_recording(args.recording, args.output, channel_map=parse_channel_map(args.map), buses=args.bus)
+    _print_warnings(res.warnings)
+    print(f"exported {res.total} frames ({', '.join(f'{b} {n}' for b, n in res.frames.items())}) to {res.output}")
+    return 0
+
+
+def _cmd_recover(args) -> int:
+    from .convert import recover_recording
+
+    res = recover_recording(args.recording, args.output)
+    _print_warnings(res.warnings)
+    print(f"recovered {res.total} frames ({', '.join(f'{b} {n}' for b, n in res.frames.items())}) into {res.output}")
+    return 0
+
+
+def _cmd_replay(args) -> int:
+    import signal
+    import threading
+
+    from .replay import replay_recording
+
+    stop = threading.Event()
+    old = signal.signal(signal.SIGTERM, lambda *_: stop.set())
+    try:
+        res = replay_recording(args.recording, args.bus, speed=args.speed, stop_event=stop)
+    finally:
+        signal.signal(signal.SIGTERM, old)
+    print(f"sent {sum(res.sent.values())} frames ({', '.join(f'{b} {n}' for b, n in res.sent.items())}) "
+          f"in {res.wall_s:.1f} s" + (f"; {res.send_failures} frames could not be sent" if res.send_failures else ""))
+    return 1 if res.send_failures else 0
+
+
+def _cmd_info(args) -> int:
+    from .info import read_recording_info
+
+    info = read_recording_info(args.recording, config=_config(args.vehicle) if args.vehicle else None)
+    if args.json:
+        print(json.dumps(info.to_dict(), indent=1, default=str))
+        return 0
+    print(format_info(info))
+    return 0
+
+
+def format_info(info) -> str:
+    """Human-readable text of a :class:`~wheelsoil.daq.info.RecordingInfo`."""
+    import time
+
+    d = info.to_dict()
+    out = [f"{info.path}: {info.size_bytes / 1e6:.2f} MB, "
+           f"{'complete' if info.complete else 'INCOMPLETE (no footer: truncated; run wheelsoil recover)'}"]
+    rec = info.metadata.get("wheelsoil.recording", {})
+    if info.start_ns is not None:
+        out.append(f"  frames from {time.strftime('%Y-%m-%d %H:%M:%S', time.gmtime(info.start_ns / 1e9))} UTC, "
+                   f"duration {info.duration_s:.3f} s")
+    if rec:
+        out.append(f"  recorded on {rec.get('host', '?')} with wheelsoil {rec.get('version.wheelsoil', '?')}, "
+                   f"started {rec.get('start_time_utc', '?')}")
+    out.append(f"  DBC source: {info.config_source}; attachments: {', '.join(info.attachments) or 'none'}")
+    out.append("  channels:")
+    for c in info.channels:
+        out.append(f"    {c['topic']:<28} {c['schema'] or '-'} ({c['encoding']})")
+    for bus, b in d["buses"].items():
+        drop = "" if b["rx_dropped"] is None else f", kernel rx drops {b['rx_dropped']}"
+        rate = b["frames"] / info.duration_s if info.duration_s > 0 else 0.0
+        out.append(f"  bus {bus}: {b['frames']} frames ({rate:.0f}/s), error frames {b['error_frames']}, "
+                   f"remote {b['remote_frames']}{drop}")
+        for fid, v in b["ids"].items():
+            bad = b["dlc_mismatch"].get(fid, {}).get("frames", 0)
+            out.append(f"    {fid:>12} {v['frames']:>10}  {v.get('message', '(unknown id)')}"
+                       + (f"  DLC mismatch: {bad}" if bad else ""))
+    s = info.stats
+    out.append(f"  lost frames (counter gaps): {s.total('lost_frames')}"
+               + (f" ({', '.join(f'{k} {v}' for k, v in sorted(s.lost_frames.items()))})" if s.lost_frames else ""))
+    out.append(f"  unknown-id frames: {s.total('unknown_ids')}, DLC mismatches: {s.total('dlc_mismatch')}, "
+               f"error frames: {s.total('error_frames')}")
+    for w in info.warnings:
+        out.append(f"  warning: {w}")
+    return "\n".join(out)
