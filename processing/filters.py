@@ -54,8 +54,9 @@ def lowpass(x: np.ndarray, fs_hz: float, cutoff_hz: float, order: int = FILTER_O
     """Zero-phase Butterworth low-pass of one gap-free series.
 
     ``x`` (N,) finite samples at ``fs_hz``; ``cutoff_hz`` must be below
-    ``fs_hz/2`` (a cutoff at or above Nyquist returns ``x`` unchanged). Series
-    shorter than the filter's padding are padded as far as they allow.
+    ``fs_hz/2`` (a cutoff at or above Nyquist returns ``x`` unchanged). The ends
+    are extended by odd reflection over ``3 fs/cutoff`` samples (or as far as a
+    short series allows) to keep edge transients small.
     Raises ``ValueError`` for a non-positive cutoff.
     """
     if not cutoff_hz > 0:
@@ -64,7 +65,9 @@ def lowpass(x: np.ndarray, fs_hz: float, cutoff_hz: float, order: int = FILTER_O
     if cutoff_hz >= 0.5 * fs_hz or x.shape[0] < 2:
         return x.copy()
     sos = signal.butter(order, cutoff_hz, btype="low", fs=fs_hz, output="sos")
-    padlen = min(3 * (2 * sos.shape[0] + 1), x.shape[0] - 1)
+    # odd extension over ~3 time constants (scipy's default of 3*(2*sections+1) samples
+    # is far shorter than the impulse response and leaves edge transients on ramps)
+    padlen = min(max(3 * (2 * sos.shape[0] + 1), int(3 * fs_hz / cutoff_hz)), x.shape[0] - 1)
     return signal.sosfiltfilt(sos, x, padlen=padlen)
 
 

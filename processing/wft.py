@@ -63,8 +63,12 @@ def unwrap_counter(timestamp_ns: np.ndarray, counter: np.ndarray, *, modulo: int
     clock = np.maximum(np.round(expected).astype(np.int64), 0)
     jumps = 0
     rel_t = (ts - ts[0]) * 1e-9
-    for i in np.flatnonzero(np.abs(steps - expected) > 1.5):
-        a, b = max(0, i - window), min(ts.shape[0] - 1, i + 1 + window)
+    cands = np.flatnonzero(np.abs(steps - expected) > 1.5)
+    for j, i in enumerate(cands):
+        # frames a..i before the step (earlier steps already decided), i+1..b after it,
+        # up to the frame before the next suspicious step
+        nxt = cands[j + 1] if j + 1 < cands.size else ts.shape[0] - 1
+        a, b = max(0, i - window), min(ts.shape[0] - 1, i + 1 + window, nxt)
         k_left = -np.cumsum(steps[a:i][::-1])[::-1]            # index of frames a..i-1 relative to frame i
         k_left = np.concatenate([k_left, [0]])                  # frame i
         k_right = np.cumsum(steps[i:b])                          # frames i+1..b

@@ -73,8 +73,9 @@ def truth_profile(n_cycles: int = 3, dt: float = 0.002, *, standstill_s: float =
     omega = np.where(speed > 0, speed / (R * (1 - slip)), 0.0)
     load = 11000.0 + 400.0 * np.sin(2 * np.pi * 0.3 * t) + 200.0 * np.sin(2 * np.pi * 1.1 * t)
     dp = load * (0.45 * (1 - np.exp(-np.maximum(slip, -0.5) / 0.15)) - 0.08)
-    dp = np.where(speed > 0, dp, 0.0)
-    torque = R * (dp + 0.1 * load) * np.where(speed > 0, 1.0, 0.0)
+    moving = _smooth(speed / 0.5)  # forces build up smoothly as the wheel starts rolling
+    dp = dp * moving
+    torque = R * (dp + 0.1 * load) * moving
     return Truth(t, speed, slip, omega, load, dp, torque, np.concatenate(ph))
 
 

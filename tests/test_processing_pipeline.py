@@ -1,0 +1,180 @@
+"""Acceptance tests of process_recording on simulated recordings with known truth,
+bad inputs, and the ``wheelsoil process`` command."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from processing_sim import FORCE_NOISE_N, MOMENT_NOISE_NM, truth_profile, write_recording  # noqa: E402
+
+from wheelsoil.processing import COLUMNS, process_recording  # noqa: E402
+
+GPS_OFFSET_S = 1234.5678
+
+
+def _truth_on(res, truth, name):
+    return np.interp(res.signals["t_s"].to_numpy(), truth.t_s, getattr(truth, name))
+
+
+@pytest.fixture(scope="module", params=[0.05, 0.2])
+def processed(request, tmp_path_factory):
+    latency = request.param
+    truth = truth_profile(3)
+    info = write_recording(tmp_path_factory.mktemp("rec") / "run.mcap", truth, latency_s=latency,
+                           gps_offset_s=GPS_OFFSET_S, drop_wft_bursts=8, seed=int(latency * 100))
+    return latency, truth, info, process_recording(info["path"])
+
+
+def test_columns_exact_and_types(processed):
+    _, _, _, res = processed
+    s = res.signals
+    assert tuple(s.columns) == COLUMNS
+    assert s["valid"].dtype == bool
+    assert set(s["phase"].unique()) <= {"accel", "brake", "standstill", "other"}
+    assert np.allclose(np.diff(s["t_s"]), 0.01)
+    assert res.cycle.shape == (len(s),)
+
+
+def test_latency_recovered_within_10ms(processed):
+    latency, _, _, res = processed
+    assert res.gnss_latency_s is not None
+    assert abs(res.gnss_latency_s - latency) < 0.010
+    assert 0 < res.gnss_latency_stderr_s < 0.010
+
+
+def test_slip_rms_on_accel_phases(processed):
+    _, truth, _, res = processed
+    s = res.signals
+    m = s["valid"].to_numpy() & (s["phase"] == "accel").to_numpy()
+    assert m.sum() > 1500  # three 8 s accelerations at 100 Hz, most of them found
+    err = s["slip"].to_numpy()[m] - _truth_on(res, truth, "slip")[m]
+    assert np.sqrt(np.mean(err**2)) <= 0.01
+
+
+def test_forces_within_sensor_noise(processed):
+    _, truth, _, res = processed
+    s = res.signals
+    m = s["valid"].to_numpy()
+    for col, noise in (("drawbar_pull_n", FORCE_NOISE_N), ("load_n", FORCE_NOISE_N),
+                       ("torque_nm", MOMENT_NOISE_NM)):
+        err = s[col].to_numpy()[m] - _truth_on(res, truth, col)[m]
+        assert np.sqrt(np.mean(err**2)) <= noise, col
+
+
+def test_speed_and_omega(processed):
+    _, truth, _, res = processed
+    s = res.signals
+    m = s["valid"].to_numpy()
+    assert np.sqrt(np.mean((s["speed_mps"].to_numpy()[m] - _truth_on(res, truth, "speed_mps")[m]) ** 2)) < 0.02
+    assert np.sqrt(np.mean((s["omega_radps"].to_numpy()[m] - _truth_on(res, truth, "omega_radps")[m]) ** 2)) < 0.05
+
+
+def test_lost_frames_and_gps_mapping(processed):
+    latency, _, info, res = processed
+    for name in ("WFT_RL_Force", "WFT_RL_Moment", "WFT_RL_Angle"):
+        assert res.lost_frames[name]["lost"] == info["lost_samples"]
+    g = res.gps_time_mapping
+    # GPS time of a fix = host receive time + offset - latency (the receiver's clock offset)
+    assert abs(g["offset_s"] - (GPS_OFFSET_S - latency)) < 2e-3
+    assert abs(g["drift_ppm"]) < 20
+    assert g["residual_rms_s"] < 2e-3
+
+
+def test_phases_and_cycles_follow_truth(processed):
+    _, truth, _, res = processed
+    s = res.signals
+    idx = np.clip(np.searchsorted(truth.t_s, s["t_s"].to_numpy()), 0, truth.t_s.size - 1)
+    true_phase = truth.phase[idx]
+    acc = true_phase == "accel"
+    assert np.mean(s["phase"].to_numpy()[acc] == "accel") > 0.85
+    assert np.mean(s["phase"].to_numpy()[true_phase == "brake"] != "accel") > 0.95
+    assert res.cycle.max() == 2  # three accelerate cycles, ids 0..2
+    assert set(np.unique(res.cycle[acc])) <= {-1, 0, 1, 2}
+
+
+# --------------------------------------------------------------------------- bad input
+@pytest.fixture(scope="module")
+def short_truth():
+    return truth_profile(1)
+
+
+def test_no_gnss(tmp_path, short_truth):
+    info = write_recording(tmp_path / "r.mcap", short_truth, no_gnss=True)
+    res = process_recording(info["path"])
+    s = res.signals
+    assert res.gnss_latency_s is None and res.gps_time_mapping is None
+    assert any("no GNSS velocity" in w and "still computed" in w for w in res.warnings)
+    assert s["speed_mps"].isna().all() and s["slip"].isna().all() and not s["valid"].any()
+    assert s["load_n"].notna().mean() > 0.99 and s["omega_radps"].notna().mean() > 0.99
+
+
+def test_no_wheel_speed(tmp_path, short_truth):
+    info = write_recording(tmp_path / "r.mcap", short_truth, no_wheel_speed=True)
+    res = process_recording(info["path"])
+    s = res.signals
+    assert any("no wheel speed" in w for w in res.warnings)
+    assert any("latency not estimated" in w for w in res.warnings)
+    assert s["omega_radps"].isna().all() and s["slip"].isna().all() and not s["valid"].any()
+    assert s["speed_mps"].notna().mean() > 0.95 and s["drawbar_pull_n"].notna().mean() > 0.99
+
+
+def test_jumping_wft_counter(tmp_path, short_truth):
+    info = write_recording(tmp_path / "r.mcap", short_truth, counter_jumps=4, drop_wft_bursts=3, seed=5)
+    res = process_recording(info["path"])
+    assert any("counter jumped" in w for w in res.warnings)
+    assert res.lost_frames["WFT_RL_Force"]["counter_jumps"] == 4
+    assert res.lost_frames["WFT_RL_Force"]["lost"] == info["lost_samples"]
+    s = res.signals
+    m = s["valid"].to_numpy()
+    err = s["load_n"].to_numpy()[m] - _truth_on(res, short_truth, "load_n")[m]
+    assert np.sqrt(np.mean(err**2)) <= FORCE_NOISE_N
+
+
+def test_wheel_speed_zero_for_a_minute(tmp_path):
+    truth = truth_profile(5)
+    info = write_recording(tmp_path / "r.mcap", truth, wheel_speed_zero=(8.0, 68.0))
+    res = process_recording(info["path"])
+    s = res.signals
+    window = (s["t_s"] > 9) & (s["t_s"] < 67)
+    assert not np.isinf(s["slip"]).any()
+    assert s["slip"][window].isna().all() and not s["valid"][window].any()
+    assert any("slip undefined" in w and "vehicle moved" in w for w in res.warnings)
+    assert s["load_n"][window].notna().all() and s["speed_mps"][window].notna().all()
+    assert s["valid"][s["t_s"] > 70].mean() > 0.5  # the rest is still usable
+
+
+def test_recording_without_configured_messages(tmp_path):
+    from wheelsoil.daq import FrameBatch, RecordingWriter
+
+    path = tmp_path / "other.mcap"
+    with RecordingWriter(path, config=None, metadata={}) as w:
+        w.write_batch(FrameBatch.from_columns("can0", np.arange(10) * 1000, np.full(10, 0x7AB),
+                                              np.zeros(10), np.full(10, 8), np.zeros((10, 8))))
+    with pytest.raises(ValueError, match="none of the configured messages"):
+        process_recording(path)
+    with pytest.raises(OSError, match="no such file"):
+        process_recording(tmp_path / "missing.mcap")
+
+
+# --------------------------------------------------------------------------- CLI
+def test_cli_writes_csv_and_parquet(tmp_path, short_truth, capsys):
+    from wheelsoil.cli import main
+
+    info = write_recording(tmp_path / "r.mcap", short_truth, latency_s=0.1)
+    assert main(["process", str(info["path"]), "-o", str(tmp_path / "s.csv")]) == 0
+    out = capsys.readouterr().out
+    assert "GNSS latency:" in out and "GPS time:" in out and "lost frames" in out and "valid samples" in out
+    df = pd.read_csv(tmp_path / "s.csv")
+    assert tuple(df.columns) == COLUMNS
+    assert main(["process", str(info["path"]), "-o", str(tmp_path / "s.parquet"), "--rate", "50",
+                 "--cutoff", "3"]) == 0
+    pq = pd.read_parquet(tmp_path / "s.parquet")
+    assert tuple(pq.columns) == COLUMNS and np.allclose(np.diff(pq["t_s"]), 0.02)
+    assert main(["process", str(info["path"]), "-o", str(tmp_path / "s.txt")]) == 2
+    assert "csv" in capsys.readouterr().err
