@@ -291,6 +291,7 @@ def diagnose(
     fit_terrain: bool = False,
     sinkage: str = "eq10",
     progress: bool = False,
+    max_iter: int = 60,
 ) -> Diagnosis:
     """Diagnose what Wong's model gets wrong on measured data (rule in the module doc).
 
@@ -306,6 +307,8 @@ def diagnose(
         are no lab values to mismatch) and is skipped.
     sinkage : ``eq10`` | ``balance`` (model core).
     progress : show a tqdm progress bar.
+    max_iter : Gauss–Newton iteration limit per fit (a fit that does not
+        converge is reported in ``failures`` and left out of the verdict).
 
     Returns
     -------
@@ -339,7 +342,7 @@ def diagnose(
         if bar is not None:
             bar.set_postfix_str(name)
         try:
-            f = fit_model(data, terrain, wheel, name, terrain_params=tparams, sinkage=sinkage)
+            f = fit_model(data, terrain, wheel, name, terrain_params=tparams, sinkage=sinkage, max_iter=max_iter)
             f = cross_validate(data, f, terrain, wheel, sinkage=sinkage)
             if not f.success:
                 failures.append(f"{TITLES[name]}: the fit did not converge ({f.message}); its numbers are shown but not used for the verdict.")
