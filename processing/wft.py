@@ -52,10 +52,17 @@ def unwrap_counter(timestamp_ns: np.ndarray, counter: np.ndarray, *, modulo: int
     dt = np.diff(ts) * 1e-9
     d = np.diff(c) % modulo
     if period_s is None:
-        ones = dt[d == 1]
-        if ones.size == 0:
+        if not np.any(d == 1):
             raise ValueError("counter never advances by one: cannot estimate the sample period")
-        period_s = float(np.median(ones))
+        # elapsed time over counter advance in windows of up to 64 frames: host
+        # timestamps of bursty adapters (USB, UDP) put many consecutive frames
+        # microseconds apart, so a per-step median would be far too small
+        w = int(min(64, dt.shape[0]))
+        ct = np.concatenate([[0.0], np.cumsum(dt)])
+        cd = np.concatenate([[0], np.cumsum(d)])
+        span_t, span_d = ct[w:] - ct[:-w], cd[w:] - cd[:-w]
+        ok = (span_d > 0) & (span_d <= 2 * w)
+        period_s = float(np.median(span_t[ok] / span_d[ok])) if ok.any() else float(np.median(dt[d == 1]))
         if not period_s > 0:
             raise ValueError("frames with consecutive counters share one timestamp: no sample period")
     expected = dt / period_s
@@ -63,7 +70,9 @@ def unwrap_counter(timestamp_ns: np.ndarray, counter: np.ndarray, *, modulo: int
     clock = np.maximum(np.round(expected).astype(np.int64), 0)
     jumps = 0
     rel_t = (ts - ts[0]) * 1e-9
-    cands = np.flatnonzero(np.abs(steps - expected) > 1.5)
+    # a counter that advances by exactly one lost nothing, whatever the host clock
+    # says: a late delivery (USB/UDP burst, scheduling pause) is not a counter jump
+    cands = np.flatnonzero((np.abs(steps - expected) > 1.5) & (steps != 1))
     for j, i in enumerate(cands):
         # frames a..i before the step (earlier steps already decided), i+1..b after it,
         # up to the frame before the next suspicious step
