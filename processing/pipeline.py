@@ -190,6 +190,8 @@ def _to_grid(t_s: np.ndarray, x: np.ndarray, period_s: float, t_grid: np.ndarray
         if b - a < 2:
             continue
         n_u = int(math.floor((t[b - 1] - t[a]) / period_s)) + 1
+        if n_u < 2:
+            continue
         tu = t[a] + np.arange(n_u) * period_s
         xu = lowpass(np.interp(tu, t[a:b], v[a:b]), fs, cutoff_hz)
         lo = np.searchsorted(t_grid, tu[0], side="left")
