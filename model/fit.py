@@ -125,7 +125,8 @@ class FitResult:
 
 def _fd_jacobian(fun_w, x, r0, lo, hi, d):
     """Forward-difference Jacobian (m, p) of ``fun_w`` at ``x``; the step is
-    ``sqrt(eps_mach) * max(|x_i|, d_i)``, taken backwards next to an upper bound."""
+    ``sqrt(eps_mach) * max(|x_i|, d_i)``, taken backwards next to an upper bound
+    or where the forward point is outside the model's domain."""
     p = len(x)
     J = np.empty((len(r0), p))
     for i in range(p):
@@ -134,7 +135,11 @@ def _fd_jacobian(fun_w, x, r0, lo, hi, d):
             h = -h
         xh = x.copy()
         xh[i] += h
-        J[:, i] = (fun_w(xh) - r0) / h
+        col = (fun_w(xh) - r0) / h
+        if not np.all(np.isfinite(col)) and x[i] - h >= lo[i]:  # outside the model's domain: step back
+            xh[i] = x[i] - h
+            col = (fun_w(xh) - r0) / -h
+        J[:, i] = col
     return J
 
 
@@ -346,6 +351,8 @@ def _covariance(J, d, cost, dof, absolute_sigma):
     except np.linalg.LinAlgError:
         return np.full((p, p), np.nan), float("inf")
     if sv.size == 0 or sv[0] == 0:
+        return np.full((p, p), np.nan), float("inf")
+    if not np.all(np.isfinite(sv)):
         return np.full((p, p), np.nan), float("inf")
     cond = float(sv[0] / sv[-1]) if sv[-1] > 0 else float("inf")
     keep = sv > 1e-10 * sv[0]
