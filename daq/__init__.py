@@ -10,12 +10,12 @@ The MCAP layout is described in docs/mcap-layout.md.
 
 from .config import REQUIRED_SIGNALS, SignalRef, VehicleConfig, load_vehicle_config
 from .frames import FrameBatch
-from .info import RecordingInfo, read_recording_info
+from .info import RecordingInfo, load_recording_config, read_recording_info
 from .recording import RecordingError, RecordingWriter, iter_frame_batches, read_frames
 from .stats import FrameStats, frame_stats
 
 __all__ = [
     "FrameBatch", "iter_frame_batches", "read_frames", "RecordingWriter", "RecordingError",
     "VehicleConfig", "SignalRef", "load_vehicle_config", "REQUIRED_SIGNALS",
-    "read_recording_info", "RecordingInfo", "FrameStats", "frame_stats",
+    "read_recording_info", "RecordingInfo", "load_recording_config", "FrameStats", "frame_stats",
 ]

@@ -76,6 +76,7 @@ class VehicleConfig:
     source: Path | None = None
     text: str = ""
     _dbs: dict = field(default_factory=dict, repr=False, compare=False)
+    _texts: dict = field(default_factory=dict, repr=False, compare=False)
 
     def database(self, bus: str):
         """The cantools database of all DBC files on ``bus`` (cached).
@@ -100,7 +101,9 @@ class VehicleConfig:
         out = {}
         for paths in self.buses.values():
             for p in paths:
-                out[p.name] = Path(p).read_text(encoding="utf-8", errors="replace")
+                if p.name not in self._texts:
+                    self._texts[p.name] = Path(p).read_text(encoding="utf-8", errors="replace")
+                out[p.name] = self._texts[p.name]
         return out
 
     def counter_specs(self) -> list[tuple[str, int, bool, int, int]]:

@@ -98,6 +98,19 @@ def _idstr(k) -> str:
     return f"0x{fid:08X}x" if ext else f"0x{fid:03X}"
 
 
+def load_recording_config(path):
+    """The :class:`VehicleConfig` attached to a recording (None if it has none).
+
+    Reads only the start of the file (works on truncated files).
+
+    Raises:
+        OSError: unreadable file. ValueError: not an MCAP file, or invalid attached TOML/DBC.
+    """
+    from .recording import read_attachments
+
+    return config_from_attachments(read_attachments(path))
+
+
 def config_from_attachments(attachments: dict[str, bytes]):
     """Rebuild the :class:`VehicleConfig` a recording was made with from its
     ``vehicle.toml`` and ``dbc/*`` attachments (None if they are missing).
@@ -123,6 +136,7 @@ def config_from_attachments(attachments: dict[str, bytes]):
         cfg = vehicle_config_from_dict(doc, source=Path(tmp) / "vehicle.toml", text=text)
         for bus in cfg.buses:
             cfg.database(bus)  # parse now, the files vanish with the directory
+        cfg.dbc_texts()
     cfg.source = None
     return cfg
 

@@ -392,6 +392,33 @@ def _iter_records(path, state: _Records, *, recover: bool, with_status: bool = F
             warnings.warn(msg, RuntimeWarning, stacklevel=3)
 
 
+def read_attachments(path) -> dict[str, bytes]:
+    """Attachments at the start of a recording (``vehicle.toml``, ``dbc/*``), name -> bytes.
+
+    Reads only up to the first chunk, so it is instant on long files and works
+    on truncated ones (the writer puts attachments before any frame).
+
+    Raises:
+        OSError: unreadable file. RecordingError: not an MCAP file.
+    """
+    from mcap.records import Attachment, Chunk, Message
+    from mcap.stream_reader import StreamReader
+
+    out: dict[str, bytes] = {}
+    with open(path, "rb") as raw:
+        f = _StrictFile(raw)
+        try:
+            for rec in StreamReader(f, emit_chunks=True).records:
+                if isinstance(rec, Attachment):
+                    out[rec.name] = rec.data
+                elif isinstance(rec, (Chunk, Message)):
+                    break
+        except Exception as exc:
+            if f.offset <= 8:
+                raise RecordingError(f"{path}: not an MCAP file ({type(exc).__name__}: {exc})") from None
+    return out
+
+
 def iter_frame_batches(path, *, buses=None, recover: bool = True) -> Iterator[FrameBatch]:
     """Stream the raw frames of an MCAP recording, batch by batch.
 
