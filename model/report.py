@@ -357,6 +357,9 @@ def _html(rep: dict, figs: list) -> str:
         rows.append([TITLES[k], _n(mm["M0_pct"]), _n(mm["R0_n"]), _n(mm["R2"]), _n(m["cv_R0_n"]),
                      _n(m.get("cv_score")), _n(m["bic"], nd=5), m["status"]])
     parts.append(_table(["model", "M0 [%]", "R0 [N]", "R²", "CV R0 [N]", "CV weighted RMS", "BIC (n_eff)", "status"], rows))
+    parts.append("<p>M0 = max |error| / |measured| (paper §1.3) grows without bound where the measured Dp "
+                 "is near zero; R0 and the out-of-sample CV R0 are the robust comparison. BIC uses the effective "
+                 "number of independent observations; lower is better.</p>")
     chan_rows = []
     for k, m in rep["models"].items():
         if m.get("channel_metrics"):
