@@ -873,6 +873,94 @@ def write_truth(run: SimulatedRun, path) -> Path:
     return path
 
 
+# ------------------------------------------------------------------ verification
+#: Diagnosis verdict expected for each hidden effect (report.json ``diagnosis.effect``).
+EXPECTED_VERDICT = {"none": "none", "vasilev": "slip_sinkage", "lyasko": "slip_sinkage",
+                    "ding": "slip_sinkage", "terrain_mismatch": "terrain_mismatch"}
+
+
+def draw_case(seed: int) -> dict[str, Any]:
+    """A hidden-effect test case drawn at random from ``seed``.
+
+    Returns a dict of :func:`simulate_run` keyword arguments plus ``terrain``
+    (``clay`` +3 kN or ``sand`` +5 kN, as in the paper): ``effect`` uniform over
+    :data:`EFFECTS` (coefficients then drawn by the simulator), GNSS latency
+    0.03-0.2 s, drop rate 0-1 %, ``seed``.
+    """
+    rng = np.random.default_rng([int(seed), 20141211])
+    effect = str(EFFECTS[int(rng.integers(len(EFFECTS)))])
+    terrain = "clay" if rng.random() < 0.5 else "sand"
+    return {
+        "terrain": terrain, "effect": effect, "added_load_n": 3000.0 if terrain == "clay" else 5000.0,
+        "gnss_latency_s": float(rng.uniform(0.03, 0.2)), "drop_rate": float(rng.uniform(0.0, 0.01)),
+        "seed": int(seed),
+    }
+
+
+def judge(truth: Mapping[str, Any], report: Mapping[str, Any], *, k_sigma: float = 3.0,
+          rel_floor: float = 0.03) -> dict[str, Any]:
+    """Compare a fit report (``report.json``, schema wheelsoil.report/1) with the hidden truth.
+
+    Checks: the verdict (``diagnosis.effect``) is the expected one
+    (:data:`EXPECTED_VERDICT`); for slip sinkage the chosen form is the true
+    one, or the report says the true form is indistinguishable from it; the
+    fitted coefficients of the true form (or K, phi of ``terrain_mismatch``)
+    are within ``k_sigma`` standard errors of the truth, the standard error
+    floored at ``rel_floor`` x |true value| (processing and soil variability
+    bias the estimates beyond the purely statistical error; the z-scores with
+    the bare standard errors are returned too); an effect gives a positive
+    out-of-sample gain (``cv_R0_n_after < cv_R0_n_before``).
+
+    Returns a dict: ``expected``, ``verdict``, ``model``, ``effect_ok``,
+    ``form_ok``, ``params_ok``, ``param_z`` (bare), ``param_z_floored``,
+    ``gain_ok``, ``latency_error_s``, ``ok`` (all checks), ``miss``
+    (``None``, ``"unexplained"`` or ``"wrong cause"``).
+    """
+    effect = truth["effect"]
+    expected = EXPECTED_VERDICT[effect]
+    diag = report.get("diagnosis", {})
+    verdict = diag.get("effect")
+    model = diag.get("model")
+    out: dict[str, Any] = {"expected": expected, "verdict": verdict, "model": model,
+                           "effect_ok": verdict == expected}
+    form_ok = True
+    if effect in PARAM_RANGES and verdict == "slip_sinkage":
+        tied = set(diag.get("indistinguishable_forms") or [])
+        form_ok = model == effect or (effect in tied and not diag.get("forms_distinguishable"))
+    out["form_ok"] = form_ok
+    # coefficients of the true form
+    z_bare, z_floor = {}, {}
+    if effect in PARAM_RANGES or effect == "terrain_mismatch":
+        fit = report.get("models", {}).get(effect, {})
+        true = dict(truth["params"])
+        if effect == "terrain_mismatch":
+            true = {"K": true["K"], "phi": math.radians(true["phi_deg"])}
+        for name, tv in true.items():
+            fv = (fit.get("params") or {}).get(name)
+            se = (fit.get("stderr") or {}).get(name)
+            if fv is None or se is None or not np.isfinite(se):
+                z_bare[name] = z_floor[name] = float("inf")
+                continue
+            z_bare[name] = abs(fv - tv) / max(se, 1e-300)
+            z_floor[name] = abs(fv - tv) / max(se, rel_floor * abs(tv))
+    out["param_z"] = z_bare
+    out["param_z_floored"] = z_floor
+    # with tied forms (highly correlated m1, m2) only the chosen form's curve is pinned down
+    check_params = effect == "terrain_mismatch" or (effect in PARAM_RANGES and model == effect)
+    out["params_ok"] = (not check_params) or all(z <= k_sigma for z in z_floor.values())
+    gain = report.get("gain") or {}
+    if effect == "none":
+        out["gain_ok"] = True
+    else:
+        before, after = gain.get("cv_R0_n_before"), gain.get("cv_R0_n_after")
+        out["gain_ok"] = before is not None and after is not None and after < before
+    lat = (report.get("time_sync") or {}).get("gnss_latency_s")
+    out["latency_error_s"] = None if lat is None else float(lat) - float(truth["gnss_latency_s"])
+    out["ok"] = bool(out["effect_ok"] and form_ok and out["params_ok"] and out["gain_ok"])
+    out["miss"] = None if out["effect_ok"] else ("unexplained" if verdict == "unexplained" else "wrong cause")
+    return out
+
+
 # --------------------------------------------------------------------------- CLI
 _EPILOG = """\
 examples:
