@@ -7,7 +7,7 @@ import warnings
 from dataclasses import dataclass, field
 
 #: Default socket receive buffer asked for on SocketCAN buses [bytes].
-DEFAULT_RCVBUF_BYTES = 8 * 1024 * 1024
+DEFAULT_RCVBUF_BYTES = 64 * 1024 * 1024  # ~10 s of both vehicle buses saturated
 
 _NAME_RE = re.compile(r"^[A-Za-z_][A-Za-z0-9_.-]*$")
 

