@@ -123,8 +123,9 @@ class WftSamples:
     """One row per WFT sample index (from the first to the last sample seen).
 
     ``index`` int64 (M,) unwrapped sample index; ``timestamp_ns`` int64 (M,)
-    (mean host time of the sample's frames; interpolated for missing
-    samples); ``complete`` bool (M,) all three frames present;
+    sample times on the host clock, from the transducer's regular period
+    with a slowly varying offset fitted to the frames' host times (see
+    :func:`_smooth_sample_times`; missing samples included); ``complete`` bool (M,) all three frames present;
     ``columns`` name -> float64 (M,) (NaN where the frame was lost);
     ``period_s``; ``reports`` message name -> :class:`GapReport`.
     """
@@ -208,9 +209,36 @@ def assemble_wft_samples(streams: dict[str, tuple[np.ndarray, np.ndarray, dict[s
         # frames missing at the ends of this stream relative to the others
         reports[name].lost += int(idx[0] - lo) + int(hi - idx[-1])
     have = t_cnt > 0
-    rel = np.full(m, np.nan)
-    rel[have] = t_sum[have] / t_cnt[have]
-    if not have.all():
-        rel = np.interp(index.astype(np.float64), index[have].astype(np.float64), rel[have])
-    timestamp_ns = t_ref[0] + np.round(rel).astype(np.int64)
+    mean_t = t_sum[have] / t_cnt[have]
+    timestamp_ns = t_ref[0] + np.round(_smooth_sample_times(index, have, mean_t, period)).astype(np.int64)
     return WftSamples(index, timestamp_ns, present, columns, period, reports)
+
+
+def _smooth_sample_times(index: np.ndarray, have: np.ndarray, mean_t_ns: np.ndarray, period_s: float,
+                         block: int = 500) -> np.ndarray:
+    """Sample times [ns, relative] from the transducer's regular clock, not the host's jitter.
+
+    The WFT samples at a fixed period, so ``t = offset(K) + K * period`` with an
+    offset that changes only slowly (clock drift). The offset is the median of
+    ``t_host - K * period`` over blocks of ``block`` samples (1 s at 500 Hz),
+    interpolated linearly between block centres: host receive jitter and
+    bursty delivery (USB/UDP adapters) do not move the sample times.
+    ``index`` (M,), ``have`` (M,) bool samples with frames, ``mean_t_ns``
+    their mean frame time; returns float (M,).
+    """
+    k = index[have].astype(np.float64)
+    resid = mean_t_ns - k * period_s * 1e9
+    blk = ((index[have] - index[0]) // block).astype(np.int64)
+    starts = np.flatnonzero(np.r_[True, np.diff(blk) != 0])
+    ends = np.r_[starts[1:], blk.size]
+    centres = np.array([k[a:b].mean() for a, b in zip(starts, ends)])
+    offsets = np.array([np.median(resid[a:b]) for a, b in zip(starts, ends)])
+    kk = index.astype(np.float64)
+    if centres.size == 1:
+        return offsets[0] + kk * period_s * 1e9
+    # linear inside, extrapolated with the end blocks' slope outside the centres
+    off = np.interp(kk, centres, offsets)
+    lo, hi = kk < centres[0], kk > centres[-1]
+    off[lo] = offsets[0] + (kk[lo] - centres[0]) * (offsets[1] - offsets[0]) / (centres[1] - centres[0])
+    off[hi] = offsets[-1] + (kk[hi] - centres[-1]) * (offsets[-1] - offsets[-2]) / (centres[-1] - centres[-2])
+    return off + kk * period_s * 1e9

@@ -76,6 +76,21 @@ def test_assemble_matches_frames_by_counter_and_time():
     assert ws.reports["M"].lost == 301 and ws.reports["F"].lost == 0
 
 
+def test_sample_times_ignore_bursty_delivery():
+    """Frames delivered in bursts of 20 (USB/UDP) still get their true sample times."""
+    rng = np.random.default_rng(6)
+    n = 5000
+    true_ns = 1_700_000_000_000_000_000 + np.arange(n) * 2_000_000
+    burst_end = (np.arange(n) // 20 + 1) * 20 - 1
+    # each frame arrives with its burst's last one (in order, 2 us apart), bursts jitter by 0..1 ms
+    ts = true_ns[burst_end] + (np.arange(n) % 20) * 2_000 + np.repeat(rng.integers(0, 1_000_000, n // 20), 20)
+    counter = np.arange(n) % 256
+    ws = assemble_wft_samples({"F": (ts, counter, {"x": np.zeros(n)})}, reference="F")
+    err = ws.timestamp_ns - true_ns
+    assert np.all(np.diff(ws.timestamp_ns) > 0)
+    assert np.ptp(err) < 500_000  # constant delay allowed; spread < 0.5 ms (bursts: 38 ms, jitter 1 ms)
+
+
 def test_filter_never_crosses_a_gap():
     x = np.concatenate([np.zeros(400), np.full(10, np.nan), np.full(400, 1000.0)])
     y = lowpass_segments(x, 500.0, 5.0)
