@@ -293,14 +293,21 @@ def export_recording(path, output, *, channel_map: Mapping[str, str] | None = No
     res = ConvertResult(out)
     counts: dict[str, int] = {}
     rev = {v: k for k, v in (channel_map or {}).items()}
+    trc = out.suffix.lower() == ".trc"
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", RuntimeWarning)
         with can.Logger(str(out)) as writer:
             for msg in iter_merged_messages(path, channel_map=channel_map, buses=buses):
+                if trc and (msg.is_remote_frame or msg.is_error_frame or msg.is_fd):
+                    res.skipped += 1  # python-can's TRC writer drops these (with a log line each)
+                    continue
                 writer.on_message_received(msg)
                 bus = rev.get(msg.channel, msg.channel)
                 counts[bus] = counts.get(bus, 0) + 1
     res.warnings = [str(w.message) for w in caught if issubclass(w.category, RuntimeWarning)]
+    if res.skipped:
+        res.warnings.append(f"{out}: {res.skipped} remote/error/CAN FD frames not written: python-can's "
+                            "TRC writer does not support them (use .log, .asc or .blf)")
     res.frames = counts
     return res
 
