@@ -9,6 +9,7 @@ examples:
   wheelsoil process run.mcap -o signals.csv
   wheelsoil process run.mcap -o signals.parquet --rate 200 --cutoff 8
   wheelsoil process run.mcap -o signals.csv --config my_vehicle.toml
+  wheelsoil process candump-2024-05-01.log -o signals.csv     (log imported first)
 
 output columns (one row per grid point, from the first frame on):
   t_s             time since the first frame [s] (host clock)
@@ -41,7 +42,8 @@ def register(subparsers) -> None:
         epilog=_EPILOG,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    p.add_argument("recording", help="MCAP recording (from 'wheelsoil log' or 'wheelsoil import')")
+    p.add_argument("recording", help="MCAP recording (from 'wheelsoil log' or 'wheelsoil import'); "
+                   ".log/.asc/.blf/.trc logs are imported on the fly")
     p.add_argument("-o", "--output", required=True,
                    help="output table: .csv or .parquet (columns listed below)")
     p.add_argument("--rate", type=float, default=100.0, metavar="HZ",

@@ -215,12 +215,39 @@ def _time_gaps(name: str, ts_ns: np.ndarray) -> tuple[dict, float]:
             "received": int(ts_ns.shape[0]), "method": f"time gaps, period {period * 1e3:.1f} ms"}, period
 
 
+# --------------------------------------------------------------------------- log files
+#: Log formats accepted besides MCAP (imported with ``wheelsoil.daq.convert.import_log`` first).
+LOG_SUFFIXES = (".log", ".asc", ".blf", ".trc")
+
+
+def _process_log(path: Path, *, config, rate_hz, cutoff_hz, progress) -> "ProcessResult":
+    """Import a candump/ASC/BLF/TRC log into a temporary MCAP, then process that."""
+    import tempfile
+    import warnings as _w
+
+    from wheelsoil.daq import VehicleConfig, load_vehicle_config
+    from wheelsoil.daq.convert import import_log
+
+    cfg = config if isinstance(config, VehicleConfig) else load_vehicle_config(config)
+    with tempfile.TemporaryDirectory(prefix="wheelsoil-process-") as tmp:
+        mcap = Path(tmp) / (path.stem + ".mcap")
+        with _w.catch_warnings():
+            _w.simplefilter("ignore", RuntimeWarning)  # listed in conv.warnings
+            conv = import_log(path, mcap, config=cfg)
+        res = process_recording(mcap, config=cfg, rate_hz=rate_hz, cutoff_hz=cutoff_hz, progress=progress)
+    res.warnings[:0] = [f"{path}: imported {sum(conv.frames.values())} frames "
+                        f"({', '.join(f'{b}: {n}' for b, n in conv.frames.items())})"] + list(conv.warnings)
+    return res
+
+
 # --------------------------------------------------------------------------- main entry
 def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: float | None = None,
                       progress: bool = False) -> ProcessResult:
     """Decode, synchronise, filter and compute slip for one MCAP recording.
 
-    Parameters: ``path`` ``.mcap`` recording (``wheelsoil log``/``import``);
+    Parameters: ``path`` ``.mcap`` recording (``wheelsoil log``/``import``), or a
+    ``.log``/``.asc``/``.blf``/``.trc`` log (imported first, bus names as
+    ``wheelsoil import`` gives them);
     ``config`` a ``VehicleConfig``, a vehicle TOML path, or None (the
     configuration attached to the recording, else ``dbc/vehicle.toml``);
     ``rate_hz`` output grid rate [Hz] (default 100); ``cutoff_hz`` low-pass
@@ -251,6 +278,8 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
         cutoff = 0.4 * rate_hz
     if not path.exists():
         raise OSError(f"{path}: no such file")
+    if path.suffix.lower() in LOG_SUFFIXES:
+        return _process_log(path, config=config, rate_hz=rate_hz, cutoff_hz=cutoff_hz, progress=progress)
     cfg = _resolve_config(path, config, warns)
     r = float(cfg.wheel_radius_m)
     sig = cfg.signals

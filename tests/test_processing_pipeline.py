@@ -178,3 +178,17 @@ def test_cli_writes_csv_and_parquet(tmp_path, short_truth, capsys):
     assert tuple(pq.columns) == COLUMNS and np.allclose(np.diff(pq["t_s"]), 0.02)
     assert main(["process", str(info["path"]), "-o", str(tmp_path / "s.txt")]) == 2
     assert "csv" in capsys.readouterr().err
+
+
+def test_log_file_input_is_imported_first(tmp_path, short_truth):
+    from wheelsoil.daq.convert import export_recording
+
+    info = write_recording(tmp_path / "r.mcap", short_truth, latency_s=0.1)
+    export_recording(info["path"], tmp_path / "r.log")
+    a = process_recording(info["path"])
+    b = process_recording(tmp_path / "r.log")
+    assert any("imported" in w for w in b.warnings)
+    assert b.gnss_latency_s == pytest.approx(a.gnss_latency_s, abs=1e-3)
+    assert len(a.signals) == len(b.signals)
+    np.testing.assert_allclose(b.signals["load_n"], a.signals["load_n"], atol=1.0, equal_nan=True)
+    assert (a.signals["valid"] == b.signals["valid"]).mean() > 0.99
