@@ -541,6 +541,14 @@ def _fmt(v, unit="N", nd=3):
     return f"{v:.{nd}g} {unit}".strip()
 
 
+def _param_text(name, value, se) -> str:
+    """'name = value +/- se unit' in the field's units (phi in deg, k_eq in kN/m^(n+2), c in kPa)."""
+    k, unit = {"phi": (180 / math.pi, " deg"), "k_eq": (1e-3, " kN/m^(n+2)"), "c": (1e-3, " kPa"),
+               "H": (1.0, " m"), "K": (1.0, " m")}.get(name, (1.0, ""))
+    se_txt = _fmt(se * k, "", 2) if se is not None else "n/a"
+    return f"{name} = {_fmt(value * k, '', 3)} +/- {se_txt}{unit}"
+
+
 def _summary(d: Diagnosis, tests_w: dict, load_struct: bool) -> str:
     """The plain-English paragraph of the report."""
     data, wong = d.data, d.fits["wong"]
@@ -582,9 +590,7 @@ def _summary(d: Diagnosis, tests_w: dict, load_struct: bool) -> str:
         f = d.fits[d.model]
         cause = "slip sinkage (sinkage growing with slip)" if d.effect == "slip_sinkage" else \
             "a mismatch of the terrain's shear parameters (K, phi)"
-        ptxt2 = ", ".join(
-            f"{k} = {_fmt(v, '', 3)} +/- {_fmt(f.stderr.get(k), '', 2)}" for k, v in f.params.items()
-        )
+        ptxt2 = ", ".join(_param_text(k, v, f.stderr.get(k)) for k, v in f.params.items())
         parts.append(f"The cause is {cause}; the best model is {TITLES[d.model]} ({ptxt2}).")
         if d.forms_distinguishable is False:
             parts.append(
