@@ -18,14 +18,18 @@ manoeuvre, and removes about 99 % of the noise power of 500 Hz WFT data.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from scipy import signal
 
-__all__ = ["DEFAULT_CUTOFF_HZ", "FILTER_ORDER", "segments", "lowpass", "lowpass_segments",
-           "resample_segments", "fill_short_gaps"]
+__all__ = ["DEFAULT_CUTOFF_HZ", "FILTER_ORDER", "MAX_FILL_SAMPLES", "segments", "lowpass",
+           "lowpass_segments", "filter_to_grid"]
 
 DEFAULT_CUTOFF_HZ = 5.0
 FILTER_ORDER = 4
+#: Lost samples bridged by linear interpolation; longer gaps split a series into segments.
+MAX_FILL_SAMPLES = 3
 
 
 def segments(valid: np.ndarray) -> list[tuple[int, int]]:
@@ -33,21 +37,6 @@ def segments(valid: np.ndarray) -> list[tuple[int, int]]:
     v = np.concatenate([[False], np.asarray(valid, dtype=bool), [False]])
     edges = np.flatnonzero(np.diff(v.astype(np.int8)))
     return list(zip(edges[0::2].tolist(), edges[1::2].tolist()))
-
-
-def fill_short_gaps(x: np.ndarray, max_gap: int) -> np.ndarray:
-    """Linearly interpolate runs of at most ``max_gap`` NaN samples between finite ones.
-
-    ``x`` (N,) float; longer runs (and NaN at the ends) stay NaN. Returns a new array.
-    """
-    x = np.array(x, dtype=np.float64)
-    bad = ~np.isfinite(x)
-    if not bad.any() or bad.all():
-        return x
-    for a, b in segments(bad):
-        if a > 0 and b < x.shape[0] and b - a <= max_gap:
-            x[a:b] = np.interp(np.arange(a, b), [a - 1, b], [x[a - 1], x[b]])
-    return x
 
 
 def lowpass(x: np.ndarray, fs_hz: float, cutoff_hz: float, order: int = FILTER_ORDER) -> np.ndarray:
@@ -79,26 +68,33 @@ def lowpass_segments(x: np.ndarray, fs_hz: float, cutoff_hz: float, *, order: in
     return out
 
 
-def resample_segments(t_src: np.ndarray, x: np.ndarray, t_grid: np.ndarray, *,
-                      max_step: float) -> np.ndarray:
-    """Linear interpolation of ``x`` (N,) at ``t_src`` (N,, sorted) onto ``t_grid`` (M,).
+def filter_to_grid(t_s: np.ndarray, x: np.ndarray, period_s: float, t_grid: np.ndarray,
+                   cutoff_hz: float) -> np.ndarray:
+    """Filter a source series per segment and interpolate it onto an output grid.
 
-    Only inside runs of finite samples whose time steps are at most
-    ``max_step`` (same unit as the times); grid points elsewhere get NaN.
-    Returns float64 (M,).
+    ``t_s`` (n,) sorted times [s], ``x`` (n,) values (NaN = lost sample);
+    segments break where more than ``MAX_FILL_SAMPLES`` consecutive samples
+    are missing. Within a segment the series is resampled uniformly at
+    ``period_s`` (lost samples linearly bridged), low-passed zero-phase and
+    interpolated onto the ``t_grid`` points inside it; others stay NaN.
     """
-    t_src = np.asarray(t_src, dtype=np.float64)
     out = np.full(t_grid.shape[0], np.nan)
-    ok = np.isfinite(x)
-    long_step = np.zeros(t_src.shape[0], dtype=bool)
-    long_step[1:] = np.diff(t_src) > max_step  # sample i starts a new run
-    for a, b in segments(ok):
-        cuts = [a, *(np.flatnonzero(long_step[a + 1:b]) + a + 1).tolist(), b]
-        for s, e in zip(cuts[:-1], cuts[1:]):
-            if e - s < 2:
-                continue
-            lo = np.searchsorted(t_grid, t_src[s], side="left")
-            hi = np.searchsorted(t_grid, t_src[e - 1], side="right")
-            if hi > lo:
-                out[lo:hi] = np.interp(t_grid[lo:hi], t_src[s:e], x[s:e])
+    ok = np.isfinite(x) & np.isfinite(t_s)
+    t, v = t_s[ok], x[ok]
+    if t.shape[0] < 2:
+        return out
+    brk = np.flatnonzero(np.diff(t) > (MAX_FILL_SAMPLES + 1.5) * period_s) + 1
+    fs = 1.0 / period_s
+    for a, b in zip(np.concatenate([[0], brk]), np.concatenate([brk, [t.shape[0]]])):
+        if b - a < 2:
+            continue
+        n_u = int(math.floor((t[b - 1] - t[a]) / period_s)) + 1
+        if n_u < 2:
+            continue
+        tu = t[a] + np.arange(n_u) * period_s
+        xu = lowpass(np.interp(tu, t[a:b], v[a:b]), fs, cutoff_hz)
+        lo = np.searchsorted(t_grid, tu[0], side="left")
+        hi = np.searchsorted(t_grid, tu[-1], side="right")
+        if hi > lo:
+            out[lo:hi] = np.interp(t_grid[lo:hi], tu, xu)
     return out

@@ -32,7 +32,7 @@ import numpy as np
 import pandas as pd
 
 from .decode import DecodedMessage, Decoder, decode_batches
-from .filters import DEFAULT_CUTOFF_HZ, lowpass, segments
+from .filters import DEFAULT_CUTOFF_HZ, MAX_FILL_SAMPLES, filter_to_grid, segments
 from .slip import accel_cycles, classify_phases, slip_ratio
 from .timesync import LatencyEstimate, estimate_latency, fit_gps_time_mapping
 from .wft import assemble_wft_samples, rotate_to_hub
@@ -42,8 +42,6 @@ __all__ = ["ProcessResult", "process_recording", "COLUMNS", "MAX_FILL_SAMPLES"]
 #: The columns of ``ProcessResult.signals``, in order (docs/architecture.md).
 COLUMNS = ("t_s", "slip", "load_n", "drawbar_pull_n", "torque_nm", "speed_mps", "omega_radps",
            "phase", "valid")
-#: Lost samples bridged by linear interpolation; longer gaps split segments.
-MAX_FILL_SAMPLES = 3
 #: r*omega below this [m/s] leaves the slip undefined (NaN).
 MIN_WHEEL_SPEED_MPS = 0.1
 #: WFT Status bits that invalidate a sample (overload, bridge fault, encoder fault).
@@ -169,38 +167,6 @@ def _front_wheel_refs(config) -> list:
 
 
 # --------------------------------------------------------------------------- resampling
-def _to_grid(t_s: np.ndarray, x: np.ndarray, period_s: float, t_grid: np.ndarray,
-             cutoff_hz: float) -> np.ndarray:
-    """Filter a source series per segment and interpolate it onto the output grid.
-
-    ``t_s`` (n,) sorted times [s], ``x`` (n,) values (NaN = lost sample);
-    segments break where more than ``MAX_FILL_SAMPLES`` consecutive samples
-    are missing. Within a segment the series is resampled uniformly at
-    ``period_s`` (lost samples linearly bridged), low-passed zero-phase and
-    interpolated onto the ``t_grid`` points inside it; others stay NaN.
-    """
-    out = np.full(t_grid.shape[0], np.nan)
-    ok = np.isfinite(x) & np.isfinite(t_s)
-    t, v = t_s[ok], x[ok]
-    if t.shape[0] < 2:
-        return out
-    brk = np.flatnonzero(np.diff(t) > (MAX_FILL_SAMPLES + 1.5) * period_s) + 1
-    fs = 1.0 / period_s
-    for a, b in zip(np.concatenate([[0], brk]), np.concatenate([brk, [t.shape[0]]])):
-        if b - a < 2:
-            continue
-        n_u = int(math.floor((t[b - 1] - t[a]) / period_s)) + 1
-        if n_u < 2:
-            continue
-        tu = t[a] + np.arange(n_u) * period_s
-        xu = lowpass(np.interp(tu, t[a:b], v[a:b]), fs, cutoff_hz)
-        lo = np.searchsorted(t_grid, tu[0], side="left")
-        hi = np.searchsorted(t_grid, tu[-1], side="right")
-        if hi > lo:
-            out[lo:hi] = np.interp(t_grid[lo:hi], tu, xu)
-    return out
-
-
 def _time_gaps(name: str, ts_ns: np.ndarray) -> tuple[dict, float]:
     """Lost frames of a message without counter, from time gaps > 1.5 nominal periods."""
     if ts_ns.shape[0] < 3:
@@ -407,13 +373,13 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
                 fx, fz = rotate_to_hub(cols["wft_fx_w"], cols["wft_fz_w"], cols["wft_angle"])
                 fx[bad] = np.nan
                 fz[bad] = np.nan
-                dp = _to_grid(t_w, fx, ws.period_s, t_grid, cutoff)
-                load = _to_grid(t_w, fz, ws.period_s, t_grid, cutoff)
+                dp = filter_to_grid(t_w, fx, ws.period_s, t_grid, cutoff)
+                load = filter_to_grid(t_w, fz, ws.period_s, t_grid, cutoff)
             else:
                 warns.append("WFT force or angle frames missing: load_n and drawbar_pull_n not computed (NaN)")
             if "wft_my" in cols:
                 my = np.where(bad, np.nan, cols["wft_my"])
-                torque = _to_grid(t_w, my, ws.period_s, t_grid, cutoff)
+                torque = filter_to_grid(t_w, my, ws.period_s, t_grid, cutoff)
             else:
                 warns.append("WFT moment frames missing: torque_nm not computed (NaN)")
             total_lost = sum(rep.lost for rep in ws.reports.values())
@@ -444,7 +410,7 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
         rep, period = _time_gaps(ws_ref.message, wss_t)
         lost_frames[ws_ref.message] = rep
         wss_rel = rel_s(wss_t)
-        omega = _to_grid(wss_rel, w_rl, period, t_grid, cutoff)
+        omega = filter_to_grid(wss_rel, w_rl, period, t_grid, cutoff)
 
     # ---- 3b. GNSS speed, GPS time, latency ---------------------------------------------
     speed = nan
@@ -494,7 +460,7 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
             lat_ref = f"measured wheel r*omega where |T| < {FREE_ROLLING_TORQUE_NM:g} N m"
         if ref_t is not None:
             _, ref_period = _time_gaps("ref", (ref_t * 1e9).astype(np.int64))
-            ref_f = _to_grid(ref_t, ref_v, ref_period, ref_t, LATENCY_REF_CUTOFF_HZ)
+            ref_f = filter_to_grid(ref_t, ref_v, ref_period, ref_t, LATENCY_REF_CUTOFF_HZ)
             dv = np.gradient(np.nan_to_num(ref_f), ref_t)
             use = dv > -LATENCY_MAX_DECEL_MPS2
             usable = use if usable is None else (usable & use)
@@ -508,7 +474,7 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
             warns.append("GNSS latency not estimated: no free-rolling wheel speed to compare with; "
                          "GNSS timestamps used as received")
         shift = latency.latency_s if latency is not None else 0.0
-        speed = _to_grid(g_rel - shift, g_v, g_period, t_grid, min(cutoff, 0.4 / g_period))
+        speed = filter_to_grid(g_rel - shift, g_v, g_period, t_grid, min(cutoff, 0.4 / g_period))
 
     # ---- 4. slip, phase, cycles, valid --------------------------------------------------------
     rw = r * omega

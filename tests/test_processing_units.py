@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from wheelsoil.processing.filters import fill_short_gaps, lowpass_segments, segments
+from wheelsoil.processing.filters import filter_to_grid, lowpass_segments, segments
 from wheelsoil.processing.slip import accel_cycles, classify_phases, slip_ratio
 from wheelsoil.processing.timesync import GPS_EPOCH_UNIX_S, estimate_latency, fit_gps_time_mapping
 from wheelsoil.processing.wft import assemble_wft_samples, rotate_to_hub, unwrap_counter
@@ -100,13 +100,17 @@ def test_filter_never_crosses_a_gap():
     assert segments(np.isfinite(x)) == [(0, 400), (410, 810)]
 
 
-def test_fill_short_gaps_only():
-    x = np.arange(20, dtype=float)
-    x[3:5] = np.nan      # 2 missing: filled
-    x[10:15] = np.nan    # 5 missing: kept
-    y = fill_short_gaps(x, 3)
-    np.testing.assert_allclose(y[3:5], [3, 4])
-    assert np.isnan(y[10:15]).all()
+def test_filter_to_grid_bridges_short_gaps_only():
+    t = np.arange(1000) * 0.002
+    x = np.sin(2 * np.pi * 0.5 * t)
+    x[100:103] = np.nan   # 3 lost samples: bridged
+    x[500:510] = np.nan   # 10 lost samples: a gap
+    grid = np.arange(0, 2.0, 0.01)
+    y = filter_to_grid(t, x, 0.002, grid, 5.0)
+    gap = (grid > t[499]) & (grid < t[510])
+    assert np.isnan(y[gap]).all() and np.isfinite(y[~gap & (grid <= t[-1])]).all()
+    ok = np.isfinite(y)
+    np.testing.assert_allclose(y[ok], np.sin(2 * np.pi * 0.5 * grid[ok]), atol=2e-3)
 
 
 def test_slip_eq6_nan_not_inf_and_range_flags():
