@@ -1,4 +1,4 @@
-"""``wheelsoil log | import | export | info | replay | recover``: thin wrappers over wheelsoil.daq."""
+"""``wheelsoil log | import | export | info | replay | decode | recover``: thin wrappers over wheelsoil.daq."""
 
 from __future__ import annotations
 
@@ -95,6 +95,19 @@ def register(subparsers) -> None:
     p.set_defaults(func=_cmd_replay)
 
     p = subparsers.add_parser(
+        "decode", formatter_class=_RAW, help="add decoded signals as JSON channels (Foxglove) to a recording copy",
+        description="Copy a recording and add one JSON channel per DBC message, /decoded/<bus>/<Message>,\n"
+        "one message per frame with the physical signal values (DBC factor/offset applied),\n"
+        "log_time = the frame's receive time: open the output in Foxglove and plot signals.\n"
+        "DBCs: those attached to the recording (or --vehicle). Raw frames are copied unchanged.",
+        epilog="example:\n  wheelsoil decode run.mcap -o run.decoded.mcap")
+    p.add_argument("recording")
+    p.add_argument("-o", "--output", required=True)
+    p.add_argument("--bus", action="append", default=None, metavar="NAME", help="only decode these buses (repeatable)")
+    p.add_argument("--vehicle", default=None, metavar="TOML", help="use this vehicle configuration's DBCs")
+    p.set_defaults(func=_cmd_decode)
+
+    p = subparsers.add_parser(
         "recover", formatter_class=_RAW, help="rewrite a truncated/damaged recording into a clean one",
         description="Rewrite a recording cut short (power loss, SIGKILL) into a complete, indexed MCAP\n"
         "file with every complete chunk, its metadata and attachments.",
@@ -170,6 +183,16 @@ def _cmd_export(args) -> int:
     res = export_recording(args.recording, args.output, channel_map=parse_channel_map(args.map), buses=args.bus)
     _print_warnings(res.warnings)
     print(f"exported {res.total} frames ({', '.join(f'{b} {n}' for b, n in res.frames.items())}) to {res.output}")
+    return 0
+
+
+def _cmd_decode(args) -> int:
+    from .decode_json import decode_recording
+
+    res = decode_recording(args.recording, args.output, buses=args.bus,
+                           config=_config(args.vehicle) if args.vehicle else None)
+    _print_warnings(res.warnings)
+    print(f"decoded {res.decoded} of {res.total} frames into JSON channels of {res.output}")
     return 0
 
 

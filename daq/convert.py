@@ -33,13 +33,16 @@ class ConvertResult:
         output: file written.
         frames: bus -> frames written.
         warnings: counted problems, each naming the file and the place.
-        skipped: lines/records that could not be parsed (each also in ``warnings``).
+        skipped: lines/records that could not be parsed or frames not written
+            (each kind also in ``warnings``).
+        decoded: frames decoded into JSON messages (``wheelsoil decode``).
     """
 
     output: Path
     frames: dict[str, int] = field(default_factory=dict)
     warnings: list[str] = field(default_factory=list)
     skipped: int = 0
+    decoded: int = 0
 
     @property
     def total(self) -> int:
@@ -179,6 +182,15 @@ def iter_log_messages(path, problems: list[str]):
                 lines.replay = list(lines.header)
 
 
+def _batch(bus: str, msgs: list, text: bool) -> FrameBatch:
+    """Frames of an imported file; text formats carry whole microseconds, so the
+    float seconds python-can hands over are rounded back to them."""
+    b = FrameBatch.from_messages(bus, msgs)
+    if text:
+        b.timestamp_ns = (b.timestamp_ns + 500) // 1000 * 1000
+    return b
+
+
 def import_log(inputs, output, *, channel_map: Mapping[str, str] | None = None, config=None,
                metadata: Mapping | None = None) -> ConvertResult:
     """Convert candump ``.log``, ``.asc``, ``.blf`` or ``.trc`` files into one MCAP recording.
@@ -217,6 +229,7 @@ def import_log(inputs, output, *, channel_map: Mapping[str, str] | None = None, 
     with RecordingWriter(output, config=config, metadata=meta, fsync=False) as w:
         for p in inputs:
             trc = p.suffix.lower() == ".trc"
+            text = p.suffix.lower() != ".blf"
             pending: dict[str, list] = {}
             problems: list[str] = []
             for msg in iter_log_messages(p, problems):
@@ -232,11 +245,11 @@ def import_log(inputs, output, *, channel_map: Mapping[str, str] | None = None, 
                 lst = pending.setdefault(bus, [])
                 lst.append(msg)
                 if len(lst) >= MAX_FRAMES_PER_MESSAGE:
-                    w.write_batch(FrameBatch.from_messages(bus, lst))
+                    w.write_batch(_batch(bus, lst, text))
                     pending[bus] = []
             for bus, lst in pending.items():
                 if lst:
-                    w.write_batch(FrameBatch.from_messages(bus, lst))
+                    w.write_batch(_batch(bus, lst, text))
             for msg in problems:
                 warnings.warn(msg, RuntimeWarning, stacklevel=2)
             res.warnings += problems
@@ -312,21 +325,21 @@ def export_recording(path, output, *, channel_map: Mapping[str, str] | None = No
     return res
 
 
-def recover_recording(path, output) -> ConvertResult:
-    """Rewrite a damaged/truncated recording into a complete, indexed MCAP file.
+def rewrite_recording(path, output, *, on_batch=None, note: tuple[str, dict] | None = None) -> ConvertResult:
+    """Copy a recording record by record into a new complete, indexed MCAP file.
 
-    Copies every complete chunk's frames, the status records, metadata and
-    attachments, and adds a ``wheelsoil.recovered`` metadata record (source,
-    damage found). A file that is not damaged is copied the same way.
+    Copies metadata, attachments, frame channels (with their metadata), every
+    frame batch of every complete chunk and the logger status records.
+    ``on_batch(writer, batch)`` is called after each batch is written (to add
+    derived channels); ``note`` = (name, dict) adds a metadata record.
 
     Raises:
         OSError: unreadable input/unwritable output. RecordingError: not an MCAP file.
+        ValueError: output is the input.
     """
-    import json
-
     path, output = Path(path), Path(output)
-    if path.resolve() == output.resolve():
-        raise ValueError(f"{output}: recover writes a new file; choose another output name")
+    if output.exists() and path.resolve() == output.resolve():
+        raise ValueError(f"{output}: writes a new file; choose another output name than the input")
     state = _Records()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
@@ -349,15 +362,30 @@ def recover_recording(path, output) -> ConvertResult:
             warnings.simplefilter("ignore", RuntimeWarning)
             for b in iter_frame_batches(path):
                 w.write_batch(b)
+                if on_batch is not None:
+                    on_batch(w, b)
         for st, t in zip(state.statuses, state.status_times):
             w.write_status(st, time_ns=t)
-        w.add_metadata("wheelsoil.recovered", {
-            "source_file": str(path), "source_complete": str(state.complete),
-            "damage": "; ".join(state.warnings) or "none",
-            "frames": json.dumps(w.frame_counts, sort_keys=True)})
+        if note is not None:
+            w.add_metadata(note[0], dict(note[1], source_file=str(path), source_complete=str(state.complete),
+                                         damage="; ".join(state.warnings) or "none"))
         if "wheelsoil.summary" in state.metadata:
             w.summary.update(state.metadata["wheelsoil.summary"])
     finally:
         w.close()
     res.frames = dict(w.frame_counts)
     return res
+
+
+def recover_recording(path, output) -> ConvertResult:
+    """Rewrite a damaged/truncated recording into a complete, indexed MCAP file.
+
+    Copies every complete chunk's frames, the status records, metadata and
+    attachments (:func:`rewrite_recording`), and adds a ``wheelsoil.recovered``
+    metadata record (source, damage found). A file that is not damaged is
+    copied the same way.
+
+    Raises:
+        OSError: unreadable input/unwritable output. RecordingError: not an MCAP file.
+    """
+    return rewrite_recording(path, output, note=("wheelsoil.recovered", {}))

@@ -256,6 +256,20 @@ class RecordingWriter:
                                data=json.dumps(status, sort_keys=True).encode(), sequence=self._seq)
         self._seq += 1
 
+    # -- other channels
+    def add_json_channel(self, topic: str, schema: Mapping, metadata: Mapping | None = None) -> int:
+        """Register a JSON channel (schema encoding ``jsonschema``); returns its id."""
+        title = str(schema.get("title", topic))
+        sid = self._mcap.register_schema(title, "jsonschema", json.dumps(schema).encode())
+        return self._mcap.register_channel(topic, "json", sid, {str(k): str(v) for k, v in (metadata or {}).items()})
+
+    def write_json(self, channel_id: int, log_time_ns: int, obj) -> None:
+        """Append one JSON message to a channel from :meth:`add_json_channel`."""
+        t = max(int(log_time_ns), 0)
+        self._mcap.add_message(channel_id, log_time=t, publish_time=t, data=json.dumps(obj).encode(),
+                               sequence=self._seq)
+        self._seq += 1
+
     # -- durability
     def tick(self) -> None:
         """Flush (close chunk + fsync) if ``flush_interval_s`` has passed since the last flush."""

@@ -9,6 +9,7 @@ import pytest
 from daq_helpers import cli, random_messages
 
 from wheelsoil.daq import read_frames, read_recording_info
+from wheelsoil.daq.compare import frame_differences
 from wheelsoil.daq.convert import export_recording, import_log
 
 
@@ -162,3 +163,29 @@ def test_bad_inputs_give_clear_errors(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "bad.blf" in err and "Traceback" not in err
     assert rc in (0, 2)
+
+
+def test_decode_adds_json_channels_with_physical_values(tmp_path, capsys):
+    from mcap.reader import make_reader
+
+    src = tmp_path / "w.log"
+    # Fx_w = 0x0190 * 0.5 N = 200 N; Fz_w = 0x2328 = 9000 N; counter 7; one short frame (DLC 2)
+    src.write_text("(1700000000.000100) can0 120#9001000028230700\n"
+                   "(1700000000.000200) can0 120#0102\n"
+                   "(1700000000.000300) can1 300#0000000017700000\n")
+    rec, dec = tmp_path / "w.mcap", tmp_path / "d.mcap"
+    import_log(src, rec)
+    assert cli("decode", rec, "-o", dec) == 0
+    err = capsys.readouterr().err
+    assert "1 WFT_RL_Force frame(s) did not decode" in err
+    got = {}
+    with open(dec, "rb") as f:
+        for _, ch, msg in make_reader(f).iter_messages():
+            if ch.topic.startswith("/decoded/"):
+                got[ch.topic] = (msg.log_time, json.loads(msg.data))
+    t, v = got["/decoded/can0/WFT_RL_Force"]
+    assert t == 1_700_000_000_000_100_000
+    assert (v["Fx_w"], v["Fz_w"], v["Counter"]) == (200.0, 9000.0, 7.0)
+    assert got["/decoded/can1/WSS_WheelSpeeds"][1]["WheelSpeed_RL"] == pytest.approx(0x1770 * 0.01)
+    # raw frames are copied unchanged
+    assert frame_differences(read_frames(rec), read_frames(dec), flag_mask=0xFF) == []
