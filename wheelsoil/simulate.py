@@ -531,8 +531,9 @@ def simulate_run(
     t_brake = -r * mu_brake * load
     dp = (1 - brake_w) * dp + brake_w * dp_brake
     torque = (1 - brake_w) * torque + brake_w * t_brake
-    # standstill: brakes held, no soil forces; blend near zero speed
-    w_move = _smoothstep(speed / 0.3)
+    # standstill: brakes held, no soil forces; the drive forces build up over the
+    # first centimetres per second of a pull-away (below the speed where slip is defined)
+    w_move = _smoothstep(speed / 0.05)
     dp *= w_move
     torque *= w_move
 
