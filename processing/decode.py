@@ -421,7 +421,7 @@ CHUNK_FRAMES = 1 << 16
 
 @dataclass
 class _Chunk:
-    """Frames of one bus concatenated from several batches (FrameBatch-like)."""
+    """Frames of one bus gathered from several batches (FrameBatch-like views)."""
 
     bus: str
     timestamp_ns: np.ndarray
@@ -432,19 +432,39 @@ class _Chunk:
     data: np.ndarray
 
 
-def _concat(parts: list[Any]) -> Any:
-    if len(parts) == 1:
-        return parts[0]
-    width = max(p.data.shape[1] for p in parts)
-    data = []
-    for p in parts:
-        d = np.asarray(p.data)
-        if d.shape[1] != width:
-            d = np.pad(d, ((0, 0), (0, width - d.shape[1])))
-        data.append(d)
-    return _Chunk(parts[0].bus, *(np.concatenate([np.asarray(getattr(p, f)) for p in parts])
-                                  for f in ("timestamp_ns", "arbitration_id", "is_extended", "flags", "dlc")),
-                  np.concatenate(data))
+class _ChunkBuffer:
+    """Preallocated column buffers of one bus, filled batch by batch and reused."""
+
+    def __init__(self, bus: str, capacity: int, width: int):
+        self.bus, self.n, self.width = bus, 0, width
+        self.ts = np.empty(capacity, np.int64)
+        self.ids = np.empty(capacity, np.uint32)
+        self.ext = np.empty(capacity, bool)
+        self.flags = np.empty(capacity, np.uint8)
+        self.dlc = np.empty(capacity, np.uint8)
+        self.data = np.zeros((capacity, width), np.uint8)
+
+    def fits(self, k: int, width: int) -> bool:
+        return self.n + k <= self.ts.shape[0] and width <= self.width
+
+    def add(self, b: Any) -> None:
+        a, k = self.n, len(b.timestamp_ns)
+        self.ts[a:a + k] = b.timestamp_ns
+        self.ids[a:a + k] = b.arbitration_id
+        self.ext[a:a + k] = b.is_extended
+        self.flags[a:a + k] = b.flags
+        self.dlc[a:a + k] = b.dlc
+        d = np.asarray(b.data)
+        self.data[a:a + k, : d.shape[1]] = d
+        if d.shape[1] < self.width:
+            self.data[a:a + k, d.shape[1]:] = 0
+        self.n = a + k
+
+    def take(self) -> _Chunk:
+        """The frames gathered so far as views (valid until the next :meth:`add`)."""
+        n, self.n = self.n, 0
+        return _Chunk(self.bus, self.ts[:n], self.ids[:n], self.ext[:n], self.flags[:n], self.dlc[:n],
+                      self.data[:n])
 
 
 def iter_chunks(batches: Iterable[Any], chunk_frames: int = CHUNK_FRAMES) -> Iterator[Any]:
@@ -452,21 +472,32 @@ def iter_chunks(batches: Iterable[Any], chunk_frames: int = CHUNK_FRAMES) -> Ite
 
     Recordings hold batches of up to 2000 frames (the logger cuts them every
     100 ms, often much smaller); decoding is much faster on large chunks.
-    Frame order per bus is kept; memory holds at most one chunk per bus.
+    Frames are copied into one reused buffer per bus (no allocation per
+    batch); a yielded chunk is a view, valid until the next one is requested.
+    Frame order per bus is kept; batches of at least ``chunk_frames`` frames
+    pass through unchanged.
     """
-    pending: dict[str, list[Any]] = {}
-    count: dict[str, int] = {}
+    bufs: dict[str, _ChunkBuffer] = {}
     for b in batches:
-        n = len(b.timestamp_ns)
-        if n == 0:
+        k = len(b.timestamp_ns)
+        if k == 0:
             continue
-        pending.setdefault(b.bus, []).append(b)
-        count[b.bus] = count.get(b.bus, 0) + n
-        if count[b.bus] >= chunk_frames:
-            yield _concat(pending.pop(b.bus))
-            count[b.bus] = 0
-    for parts in pending.values():
-        yield _concat(parts)
+        width = int(np.shape(b.data)[1])
+        buf = bufs.get(b.bus)
+        if buf is not None and not buf.fits(k, width):
+            if buf.n:
+                yield buf.take()
+            if not buf.fits(k, width):
+                buf = None
+        if buf is None:
+            if k >= chunk_frames:
+                yield b
+                continue
+            buf = bufs[b.bus] = _ChunkBuffer(b.bus, chunk_frames, max(width, bufs[b.bus].width if b.bus in bufs else 0))
+        buf.add(b)
+    for buf in bufs.values():
+        if buf.n:
+            yield buf.take()
 
 
 def decode_batches(

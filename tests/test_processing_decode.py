@@ -256,3 +256,30 @@ def test_bus_mapping_and_bad_selection():
     assert dec.decode_batch(make_batch("can1", [0x122], [False], [p])) == {}  # other bus: not decoded
     res = dec.decode_batch(make_batch("can0", [0x122], [False], [p]))
     assert res["WFT_RL_Angle"][1]["Counter"][0] == 3
+
+
+def test_regrouping_into_chunks_keeps_every_frame_in_order():
+    """Small, large, classic and FD batches regrouped into chunks decode as in one piece."""
+    from wheelsoil.processing.decode import iter_chunks
+
+    fd = Message(0x18FF0001, "FD", 64, [Signal("X", 500, 12), Signal("Y", 3, 16)], is_extended_frame=True,
+                 is_fd=True)
+    cl = Message(0x100, "CL", 8, [Signal("A", 0, 16, is_signed=True), Signal("B", 23, 9, "big_endian")])
+    db = cantools.database.Database(messages=[fd, cl])
+    rng = np.random.default_rng(7)
+    batches = []
+    for size in [3, 40, 1, 17, 100, 5, 33, 2]:
+        width = 64 if rng.random() < 0.4 else 8
+        is_fd = rng.random(size) < 0.5 if width == 64 else np.zeros(size, bool)
+        payloads = [rng.integers(0, 256, 64 if f else 8, dtype=np.uint8).tobytes() for f in is_fd]
+        ids = [fd.frame_id if f else cl.frame_id for f in is_fd]
+        batches.append(make_batch("can0", ids, is_fd, payloads, width))
+    whole = decode_batches(batches, db, chunk_frames=10**6)
+    small = decode_batches(batches, db, chunk_frames=16)
+    for name in ("FD", "CL"):
+        np.testing.assert_array_equal(small[name].timestamp_ns, whole[name].timestamp_ns)
+        for sig in whole[name].signals:
+            np.testing.assert_array_equal(small[name].signals[sig], whole[name].signals[sig])
+    n_in = sum(len(b.timestamp_ns) for b in batches)
+    assert sum(len(c.timestamp_ns) for c in iter_chunks(batches, 16)) == n_in
+    assert len(whole["FD"]) + len(whole["CL"]) == n_in
