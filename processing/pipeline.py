@@ -98,8 +98,9 @@ class ProcessResult:
         g = self.gps_time_mapping
         if g:
             lines.append(
-                f"GPS time: host t0 = GPS week {g['gps_week_at_t0']} tow {g['gps_tow_at_t0_s']:.3f} s; "
-                f"GPS - host = {g['offset_s']:+.3f} s, drift {g['drift_ppm']:+.2f} ppm, residual rms "
+                f"GPS time: t_s = 0 is GPS week {g['gps_week_at_t0']} tow {g['gps_tow_at_t0_s']:.3f} s; "
+                f"GPS - host clock = {g['offset_s']:+.3f} s (incl. leap seconds and the receiver's output "
+                f"delay), drift {g['drift_ppm']:+.2f} ppm, residual rms "
                 f"{g['residual_rms_s'] * 1e3:.2f} ms (max {g['residual_max_s'] * 1e3:.2f} ms, "
                 f"{g['n']} fixes, {g['n_outliers']} outliers)")
         else:
@@ -266,6 +267,7 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
 
     span = [None, None]
     n_frames = [0]
+    buses_seen: dict[str, int] = {}
 
     def batches():
         it = iter_frame_batches(path)
@@ -280,6 +282,7 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
                     span[0] = lo if span[0] is None else min(span[0], lo)
                     span[1] = hi if span[1] is None else max(span[1], hi)
                     n_frames[0] += len(b)
+                    buses_seen[b.bus] = buses_seen.get(b.bus, 0) + len(b)
                     if bar is not None:
                         bar.update(len(b))
                 yield b
@@ -308,7 +311,8 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
 
     if not any(sig[k].message in dec for k in refs):
         looked = ", ".join(sorted({f"{sig[k].message} on {sig[k].bus}" for k in refs}))
-        raise ValueError(f"{path}: none of the configured messages found in {n_frames[0]} frames "
+        seen = ", ".join(f"{b}: {n}" for b, n in buses_seen.items())
+        raise ValueError(f"{path}: none of the configured messages found in {n_frames[0]} frames ({seen}) "
                          f"(looked for {looked}); wrong vehicle configuration or bus names?")
 
     t0_ns = int(span[0])
