@@ -67,7 +67,8 @@ class ProcessResult:
     None; ``lost_frames`` message -> dict(lost, gaps, longest_gap_s, received,
     method); ``warnings`` list of sentences; ``cycle`` int64 (N,)
     accelerate-cycle id (-1 outside); plus ``t0_ns`` (host time of the first
-    frame), ``rate_hz``, ``cutoff_hz``, ``wheel_radius_m``, ``latency_reference``.
+    frame), ``rate_hz``, ``cutoff_hz``, ``wheel_radius_m``, ``wheel_width_m`` (from
+    the vehicle configuration used), ``latency_reference``.
     """
 
     signals: pd.DataFrame
@@ -81,6 +82,7 @@ class ProcessResult:
     rate_hz: float = 100.0
     cutoff_hz: float = DEFAULT_CUTOFF_HZ
     wheel_radius_m: float = float("nan")
+    wheel_width_m: float = float("nan")
     latency_reference: str = ""
     latency_detail: LatencyEstimate | None = field(default=None, repr=False)
 
@@ -511,5 +513,6 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
         gnss_latency_stderr_s=None if latency is None else latency.stderr_s,
         gps_time_mapping=gps_map, lost_frames=lost_frames, warnings=warns, cycle=cycle,
         t0_ns=t0_ns, rate_hz=float(rate_hz), cutoff_hz=cutoff, wheel_radius_m=r,
+        wheel_width_m=float(cfg.wheel_width_m),
         latency_reference=lat_ref if latency is not None else "", latency_detail=latency,
     )
