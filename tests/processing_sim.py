@@ -125,8 +125,19 @@ def write_recording(path, truth: Truth, *, latency_s: float = 0.1, seed: int = 0
                                                      "Status": 0}, strict=False)))
         can0.append((t[i] + 3.6e-4, m_a, m_a.encode({"WheelAngle": np.degrees(angle[i]) % 360.0, "Counter": c,
                                                      "Status": 0}, strict=False)))
-    # ---- wheel speeds, 100 Hz (Motorola, unsigned rpm)
+    m_d = wft.get_message_by_name("WFT_RL_Diag")  # multiplexed diagnostics, 1 Hz per mux value
+    for sec in np.arange(0.0, t[-1], 1.0):
+        can0.append((sec + 0.25, m_d, m_d.encode({"DiagMux": 0, "BridgeTemp": 21.5 + rng.normal(0, 0.1),
+                                                   "SupplyVoltage": 13.8})))
+        can0.append((sec + 0.5, m_d, m_d.encode({"DiagMux": 1, "SerialNumber": 140321})))
+        can0.append((sec + 0.75, m_d, m_d.encode({"DiagMux": 2, "FirmwareMajor": 2, "FirmwareMinor": 7,
+                                                  "CalibrationId": 1311})))
+    # ---- wheel speeds, 100 Hz (Motorola, unsigned rpm), status 10 Hz
     can1 = []
+    m_st = wss.get_message_by_name("WSS_Status")
+    for k, tw in enumerate(np.arange(0.005, t[-1], 0.1)):
+        can1.append((tw, m_st, m_st.encode({"RollingCounter": k % 16, "SensorFault_FL": 0, "SensorFault_FR": 0,
+                                             "SensorFault_RL": 0, "SensorFault_RR": 0})))
     m_ws = wss.get_message_by_name("WSS_WheelSpeeds")
     if not no_wheel_speed:
         for tw in np.arange(0.003, t[-1], 0.01):
