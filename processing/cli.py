@@ -50,7 +50,7 @@ def register(subparsers) -> None:
                    help="output sample rate [Hz] (default 100)")
     p.add_argument("--cutoff", type=float, default=None, metavar="HZ",
                    help="low-pass cutoff [Hz] (default 5; at most 0.4 x rate)")
-    p.add_argument("--config", default=None, metavar="TOML",
+    p.add_argument("--config", "--vehicle", dest="config", default=None, metavar="TOML",
                    help="vehicle configuration (default: the one stored in the recording, "
                    "else the shipped dbc/vehicle.toml)")
     p.add_argument("--progress", action="store_true", help="show a progress bar while decoding")
