@@ -297,9 +297,11 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
     with _w.catch_warnings(record=True) as caught:
         _w.simplefilter("always", RuntimeWarning)
         dec = decode_batches(batches(), decoder)
-    warns += [str(c.message) for c in caught if issubclass(c.category, RuntimeWarning)]
+    # the reader's warnings (a truncated or damaged file) name the file
+    warns += [str(c.message) for c in caught
+              if issubclass(c.category, RuntimeWarning) and str(path) in str(c.message)]
     if span[0] is None:
-        raise ValueError(f"{path}: the recording holds no CAN frames")
+        raise ValueError(f"{path}: the recording holds no CAN frames" + "".join(f"; {w}" for w in warns))
 
     def get(key_or_ref) -> tuple[np.ndarray, np.ndarray] | None:
         ref = sig[key_or_ref] if isinstance(key_or_ref, str) else key_or_ref
