@@ -553,10 +553,11 @@ def simulate_run(
     start_ns = int(round(start_s * 1e9))
     frames = {}
     for bus, parts in ((BUS_WFT, frames_wft), (BUS_VEH, frames_veh)):
+        # frames leave the bus in transmit order; the host stamps them on receipt
+        # (adapter/USB latency: jitter), never out of order
         ts = np.concatenate([p[0] for p in parts])
         order = np.argsort(ts, kind="stable")
-        ts = ts[order]
-        ts = np.maximum.accumulate(ts)  # kernel receive order
+        ts = np.maximum.accumulate(ts[order] + _jitter(rng, len(ts)))
         frames[bus] = {
             "timestamp_ns": start_ns + np.round(ts * 1e9).astype(np.int64),
             "arbitration_id": np.concatenate([p[1] for p in parts])[order].astype(np.uint32),
@@ -651,7 +652,7 @@ def _wft_frames(db, rng, t_rel, load, dp, torque, angle_rad, angle_deg, drop_rat
     t_tx = t_rel + 100e-6  # sample -> transmission
     parts = []
     for k, (msg, data) in enumerate(((m_force, f_data), (m_moment, m_data), (m_angle, a_data))):
-        t = t_tx + k * 130e-6 + _jitter(rng, n)
+        t = t_tx + k * 130e-6
         parts.append([t[keep], np.full(keep.sum(), msg.frame_id), np.zeros(keep.sum(), bool),
                       np.full(keep.sum(), msg.length), data[keep]])
     parts[0].append(int(n - keep.sum()))
@@ -668,7 +669,7 @@ def _wft_frames(db, rng, t_rel, load, dp, torque, angle_rad, angle_deg, drop_rat
     ]
     for vals, off in diag:
         data, _ = pack_signals(m_diag, vals, n_s)
-        t = sec + off + _jitter(rng, n_s)
+        t = sec + off
         ok = t <= t_rel[-1]
         parts.append([t[ok], np.full(ok.sum(), m_diag.frame_id), np.zeros(ok.sum(), bool),
                       np.full(ok.sum(), m_diag.length), data[ok]])
@@ -707,12 +708,12 @@ def _vehicle_bus_frames(dbs, rng, t_rel, speed, omega, slip, r, latency_s, start
 
     data, _ = pack_signals(m_ws, {"WheelSpeed_FL": rpm(om_f), "WheelSpeed_FR": rpm(om_f * 1.002),
                                   "WheelSpeed_RL": rpm(om_rl), "WheelSpeed_RR": rpm(om_rr)}, nw)
-    parts.append([t_w + 80e-6 + _jitter(rng, nw), np.full(nw, m_ws.frame_id), np.zeros(nw, bool),
+    parts.append([t_w + 80e-6, np.full(nw, m_ws.frame_id), np.zeros(nw, bool),
                   np.full(nw, m_ws.length), data])
     t_s = t_w[::10] + 300e-6
     ns = len(t_s)
     data, _ = pack_signals(m_st, {"RollingCounter": np.arange(ns) % 16}, ns)
-    parts.append([t_s + _jitter(rng, ns), np.full(ns, m_st.frame_id), np.zeros(ns, bool), np.full(ns, m_st.length), data])
+    parts.append([t_s, np.full(ns, m_st.frame_id), np.zeros(ns, bool), np.full(ns, m_st.length), data])
     # --- GNSS receiver: fix epochs on the GPS clock, 20 Hz
     gps0 = start_s - GPS_UNIX_EPOCH_S + GPS_LEAP_S + gps_offset_s  # GPS seconds at t_rel = 0
     step = 1.0 / GNSS_RATE_HZ
