@@ -127,27 +127,21 @@ class ProcessResult:
 # --------------------------------------------------------------------------- configuration
 def _resolve_config(path: Path, config: Any, warnings: list[str]):
     """VehicleConfig from an object, a TOML path, the recording's attachment, or the default."""
-    from wheelsoil.daq import VehicleConfig, load_vehicle_config
+    from wheelsoil.daq import VehicleConfig, load_recording_config, load_vehicle_config
 
     if isinstance(config, VehicleConfig):
         return config
     if config is not None:
         return load_vehicle_config(config)
     try:
-        from mcap.reader import make_reader
-
-        from wheelsoil.daq.info import config_from_attachments
-
-        with open(path, "rb") as f:
-            att = {a.name: a.data for a in make_reader(f).iter_attachments()}
-        cfg = config_from_attachments(att)
+        cfg = load_recording_config(path)
         if cfg is not None:
             return cfg
         warnings.append(f"{path}: no vehicle configuration attached; using the shipped default")
     except OSError:
         raise
-    except Exception as exc:  # damaged file or attachment: fall back, say so
-        warnings.append(f"{path}: attached vehicle configuration not readable ({exc}); "
+    except ValueError as exc:  # not an MCAP file is reported by the reader; a bad attachment here
+        warnings.append(f"{path}: attached vehicle configuration not usable ({exc}); "
                         "using the shipped default")
     return load_vehicle_config()
 
