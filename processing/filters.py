@@ -79,6 +79,8 @@ def filter_to_grid(t_s: np.ndarray, x: np.ndarray, period_s: float, t_grid: np.n
     interpolated onto the ``t_grid`` points inside it; others stay NaN.
     """
     out = np.full(t_grid.shape[0], np.nan)
+    if not period_s > 0:  # unknown period (too few samples): nothing to put on the grid
+        return out
     ok = np.isfinite(x) & np.isfinite(t_s)
     t, v = t_s[ok], x[ok]
     if t.shape[0] < 2:

@@ -404,6 +404,9 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
     ws_ref = sig["wheel_speed"]
     got = get("wheel_speed")
     wss_t = wss_rel = None
+    if got is not None and got[0].shape[0] < 3:
+        warns.append(f"only {got[0].shape[0]} wheel speed frames ({label('wheel_speed')}): not used")
+        got = None
     if got is None:
         warns.append(f"no wheel speed ({label('wheel_speed')}): omega_radps and slip are NaN; "
                      "forces and speed still computed")
@@ -419,6 +422,11 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
     latency: LatencyEstimate | None = None
     lat_ref = ""
     g_fwd, g_spd = get("gnss_forward_velocity"), get("gnss_speed")
+    for key, g in (("gnss_forward_velocity", g_fwd), ("gnss_speed", g_spd)):
+        if g is not None and g[0].shape[0] < 3:
+            warns.append(f"only {g[0].shape[0]} frames of {label(key)}: not used")
+    g_fwd = g_fwd if g_fwd is not None and g_fwd[0].shape[0] >= 3 else None
+    g_spd = g_spd if g_spd is not None and g_spd[0].shape[0] >= 3 else None
     if g_fwd is not None:
         g_t, g_v = g_fwd
         g_msg = sig["gnss_forward_velocity"].message
@@ -449,7 +457,7 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
         g_rel = rel_s(g_t)
         # latency reference: free-rolling front wheels, else the measured wheel at low torque
         ref_t = ref_v = usable = None
-        f_series = [s for s in (get(f) for f in fronts) if s is not None]
+        f_series = [s for s in (get(f) for f in fronts) if s is not None and s[0].shape[0] >= 3]
         if f_series:
             ft = f_series[0][0]
             fv = np.nanmean(np.vstack([np.interp(ft, s[0], s[1]) for s in f_series]), axis=0) * r
