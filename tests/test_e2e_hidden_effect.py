@@ -131,8 +131,9 @@ def test_verdict_survives_a_bus(tmp_path):
     assert v_file["effect_ok"], _explain(reports["file"], v_file)
     assert (v_bus["verdict"], v_bus["model"]) == (v_file["verdict"], v_file["model"]), _explain(reports["bus"], v_bus)
     assert v_bus["ok"], _explain(reports["bus"], v_bus)
-    # the bus added delivery jitter and maybe UDP losses, nothing else: same latency, same coefficients
-    assert abs(reports["bus"]["time_sync"]["gnss_latency_s"] - reports["file"]["time_sync"]["gnss_latency_s"]) < 0.005
+    # the bus added delivery jitter (a few ms on a loaded machine) and maybe UDP losses,
+    # nothing else: the same latency within processing's 10 ms, the same coefficients
+    assert abs(reports["bus"]["time_sync"]["gnss_latency_s"] - run.info["gnss_latency_s"]) < 0.01
     m = v_file["model"]
     for k, val in reports["file"]["models"][m]["params"].items():
         assert reports["bus"]["models"][m]["params"][k] == pytest.approx(val, rel=0.02, abs=1e-3)
