@@ -128,7 +128,8 @@ def report_dict(diag: Diagnosis, *, terrain, wheel, inputs, time_sync: dict | No
         }
     struct = {
         k: {c: {"p": t["p"], "p_poly": t.get("p_poly"), "p_bins": t.get("p_bins"), "effect_sigma": t["effect"],
-                "units": t["units"]} for c, t in v.items()}
+                "effect_abs": t.get("effect_abs"), "effect_rel": t.get("effect_rel"), "units": t["units"]}
+            for c, t in v.items()}
         for k, v in diag.structure.items()
     }
     out = {
