@@ -98,3 +98,12 @@ def test_candidate_that_does_not_converge_is_reported():
     assert any("did not converge" in f for f in d.failures)
     assert d.effect in ("slip_sinkage", "unexplained")  # never a wrong cause from a failed fit
     assert d.model not in [k for k, f in d.fits.items() if not f.success]
+
+
+def test_detectable_but_negligible_error_is_reported_not_diagnosed():
+    df = _table("wong", seed=10, n=400, noise_dp_n=5.0)
+    df["drawbar_pull_n"] += 3.0  # a 0.6-sigma bias: significant with 400 rows, far below 1 sigma
+    d = diagnose(df, SAND, W, models=("vasilev",))
+    assert d.structure["wong"]["drawbar_pull_n"]["p"] < 1e-4
+    assert d.effect == "none"
+    assert "statistically detectable" in d.summary and "not attributed" in d.summary
