@@ -103,7 +103,9 @@ class CanLogger:
         self.batch_interval_s = batch_interval_s
         self.flush_interval_s = flush_interval_s
         self.status_interval_s = status_interval_s
-        self._stop = threading.Event()
+        # a plain flag, not threading.Event: Event.set() from a signal handler can
+        # deadlock on the Event's lock when the handler interrupts Event.wait()
+        self._stop_requested = False
         self._readers = {name: _Reader(name, bus) for name, bus in self.buses.items()}
         self._stats = StatsAccumulator(config)
         self._writer: RecordingWriter | None = None
@@ -118,7 +120,7 @@ class CanLogger:
     # ------------------------------------------------------------------ control
     def stop(self) -> None:
         """Ask the logger to finish (safe from signal handlers and other threads)."""
-        self._stop.set()
+        self._stop_requested = True
 
     def _file_name(self) -> Path:
         if self.split_s is None:
@@ -239,11 +241,11 @@ class CanLogger:
         moved = 0
         try:
             while True:
-                self._stop.wait(self.batch_interval_s)
+                time.sleep(self.batch_interval_s)
                 now = time.monotonic()
                 moved += self._drain()
                 self._writer.tick()
-                if self._stop.is_set():
+                if self._stop_requested:
                     break
                 if duration_s is not None and now - self._t0 >= duration_s:
                     reason = "duration"
