@@ -29,8 +29,8 @@ import vcanvm  # noqa: E402
 pytestmark = pytest.mark.vm
 
 GUEST_FILES = sorted(VMDIR.glob("guest_*.py"))
-#: qemu is killed after this long; the guest normally finishes in well under 2 min.
-VM_TIMEOUT_S = 420
+#: qemu is killed after this long; the guest normally finishes in about 2 min (TCG).
+VM_TIMEOUT_S = 480
 
 
 def _guest_test_ids():

@@ -11,8 +11,8 @@ import socket
 import pytest
 
 
-def _vcan0_reason():
-    """None when a raw CAN socket can bind to vcan0, else why not."""
+def _iface_reason(name):
+    """None when a raw CAN socket can bind to interface ``name``, else why not."""
     if not hasattr(socket, "AF_CAN"):
         return "this Python has no socket.AF_CAN"
     try:
@@ -20,9 +20,9 @@ def _vcan0_reason():
     except OSError as exc:
         return f"no AF_CAN in this kernel ({exc})"
     try:
-        s.bind(("vcan0",))
+        s.bind((name,))
     except OSError as exc:
-        return f"no vcan0 interface ({exc})"
+        return f"no {name} interface ({exc})"
     finally:
         s.close()
     return None
@@ -31,7 +31,16 @@ def _vcan0_reason():
 @pytest.fixture(scope="session")
 def vcan0():
     """The name of a real, up SocketCAN interface ("vcan0"); skips without one."""
-    reason = _vcan0_reason()
+    reason = _iface_reason("vcan0")
     if reason:
         pytest.skip(reason)
     return "vcan0"
+
+
+@pytest.fixture(scope="session")
+def vcan1(vcan0):
+    """A second real SocketCAN interface ("vcan1"); skips without one."""
+    reason = _iface_reason("vcan1")
+    if reason:
+        pytest.skip(reason)
+    return "vcan1"

@@ -5,7 +5,7 @@ modules.  The guest boots that kernel under qemu TCG with no disk: a tiny
 initramfs (busybox-static plus the virtio/9p modules) mounts the host's ``/``
 read-only over virtio-9p and ``switch_root``s into it, so the guest runs the
 host's own Python, virtualenv and checkout.  The guest init loads ``can``,
-``can_raw``, ``vcan``, brings up ``vcan0``, runs the command, prints
+``can_raw``, ``vcan``, brings up ``vcan0`` and ``vcan1``, runs the command, prints
 ``VCANVM_EXIT=<rc>`` and powers off.  A second, writable 9p share (``/run/out``
 in the guest) carries files out; the guest's tmpfs is on ``/run`` (never over
 ``/tmp``, which would hide paths of the host such as pytest's temp dirs).
@@ -34,6 +34,8 @@ from pathlib import Path
 INITRAMFS_MODULES = ("virtio_pci", "9pnet_virtio", "9p")
 #: Modules the guest loads from the host's /lib/modules once it runs on the host root.
 GUEST_MODULES = ("can", "can_raw", "vcan")
+#: Virtual CAN interfaces created in the guest (two, like the vehicle's two buses).
+VCAN_INTERFACES = ("vcan0", "vcan1")
 
 _INITRAMFS_INIT = """#!/bin/sh
 # PID 1 of the initramfs: load virtio/9p, mount the host's / read-only, switch_root.
@@ -58,7 +60,7 @@ mkdir -p /run/out && mount -t 9p -o trans=virtio,version=9p2000.L,msize=512000 o
   || echo "VCANVM: out share mount failed"
 echo "VCANVM: kernel $(uname -r), $(nproc) cpu, up $(cut -d' ' -f1 /proc/uptime) s"
 for m in {modules}; do modprobe $m || echo "VCANVM: modprobe $m failed"; done
-ip link add dev vcan0 type vcan && ip link set up vcan0 && echo "VCANVM: vcan0 up"
+for i in {interfaces}; do ip link add dev $i type vcan && ip link set up $i && echo "VCANVM: $i up"; done
 cd {cwd} && sh {cmd} < /dev/null; rc=$?
 echo "VCANVM_EXIT=$rc (up $(cut -d' ' -f1 /proc/uptime) s)"
 sync; echo o > /proc/sysrq-trigger; sleep 30
@@ -249,7 +251,7 @@ def run_in_vm(
     cpus: int = 2,
     env: dict[str, str] | None = None,
 ) -> VmResult:
-    """Boot a fresh guest with ``vcan0`` up, run shell command ``cmd`` in ``cwd``, power off.
+    """Boot a fresh guest with ``vcan0`` and ``vcan1`` up, run shell command ``cmd`` in ``cwd``, power off.
 
     Args:
         cmd: shell command (run by the host's /bin/sh inside the guest, as root).
@@ -283,6 +285,7 @@ def run_in_vm(
             path=shlex.quote(_guest_path()),
             env=" ".join(f"{k}={shlex.quote(v)}" for k, v in envs.items()),
             modules=" ".join(GUEST_MODULES),
+            interfaces=" ".join(VCAN_INTERFACES),
             cwd=shlex.quote(cwd),
             cmd=shlex.quote(str(workdir / "cmd.sh")),
         )
