@@ -119,14 +119,13 @@ class _Lines:
 
 
 def _reader_class(path: Path):
-    import can
-
+    """python-can's reader class for the suffix (the table behind :func:`can.LogReader`,
+    used directly because the text readers get a line iterator, not a file name)."""
     from can.io.player import MESSAGE_READERS
 
     suffix = path.suffix.lower()
     if suffix not in FORMATS:
         raise ValueError(f"{path}: unknown log format {suffix!r}; import reads {', '.join(FORMATS)}")
-    del can
     return MESSAGE_READERS[suffix]
 
 

@@ -286,7 +286,7 @@ def format_status(st: dict) -> str:
         drop = "-" if b["rx_dropped"] is None else str(b["rx_dropped"])
         parts.append(f"{name} {b['fps']:7.0f} fr/s lost {b['lost_wft_frames']} err {b['error_frames']}"
                      f"/{b['bus_errors']} drop {drop}")
-    parts.append(f"{st['file_bytes'] / 1e6:7.1f} MB {Path(st['file']).name}")
+    parts.append(f"{st['file_bytes'] / 1e6:8.2f} MB {Path(st['file']).name}")
     return " | ".join(parts)
 
 
