@@ -344,66 +344,94 @@ class _Records:
 
 def _iter_records(path, state: _Records, *, recover: bool, with_status: bool = False,
                   frame_buses=None) -> Iterator[FrameBatch]:
-    """Yield FrameBatches of a recording in file order, filling ``state`` on the way."""
-    from mcap.records import Attachment, Channel, Footer, Message, Metadata, Schema
-    from mcap.stream_reader import StreamReader
+    """Yield FrameBatches of a recording in file order, filling ``state`` on the way.
+
+    Damage handling: a chunk that does not decompress/parse, or a frame batch
+    that does not decode, is skipped with a warning (file, byte offset) and
+    reading goes on with the next record; a file that ends inside a record
+    (power cut) ends the read with a warning. With ``recover=False`` both raise.
+    """
+    from mcap.records import Attachment, Channel, Chunk, Footer, Message, Metadata, Schema
+    from mcap.stream_reader import StreamReader, breakup_chunk
 
     path = Path(path)
     schemas: dict[int, Schema] = {}
     frame_channels: dict[int, str] = {}
     status_channels: set[int] = set()
     n_frames = 0
+
+    def damaged(msg: str) -> None:
+        if not recover:
+            raise RecordingError(msg + "; run 'wheelsoil recover' to rewrite it")
+        state.warnings.append(msg)
+        warnings.warn(msg, RuntimeWarning, stacklevel=4)
+
+    def handle(rec, where: int):
+        """FrameBatch for a frame message, else None (other records update ``state``)."""
+        if isinstance(rec, Message):
+            bus = frame_channels.get(rec.channel_id)
+            if bus is not None:
+                if frame_buses is None or bus in frame_buses:
+                    try:
+                        return decode_batch(bus, rec.data)
+                    except ValueError as exc:
+                        damaged(f"{path}: frame batch of bus {bus} at log_time {rec.log_time} in the record "
+                                f"at byte {where} skipped: {exc}")
+            elif with_status and rec.channel_id in status_channels:
+                try:
+                    state.statuses.append(json.loads(rec.data))
+                    state.status_times.append(rec.log_time)
+                except ValueError:
+                    pass
+        elif isinstance(rec, Schema):
+            schemas[rec.id] = rec
+        elif isinstance(rec, Channel):
+            sch = schemas.get(rec.schema_id)
+            state.channels[rec.id] = {"topic": rec.topic, "encoding": rec.message_encoding,
+                                      "schema": sch.name if sch else "", "metadata": dict(rec.metadata)}
+            if sch is not None and sch.name == SCHEMA_NAME:
+                frame_channels[rec.id] = rec.metadata.get("bus") or rec.topic.split("/")[2]
+            elif rec.topic == STATUS_TOPIC:
+                status_channels.add(rec.id)
+        elif isinstance(rec, Metadata):
+            state.metadata[rec.name] = dict(rec.metadata)
+        elif isinstance(rec, Attachment):
+            state.attachments[rec.name] = rec.data
+        elif isinstance(rec, Footer):
+            state.complete = True
+        return None
+
     with open(path, "rb") as raw:
         state.size = os.fstat(raw.fileno()).st_size
         f = _StrictFile(raw)
         good = 0
         try:
-            for rec in StreamReader(f, record_size_limit=1 << 31).records:
-                if isinstance(rec, Message):
-                    bus = frame_channels.get(rec.channel_id)
-                    if bus is not None:
-                        if frame_buses is None or bus in frame_buses:
-                            try:
-                                batch = decode_batch(bus, rec.data)
-                            except ValueError as exc:
-                                raise ValueError(f"message at log_time {rec.log_time}: {exc}") from None
+            for rec in StreamReader(f, emit_chunks=True, record_size_limit=1 << 31).records:
+                if isinstance(rec, Chunk):
+                    try:
+                        inner = breakup_chunk(rec)
+                    except Exception as exc:  # zstd/lz4 errors, struct.error on a damaged chunk
+                        damaged(f"{path}: chunk at byte {good} of {state.size} damaged and skipped "
+                                f"({type(exc).__name__}: {exc})")
+                        inner = ()
+                    for r in inner:
+                        batch = handle(r, good)
+                        if batch is not None:
                             n_frames += len(batch)
                             yield batch
-                    elif with_status and rec.channel_id in status_channels:
-                        try:
-                            state.statuses.append(json.loads(rec.data))
-                            state.status_times.append(rec.log_time)
-                        except ValueError:
-                            pass
-                elif isinstance(rec, Schema):
-                    schemas[rec.id] = rec
-                elif isinstance(rec, Channel):
-                    sch = schemas.get(rec.schema_id)
-                    state.channels[rec.id] = {"topic": rec.topic, "encoding": rec.message_encoding,
-                                              "schema": sch.name if sch else "", "metadata": dict(rec.metadata)}
-                    if sch is not None and sch.name == SCHEMA_NAME:
-                        frame_channels[rec.id] = rec.metadata.get("bus") or rec.topic.split("/")[2]
-                    elif rec.topic == STATUS_TOPIC:
-                        status_channels.add(rec.id)
-                elif isinstance(rec, Metadata):
-                    state.metadata[rec.name] = dict(rec.metadata)
-                elif isinstance(rec, Attachment):
-                    state.attachments[rec.name] = rec.data
-                elif isinstance(rec, Footer):
-                    state.complete = True
+                else:
+                    batch = handle(rec, good)
+                    if batch is not None:
+                        n_frames += len(batch)
+                        yield batch
                 good = f.offset
-        except (GeneratorExit, KeyboardInterrupt):
+        except (GeneratorExit, KeyboardInterrupt, RecordingError):
             raise
-        except Exception as exc:  # mcap raises EndOfFile, struct.error, zstd errors, ...
-            where = f"{path}: damaged or truncated at byte {good} of {state.size}"
+        except Exception as exc:  # the file ends inside a record (EOFError), bad framing, ...
             if good == 0 and f.offset <= 8:
                 raise RecordingError(f"{path}: not an MCAP file ({type(exc).__name__}: {exc})") from None
-            msg = (f"{where} ({type(exc).__name__}: {exc or 'incomplete record'}); "
-                   f"kept the {n_frames} frames before it")
-            if not recover:
-                raise RecordingError(msg + "; run 'wheelsoil recover' to rewrite it") from None
-            state.warnings.append(msg)
-            warnings.warn(msg, RuntimeWarning, stacklevel=3)
+            damaged(f"{path}: damaged or truncated at byte {good} of {state.size} "
+                    f"({type(exc).__name__}: {exc or 'incomplete record'}); kept the {n_frames} frames before it")
 
 
 def read_attachments(path) -> dict[str, bytes]:

@@ -133,3 +133,41 @@ def test_iter_frame_batches_filters_buses(tmp_path):
     buses = {b.bus for b in iter_frame_batches(path, buses=["can1"])}
     assert buses == {"can1"}
     assert sum(len(b) for b in iter_frame_batches(path, buses="can1")) == 50
+
+
+def test_damaged_chunk_in_the_middle_is_skipped_and_reading_goes_on(tmp_path):
+    from mcap.records import Chunk
+    from mcap.stream_reader import StreamReader
+
+    msgs = random_messages(2000, seed=9, remote=False)
+    path = tmp_path / "r.mcap"
+    _write(path, {"can0": msgs}, flush_every=500)  # 4 chunks
+    data = bytearray(path.read_bytes())
+    # find the second chunk and scramble its compressed payload
+    offsets = []
+
+    class Pos:
+        def __init__(self, f):
+            self.f, self.pos = f, 0
+
+        def read(self, n=-1):
+            b = self.f.read(n)
+            self.pos += len(b)
+            return b
+
+    with open(path, "rb") as fh:
+        pos = Pos(fh)
+        for rec in StreamReader(pos, emit_chunks=True).records:
+            if isinstance(rec, Chunk):
+                offsets.append(pos.pos)
+    end2 = offsets[1]
+    data[end2 - 200:end2 - 100] = bytes(100)
+    bad = tmp_path / "bad.mcap"
+    bad.write_bytes(bytes(data))
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        got = read_frames(bad)
+    assert any("bad.mcap: chunk at byte" in str(w.message) for w in caught)
+    assert len(got["can0"]) == 1500  # chunks 1, 3, 4
+    ref = FrameBatch.from_messages("can0", msgs[:500] + msgs[1000:])
+    assert frame_differences({"can0": ref}, got, flag_mask=0xFF) == []
