@@ -138,14 +138,23 @@ def _cmd_log(args) -> int:
         elif count[0] % 10 == 1:
             print(format_status(st), file=sys.stderr, flush=True)
 
-    res = log_buses(args.bus, args.output, config=_config(args.vehicle), duration_s=args.duration,
+    from .buses import parse_bus_specs
+
+    config = _config(args.vehicle)
+    specs = parse_bus_specs(args.bus)
+    for s in specs:
+        if s.name not in config.buses:
+            print(f"warning: bus {s.name} is not in the vehicle configuration ({', '.join(config.buses)}); "
+                  f"its frames are recorded but not matched to a DBC. Name it, e.g. "
+                  f"--bus {next(iter(config.buses))}={s.interface}:{s.channel}", file=sys.stderr)
+    res = log_buses(specs, args.output, config=config, duration_s=args.duration,
                     split_minutes=args.split_minutes, max_frames=args.max_frames,
                     rcvbuf_bytes=args.rcvbuf_bytes, on_status=show, handle_signals=True,
                     metadata={"command": " ".join(sys.argv)})
     if tty and not args.quiet:
         print(file=sys.stderr)
     st = res.status
-    print(f"recorded {sum(res.frames.values())} frames ({', '.join(f'{b} {n}' for b, n in res.frames.items())}) "
+    print(f"recorded {sum(res.frames.values())} frames ({_counts(res.frames)}) "
           f"into {', '.join(map(str, res.files))}; stop: {res.stop_reason}")
     lost = sum(b["lost_wft_frames"] for b in st["buses"].values())
     drops = sum(b["rx_dropped"] or 0 for b in st["buses"].values())
@@ -153,6 +162,10 @@ def _cmd_log(args) -> int:
         print(f"warning: lost WFT frames {lost}, kernel rx drops {drops}, unrecordable frames {st.get('bad_frames', 0)}",
               file=sys.stderr)
     return 0
+
+
+def _counts(d: dict) -> str:
+    return ", ".join(f"{b} {n}" for b, n in d.items()) or "no bus"
 
 
 def _print_warnings(ws, limit=20):
@@ -172,7 +185,7 @@ def _cmd_import(args) -> int:
         res = import_log(args.inputs, args.output, channel_map=parse_channel_map(args.map),
                          config=_config(args.vehicle))
     _print_warnings(res.warnings)
-    print(f"imported {res.total} frames ({', '.join(f'{b} {n}' for b, n in res.frames.items())}) into "
+    print(f"imported {res.total} frames ({_counts(res.frames)}) into "
           f"{res.output}" + (f"; skipped {res.skipped} unparsable line(s)" if res.skipped else ""))
     return 0
 
@@ -182,7 +195,7 @@ def _cmd_export(args) -> int:
 
     res = export_recording(args.recording, args.output, channel_map=parse_channel_map(args.map), buses=args.bus)
     _print_warnings(res.warnings)
-    print(f"exported {res.total} frames ({', '.join(f'{b} {n}' for b, n in res.frames.items())}) to {res.output}")
+    print(f"exported {res.total} frames ({_counts(res.frames)}) to {res.output}")
     return 0
 
 
@@ -201,7 +214,7 @@ def _cmd_recover(args) -> int:
 
     res = recover_recording(args.recording, args.output)
     _print_warnings(res.warnings)
-    print(f"recovered {res.total} frames ({', '.join(f'{b} {n}' for b, n in res.frames.items())}) into {res.output}")
+    print(f"recovered {res.total} frames ({_counts(res.frames)}) into {res.output}")
     return 0
 
 
@@ -217,7 +230,7 @@ def _cmd_replay(args) -> int:
         res = replay_recording(args.recording, args.bus, speed=args.speed, stop_event=stop)
     finally:
         signal.signal(signal.SIGTERM, old)
-    print(f"sent {sum(res.sent.values())} frames ({', '.join(f'{b} {n}' for b, n in res.sent.items())}) "
+    print(f"sent {sum(res.sent.values())} frames ({_counts(res.sent)}) "
           f"in {res.wall_s:.1f} s" + (f"; {res.send_failures} frames could not be sent" if res.send_failures else ""))
     return 1 if res.send_failures else 0
 
