@@ -5,7 +5,7 @@ import pytest
 
 from wheelsoil.model import DEFAULT_WHEEL, load_terrain
 from wheelsoil.model.diagnosis import diagnose, structure_test
-from wheelsoil.model.fit import prepare_data, synthetic_data
+from wheelsoil.model.fit import synthetic_data
 
 SAND = load_terrain("sand")
 CLAY = load_terrain("clay")
