@@ -71,17 +71,18 @@ def load_inputs(inputs, *, progress: bool = False):
             })
             for w in getattr(res, "warnings", []) or []:
                 notes.append(f"{path.name}: {w}")
-            if radius is None:
+            if radius is None:  # the first recording's vehicle configuration
                 radius = getattr(res, "wheel_radius_m", None)
-                if width is None:
+                width = getattr(res, "wheel_width_m", None)
+                if radius is None or width is None:
                     try:
                         from wheelsoil.daq import load_vehicle_config
 
                         cfg = load_vehicle_config()
-                        width = cfg.wheel_width_m
                         radius = radius or cfg.wheel_radius_m
+                        width = width or cfg.wheel_width_m
                     except Exception:  # noqa: BLE001 - fall back to the documented default
-                        width = 0.32
+                        radius, width = radius or 0.47, width or 0.32
         elif suffix in TABLE_SUFFIXES:
             df = _read_table(path)
             kinds.append("table")
