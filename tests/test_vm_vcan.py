@@ -4,7 +4,8 @@ The host kernel (and CI's) has no AF_CAN.  The module fixture boots one qemu
 guest (Debian's stock kernel under TCG, the host's / read-only over 9p, see
 ``tests/vm/vcanvm.py``) that runs pytest on ``tests/vm/guest_*.py`` with this
 test run's own Python (``sys.executable``), so the same virtualenv and checkout
-are tested.  Each guest test is mirrored here as one parametrized test that
+are tested; the files run as parallel groups, each in its own network
+namespace with its own ``vcan0``/``vcan1``.  Each guest test is mirrored here as one parametrized test that
 passes, fails (with the guest's report) or skips (with the guest's reason).
 Without qemu, a Debian kernel with vcan, or busybox-static, everything here
 skips with the reason; ``make vm-packages`` installs them (Debian, as root).
@@ -29,6 +30,10 @@ import vcanvm  # noqa: E402
 pytestmark = pytest.mark.vm
 
 GUEST_FILES = sorted(VMDIR.glob("guest_*.py"))
+#: Guest test files run as parallel pytest processes (own network namespace and vcan0/vcan1
+#: each); files not listed join the last group. The replay test's two `wheelsoil` processes
+#: spend ~1-2 min importing under TCG, so the other tests run beside them.
+PARALLEL_GROUPS = {"replay": ["guest_replay_log.py"], "socketcan": ["guest_socketcan.py", "guest_logger_burst.py"]}
 #: qemu is killed after this long; the guest normally finishes in about 2 min (TCG).
 VM_TIMEOUT_S = 480
 
@@ -64,15 +69,14 @@ def guest_session(tmp_path_factory):
     if reason:
         pytest.skip(f"qemu vcan VM unavailable: {reason}")
     work = tmp_path_factory.mktemp("vcanvm")
-    files = " ".join(str(f.relative_to(REPO)) for f in GUEST_FILES)
-    cmd = (
-        f"{sys.executable} -m pytest -v -rA --color=no -p no:cacheprovider -p no:hypothesispytest"
-        f" -o junit_family=xunit1 --junitxml=/run/out/junit.xml --basetemp=/run/pytest {files}"
-    )
+    groups = {name: [] for name in PARALLEL_GROUPS}
+    for f in GUEST_FILES:
+        name = next((g for g, fs in PARALLEL_GROUPS.items() if f.name in fs), list(groups)[-1])
+        groups[name].append(str(f.relative_to(REPO)))
+    cmd = vcanvm.parallel_pytest_command(sys.executable, {g: fs for g, fs in groups.items() if fs})
     t0 = time.monotonic()
     result = vcanvm.run_in_vm(cmd, work, cwd=str(REPO), timeout=VM_TIMEOUT_S)
-    junit = result.outdir / "junit.xml"
-    cases = _parse_junit(junit) if junit.is_file() else []
+    cases = [c for junit in sorted(result.outdir.glob("junit-*.xml")) for c in _parse_junit(junit)]
     print(f"VM: {time.monotonic() - t0:.1f} s wall, guest exit {result.returncode}")
     return result, cases
 

@@ -8,6 +8,7 @@
   and remote flags, DLC, data, CAN FD flags and the kernel receive timestamps.
 """
 
+import socket
 import time
 
 import can
@@ -157,8 +158,9 @@ def test_roundtrip_canfd_and_filters(vcan0):
 
 @pytest.mark.parametrize("rcvbuf", [None, 4 * 2**20])
 def test_rcvbuf_reported(vcan0, rcvbuf):
+    with can.Bus(interface="socketcan", channel=vcan0) as plain:
+        default = plain.socket.getsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF)  # net.core.rmem_default
     with OverflowAwareSocketcanBus(vcan0, rcvbuf_bytes=rcvbuf) as bus:
-        with open("/proc/sys/net/core/rmem_default") as f:
-            default = int(f.read())
         # the kernel doubles what is asked for (socket(7)); as root SO_RCVBUFFORCE grants it all
         assert bus.rcvbuf_bytes == (default if rcvbuf is None else 2 * rcvbuf)
+        assert bus.rcvbuf_bytes == bus.socket.getsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF)

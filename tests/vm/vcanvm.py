@@ -156,7 +156,7 @@ def missing_prerequisites() -> str | None:
         _static_busybox()
     except RuntimeError as exc:
         return str(exc)
-    for tool in ("ip", "modprobe", "mount"):
+    for tool in ("ip", "modprobe", "mount", "unshare"):
         if not any(os.access(os.path.join(d, tool), os.X_OK) for d in _guest_path().split(":")):
             return f"'{tool}' not found on the host root the guest boots from"
     return None
@@ -316,3 +316,40 @@ def run_in_vm(
         console += f"\nVCANVM: qemu killed after {timeout:.0f} s timeout\n"
     m = re.search(r"^VCANVM_EXIT=(\d+)", console, re.M)
     return VmResult(int(m.group(1)) if m else -1, console, outdir, time.monotonic() - t0, timed_out)
+
+
+def parallel_pytest_command(python: str, groups: dict[str, list[str]], *, pytest_args=(),
+                            interfaces=VCAN_INTERFACES) -> str:
+    """Guest shell command running one pytest process per group, all at once.
+
+    Each group runs in its own network namespace (``unshare --net``) with its
+    own ``vcan0``/``vcan1``, so groups cannot see each other's frames and every
+    test can use the usual interface names.  Under TCG, Python start-up is
+    CPU-bound; two groups keep both vCPUs busy.
+
+    Args:
+        python: interpreter path (the host's ``sys.executable``; same path in the guest).
+        groups: group name -> test file paths (relative to the guest cwd).
+        pytest_args: extra pytest arguments for every group.
+        interfaces: vcan interfaces created in each namespace.
+
+    Returns:
+        A ``sh`` script: writes ``/run/out/junit-<group>.xml`` and
+        ``/run/out/<group>.log``, prints each log, exits with the largest exit code.
+    """
+    q = shlex.quote
+    links = " && ".join(f"ip link add dev {i} type vcan && ip link set up {i}" for i in interfaces)
+    lines = []
+    for name, files in groups.items():
+        argv = [python, "-m", "pytest", "-v", "-rA", "--color=no", "-p", "no:cacheprovider",
+                "-p", "no:hypothesispytest", "-o", "junit_family=xunit1",
+                f"--junitxml=/run/out/junit-{name}.xml", f"--basetemp=/run/pytest-{name}", *pytest_args, *files]
+        inner = f"{links} && exec {' '.join(q(a) for a in argv)}"
+        lines.append(f"(unshare --net sh -c {q(inner)} > /run/out/{name}.log 2>&1; echo $? > /run/out/{name}.rc) &")
+    lines.append("wait")
+    lines.append("rc=0")
+    for name in groups:
+        lines.append(f'r=$(cat /run/out/{name}.rc); echo "=== guest pytest group {name}: exit $r"; '
+                     f'cat /run/out/{name}.log; [ "$r" -gt "$rc" ] && rc=$r')
+    lines.append("exit $rc")
+    return "\n".join(lines)
