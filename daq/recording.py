@@ -120,6 +120,19 @@ def _software_versions() -> dict[str, str]:
     return out
 
 
+def _fsync_dir(path: Path) -> None:
+    try:
+        fd = os.open(path if str(path) else ".", os.O_RDONLY)
+    except OSError:
+        return
+    try:
+        os.fsync(fd)
+    except OSError:
+        pass
+    finally:
+        os.close(fd)
+
+
 class RecordingWriter:
     """Write raw CAN frames to an MCAP recording (context manager).
 
@@ -193,6 +206,8 @@ class RecordingWriter:
             for name, text in config.dbc_texts().items():
                 self.add_attachment(f"dbc/{name}", "text/x-dbc", text.encode())
         self.flush()
+        if fsync:  # make the new directory entry durable too (a power cut could lose the file)
+            _fsync_dir(self.path.parent)
 
     def add_metadata(self, name: str, data: Mapping) -> None:
         """Add an MCAP metadata record (values converted with ``str``)."""
