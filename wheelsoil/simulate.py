@@ -837,7 +837,7 @@ def write_simulation(run: SimulatedRun, path, *, config=None) -> Path:
     if suffix == ".mcap":
         _write_mcap(run, path, config)
         return path
-    if suffix not in (".log", ".asc", ".blf", ".trc"):
+    if suffix not in OUTPUT_SUFFIXES:
         raise ValueError(f"{path}: unknown output format {suffix!r}; use .mcap, .log, .asc, .blf or .trc")
     import can
 
@@ -1022,8 +1022,15 @@ def _parse_params(items) -> dict[str, float]:
     return out
 
 
+OUTPUT_SUFFIXES = (".mcap", ".log", ".asc", ".blf", ".trc")
+
+
 def _cmd_simulate(args) -> int:
     from wheelsoil.model import DEFAULT_WHEEL, Wheel, load_terrain
+
+    if Path(args.output).suffix.lower() not in OUTPUT_SUFFIXES:
+        raise ValueError(f"{args.output}: unknown output format {Path(args.output).suffix!r}; "
+                         f"use {', '.join(OUTPUT_SUFFIXES)}")
 
     terrain = load_terrain(args.terrain)
     wheel = Wheel(args.wheel_radius or DEFAULT_WHEEL.radius, args.wheel_width or DEFAULT_WHEEL.width)
