@@ -353,3 +353,29 @@ def parallel_pytest_command(python: str, groups: dict[str, list[str]], *, pytest
                      f'cat /run/out/{name}.log; [ "$r" -gt "$rc" ] && rc=$r')
     lines.append("exit $rc")
     return "\n".join(lines)
+
+
+def main(argv=None) -> int:
+    """``python tests/vm/vcanvm.py [--timeout S] 'shell command'``: run it in a fresh guest."""
+    import argparse
+    import sys
+    import tempfile
+
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
+                                epilog="example: python tests/vm/vcanvm.py 'candump -n 3 vcan0 & cangen -n 3 vcan0; wait'")
+    p.add_argument("command", help="shell command run as root in the guest (cwd: this checkout)")
+    p.add_argument("--timeout", type=float, default=300.0, help="seconds before qemu is killed (default 300)")
+    args = p.parse_args(argv)
+    reason = missing_prerequisites()
+    if reason:
+        print(f"vcanvm: cannot run the VM: {reason}", file=sys.stderr)
+        return 2
+    with tempfile.TemporaryDirectory(prefix="vcanvm-") as work:
+        res = run_in_vm(args.command, Path(work), cwd=str(Path(__file__).resolve().parents[2]), timeout=args.timeout)
+    print(res.console)
+    print(f"vcanvm: guest exit {res.returncode}, {res.seconds:.1f} s")
+    return 0 if res.returncode == 0 else 1
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
