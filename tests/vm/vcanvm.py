@@ -257,7 +257,7 @@ def run_in_vm(
         cmd: shell command (run by the host's /bin/sh inside the guest, as root).
         workdir: empty host directory the guest can see (e.g. a pytest temp dir
             under /tmp; the host root is shared, so any path works); holds the
-            initramfs, scripts and ``out/`` (the guest's writable ``/run/out``).
+            initramfs, scripts, ``console.log`` and ``out/`` (the guest's writable ``/run/out``).
         cwd: guest working directory (a host path; read-only in the guest).
         timeout: seconds before qemu is killed (TCG is slow: ``import can``
             takes 2-3 s in the guest).
@@ -314,6 +314,7 @@ def run_in_vm(
     console = raw.decode("utf-8", "replace").replace("\r\n", "\n")
     if timed_out:
         console += f"\nVCANVM: qemu killed after {timeout:.0f} s timeout\n"
+    (workdir / "console.log").write_text(console)
     m = re.search(r"^VCANVM_EXIT=(\d+)", console, re.M)
     return VmResult(int(m.group(1)) if m else -1, console, outdir, time.monotonic() - t0, timed_out)
 
