@@ -8,7 +8,6 @@ extended/remote flags, DLC, data, order per bus) and the replay keeps the
 recorded timing (it is never faster than the recording / speed).
 """
 
-import os
 import signal
 import subprocess
 import sys
