@@ -28,6 +28,8 @@ import pytest
 from wheelsoil.model import load_terrain
 from wheelsoil.simulate import EFFECTS, draw_case, judge, simulate_run, write_simulation
 
+pytestmark = pytest.mark.slow  # part of `make test`; deselect with -m "not slow"
+
 EXE = [sys.executable, "-m", "wheelsoil"]
 DURATION_S = 120.0
 
