@@ -12,6 +12,7 @@ import signal
 import subprocess
 import sys
 import time
+import warnings
 
 import numpy as np
 import pytest
@@ -72,6 +73,19 @@ def _require_cli():
                     f"in this checkout; it has: {', '.join(sorted(sub.choices))}")
 
 
+def _wait_until_logged(path, n_per_bus, timeout_s):
+    """Poll the growing recording (chunks are flushed every 0.5 s) until every bus has
+    ``n_per_bus`` frames or ``timeout_s`` passed; the comparison afterwards tells what is missing."""
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        time.sleep(0.5)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # the open file has no footer yet
+            counts = {b: len(v) for b, v in read_frames(path).items()}
+        if counts and all(counts.get(b, 0) >= n_per_bus for b in ("can0", "can1")):
+            return
+
+
 def test_replay_then_log_same_frames(vcan0, vcan1, tmp_path, record_property):
     _require_cli()
     t_start = time.monotonic()
@@ -105,7 +119,7 @@ def test_replay_then_log_same_frames(vcan0, vcan1, tmp_path, record_property):
         rep_out, _ = replayer.communicate(timeout=STARTUP_TIMEOUT_S)
         replay_s = time.monotonic() - t0
         assert replayer.returncode == 0, rep_out
-        time.sleep(1.5)  # let the logger drain and write its last batch
+        _wait_until_logged(out, N_PER_BUS, timeout_s=60)  # a slow guest may lag behind the replay
     finally:
         t_stop = time.monotonic()
         logger.send_signal(signal.SIGINT)
