@@ -1121,6 +1121,11 @@ def cross_validate(data: FitData, fit: ModelFit, terrain, wheel, *, sinkage: str
     and close here because one group moves the optimum little).  ``"refit"``
     runs Gauss–Newton to convergence per fold (started at the optimum).
 
+    With accelerate cycles as groups, the fold estimates also give a jackknife
+    standard error over cycles (``cv["stderr_jackknife"]``); the returned fit's
+    ``stderr`` is the larger of it and the cluster-robust one, because
+    cycle-to-cycle variation (soil, speed) is invisible inside one cycle.
+
     Pooled held-out errors give ``cv_R0_n`` (RMS error of Dp [N]), ``cv_R0``
     (per channel) and ``cv_score`` (RMS of the noise-weighted residuals over
     all channels).  Returns a copy of ``fit`` with ``cv`` set; with one group or
@@ -1142,6 +1147,7 @@ def cross_validate(data: FitData, fit: ModelFit, terrain, wheel, *, sinkage: str
             held[c] = fit.predictions[c]
     else:
         split = aux["split"]
+        fold_params = []
         for g in groups:
             test = data.groups == g
             if method == "linear":
@@ -1156,6 +1162,7 @@ def cross_validate(data: FitData, fit: ModelFit, terrain, wheel, *, sinkage: str
                 if res is None or not np.all(np.isfinite(res.x)):
                     failed += 1
                     mp, tv = split(aux["u"])
+            fold_params.append({**mp, **tv})
             try:
                 pred = _predict(model_obj, terrain, wheel, data.subset(test), mp, tv, sinkage)
             except (ValueError, FloatingPointError):
@@ -1192,7 +1199,17 @@ def cross_validate(data: FitData, fit: ModelFit, terrain, wheel, *, sinkage: str
         "failed_folds": failed,
         "held_out": held,
     }
-    return dataclasses_replace(fit, cv=cv)
+    stderr = fit.stderr
+    if fit.k and groups.size >= 2 and aux is not None and data.group_kind == "accelerate cycles":
+        # jackknife over accelerate cycles: catches cycle-level variation (soil, speed)
+        # that the within-run cluster-robust errors cannot see; the larger one is kept
+        names = list(fit.params)
+        P = np.array([[fp[n] for n in names] for fp in fold_params])
+        G = P.shape[0]
+        jk = np.sqrt((G - 1) / G * np.sum((P - P.mean(axis=0)) ** 2, axis=0))
+        cv["stderr_jackknife"] = dict(zip(names, map(float, jk)))
+        stderr = {n: (max(v, j) if np.isfinite(v) else v) for (n, v), j in zip(fit.stderr.items(), jk)}
+    return dataclasses_replace(fit, cv=cv, stderr=stderr)
 
 
 def synthetic_data(

@@ -117,6 +117,11 @@ def report_dict(diag: Diagnosis, *, terrain, wheel, inputs, time_sync: dict | No
             "cv_R0": f.cv["cv_R0"] if f.cv else None,
             "cv_score": f.cv["cv_score"] if f.cv else None,
             "cv_folds": f.cv["n_groups"] if f.cv else None,
+            "stderr_jackknife": f.cv.get("stderr_jackknife") if f.cv else None,
+            "stderr_method": ("max(cluster-robust over cycle x slip cells, jackknife over cycles)"
+                              if f.cv and f.cv.get("stderr_jackknife") else
+                              "cluster-robust over cycle x slip cells" if data.kind == "timeseries"
+                              else "s^2 (J^T J)^-1 (reduced chi-square)"),
             "bic": f.bic,
             "n_eff": f.n_eff,
             "k": f.k,
