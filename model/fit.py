@@ -635,6 +635,13 @@ def prepare_data(df, *, slip_min: float = 0.1, source: str = "data", n_blocks: i
     t_s = pd.to_numeric(df["t_s"], errors="coerce").to_numpy(float)[keep] if "t_s" in df.columns else None
     kind = "timeseries" if t_s is not None else "table"
     groups, group_kind = _cv_groups(df, keep, run, kind, n_blocks)
+    if kind == "table" and group_kind == "contiguous blocks":
+        ds = np.diff(s[keep])
+        if ds.size and (np.all(ds >= 0) or np.all(ds <= 0)):
+            notes.append(
+                "The table is sorted by slip, so the contiguous cross-validation blocks are slip ranges: the "
+                "out-of-sample errors measure prediction at slips not seen in the fit (extrapolation at the ends)."
+            )
     sigma = {
         c: estimate_noise(v, slip, w[keep], groups if kind == "timeseries" else None)
         for c, v in channels.items()
