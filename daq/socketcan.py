@@ -31,6 +31,7 @@ import logging
 import select
 import socket
 import struct
+import threading
 from typing import Optional
 
 import can
@@ -185,19 +186,17 @@ class _OverflowTap:
     for both control messages, feeds ``SO_RXQ_OVFL`` to the drop counter and
     passes the rest (the ``SO_TIMESTAMPNS`` timestamp) on unchanged."""
 
-    __slots__ = ("sock", "counter", "last_dropcount")
+    __slots__ = ("sock", "counter")
 
     def __init__(self, sock: socket.socket, counter: KernelDropCounter) -> None:
         self.sock = sock
-        self.counter = counter
-        self.last_dropcount = 0
+        self.counter = counter  # updated by the receiving thread only
 
     def recvmsg(self, bufsize: int, ancbufsize: int = 0, flags: int = 0):
         data, ancdata, msg_flags, addr = self.sock.recvmsg(bufsize, ANCILLARY_BUFFER_SIZE, flags)
         rest, dropcount = split_overflow_cmsg(ancdata)
         if dropcount is not None:
             self.counter.update(dropcount)
-            self.last_dropcount = dropcount
         return data, rest, msg_flags, addr
 
 
@@ -220,8 +219,7 @@ class OverflowAwareSocketcanBus(SocketcanBus):
         rcvbuf_bytes: the receive buffer the kernel granted, bytes, as
             ``getsockopt(SO_RCVBUF)`` reports it (twice the requested value when granted in full).
         rx_dropped: see the property.
-        rx_dropped_at_last_frame: raw kernel counter delivered with the most recent
-            frame (``SO_RXQ_OVFL``): frames lost *before* that frame was queued.
+        rx_dropped_at_last_frame: see the property.
 
     Raises:
         OSError: if the interface does not exist or AF_CAN is missing (from python-can).
@@ -248,8 +246,12 @@ class OverflowAwareSocketcanBus(SocketcanBus):
         except BaseException:
             self.shutdown()
             raise
-        self._drops = KernelDropCounter()
-        self._tap = _OverflowTap(self.socket, self._drops)
+        # Two unwrapped views of the same kernel counter, each written by one side only, so
+        # the receiving thread and a status thread never race on one: the per-frame
+        # SO_RXQ_OVFL values (receiving thread) and the live SO_MEMINFO value (callers).
+        self._tap = _OverflowTap(self.socket, KernelDropCounter())
+        self._live_drops = KernelDropCounter()
+        self._live_lock = threading.Lock()
 
     @property
     def rx_dropped(self) -> int:
@@ -260,14 +262,16 @@ class OverflowAwareSocketcanBus(SocketcanBus):
         delivered frame count too (one ``getsockopt`` per access).
         """
         raw = read_socket_drops(self.socket)
-        if raw is not None:
-            self._drops.update(raw)
-        return self._drops.total
+        with self._live_lock:
+            if raw is not None:
+                self._live_drops.update(raw)
+            return max(self._live_drops.total, self._tap.counter.total)
 
     @property
     def rx_dropped_at_last_frame(self) -> int:
-        """Raw kernel drop counter carried by the most recently received frame (0 if none yet)."""
-        return self._tap.last_dropcount
+        """Drops the kernel reported with the most recent frame that carried a count
+        (``SO_RXQ_OVFL``): frames lost *before* that frame was queued; cumulative, 0 if none yet."""
+        return self._tap.counter.total
 
     def _recv_internal(self, timeout: Optional[float]) -> tuple[Optional[can.Message], bool]:
         # SocketcanBus._recv_internal with the socket swapped for the overflow tap.

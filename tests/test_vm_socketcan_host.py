@@ -86,12 +86,12 @@ def test_tap_feeds_python_can_parser_and_counts_drops():
     a = pycan_socketcan.capture_message(tap)
     assert (a.arbitration_id, a.is_extended_id, bytes(a.data)) == (0x1ABCDE0, True, b"\x01\x02\x03")
     assert a.timestamp == pytest.approx(1_700_000_000.5, abs=1e-6)
-    assert counter.total == 0 and tap.last_dropcount == 0
+    assert counter.total == 0
 
     b = pycan_socketcan.capture_message(tap)  # python-can asserts a single (timestamp) cmsg
     assert (b.arbitration_id, b.is_extended_id, bytes(b.data)) == (0x123, False, bytes(range(8)))
     assert b.timestamp == pytest.approx(1_700_000_001.0, abs=1e-6)
-    assert counter.total == 42 and tap.last_dropcount == 42
+    assert counter.total == 42
     assert sock.ancbufsizes == [wsc.ANCILLARY_BUFFER_SIZE] * 2
     assert wsc.ANCILLARY_BUFFER_SIZE >= socket.CMSG_SPACE(16) + socket.CMSG_SPACE(4)
 
