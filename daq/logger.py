@@ -280,12 +280,15 @@ class CanLogger:
 
 
 def format_status(st: dict) -> str:
-    """One status line: ``12.0 s | can0 8801 fr/s lost 0 err 0 drop 0 | ... | 3.4 MB run.mcap``."""
+    """One status line: ``12.0 s | can0 8801 fr/s lost 0 errfr 0 buserr 0 drop 0 | ... | 3.40 MB run.mcap``
+
+    (lost: WFT frames missing by Counter gaps; errfr: CAN error frames; buserr:
+    driver/adapter errors; drop: kernel receive-queue drops, ``-`` when unknown)."""
     parts = [f"{st['elapsed_s']:7.1f} s"]
     for name, b in st["buses"].items():
         drop = "-" if b["rx_dropped"] is None else str(b["rx_dropped"])
-        parts.append(f"{name} {b['fps']:7.0f} fr/s lost {b['lost_wft_frames']} err {b['error_frames']}"
-                     f"/{b['bus_errors']} drop {drop}")
+        parts.append(f"{name} {b['fps']:7.0f} fr/s lost {b['lost_wft_frames']} errfr {b['error_frames']}"
+                     f" buserr {b['bus_errors']} drop {drop}")
     parts.append(f"{st['file_bytes'] / 1e6:8.2f} MB {Path(st['file']).name}")
     return " | ".join(parts)
 
