@@ -214,3 +214,16 @@ def test_same_seed_same_frames_and_bad_input():
         simulate_run(load_terrain("sand"), effect="lyasko", params={"H": 0.1})
     with pytest.raises(ValueError, match="drop_rate"):
         simulate_run(load_terrain("sand"), drop_rate=0.9)
+
+
+def test_usb_batching_stamps_frames_in_bursts():
+    r = simulate_run(load_terrain("clay"), seed=2, duration_s=30.0, usb_batching_s=0.001)
+    ts = r.frames["can0"]["timestamp_ns"]
+    gaps = np.diff(ts) * 1e-9
+    assert np.all(gaps >= 0)
+    # a sample's three frames arrive in one burst, microseconds apart; bursts are
+    # whole poll periods apart
+    assert np.mean(gaps < 20e-6) > 0.5
+    big = gaps[gaps > 200e-6] / 0.001
+    assert np.mean(np.abs(big - np.round(big)) < 0.05) > 0.95
+    assert r.info["usb_batching_s"] == 0.001

@@ -241,7 +241,9 @@ def _drive_profile(rng, dt, n_cycles, duration_s, wheel_radius_m):
 
     Each cycle: [standstill, pull-away] or cruise, an acceleration whose slip
     sweeps from ~0.04 up to ~0.85-0.92 and back while V rises, a short cruise,
-    then braking with negative slip down to a crawl or to standstill.
+    then braking with negative slip down to a crawl or to standstill. With
+    ``duration_s`` the run is cut there (the last cycle may be partial);
+    otherwise ``n_cycles`` cycles and a final standstill.
     Returns arrays of shape (N,): speed_mps, slip, phase (object), cycle (int).
     """
     segs = []  # (n, V array, s array, phase, cycle)
@@ -290,9 +292,6 @@ def _drive_profile(rng, dt, n_cycles, duration_s, wheel_radius_m):
         # braking (skid: negative slip), to standstill or a crawl
         c += 1
         last = c >= want_cycles
-        if duration_s is not None:
-            last = total + t_cycle + 5.0 + 25.0 > duration_s
-            want_cycles = c if last else want_cycles
         standstill_next = last or rng.random() < 0.5
         v_stop = 0.0 if standstill_next else rng.uniform(0.8, 1.4)
         T = rng.uniform(3.0, 5.0)
@@ -303,9 +302,10 @@ def _drive_profile(rng, dt, n_cycles, duration_s, wheel_radius_m):
         t_cycle += T
         v_prev, s_prev = v_stop, 0.0
         total += t_cycle
-    # final standstill
-    T = 2.0 if duration_s is None else max(duration_s - total, 2.0)
-    seg(T, lambda u: np.zeros_like(u), lambda u: np.zeros_like(u), "standstill", -1)
+        if duration_s is not None and total >= duration_s:
+            break  # the logger is stopped at duration_s, wherever the driver is
+    if duration_s is None:  # final standstill
+        seg(2.0, lambda u: np.zeros_like(u), lambda u: np.zeros_like(u), "standstill", -1)
     speed = np.concatenate([s[0] for s in segs])
     slip = np.concatenate([s[1] for s in segs])
     phase = np.concatenate([s[2] for s in segs])
@@ -408,6 +408,7 @@ def simulate_run(
     duration_s: float | None = None,
     n_cycles: int = 6,
     soil_variability: float = 0.03,
+    usb_batching_s: float = 0.0,
 ) -> SimulatedRun:
     """Simulate one field run of the instrumented left-rear wheel (paper section 2.2).
 
@@ -441,6 +442,12 @@ def simulate_run(
         Relative sd of the soil's c, kc, kphi along the track (spatial random
         field, correlation length 3 m; 0 .. 0.2, default 0.03): the field's
         soil is never the lab sample.
+    usb_batching_s : float
+        0 (default): the host stamps every frame on receipt with a small
+        exponential jitter (mean 0.15 ms), as a PCIe/SocketCAN adapter does.
+        > 0 (e.g. 0.001): a USB adapter that delivers frames in batches every
+        ``usb_batching_s`` seconds, all frames of a batch stamped within a few
+        microseconds of each other (0 .. 0.02 s).
 
     Returns
     -------
@@ -465,6 +472,8 @@ def simulate_run(
         raise ValueError(f"duration_s={duration_s} is too short: at least 30 s (one accelerate-brake cycle)")
     if duration_s is None and n_cycles < 1:
         raise ValueError("n_cycles must be at least 1")
+    if not 0.0 <= usb_batching_s <= 0.02:
+        raise ValueError(f"usb_batching_s={usb_batching_s} outside 0..0.02 s")
     if not 0.0 <= soil_variability <= 0.2:
         raise ValueError(f"soil_variability={soil_variability} outside 0..0.2")
     if added_load_n < 0 or added_load_n > 15000:
@@ -557,7 +566,13 @@ def simulate_run(
         # (adapter/USB latency: jitter), never out of order
         ts = np.concatenate([p[0] for p in parts])
         order = np.argsort(ts, kind="stable")
-        ts = np.maximum.accumulate(ts[order] + _jitter(rng, len(ts)))
+        ts = ts[order]
+        if usb_batching_s > 0:  # delivered at the next USB poll, stamped in a burst
+            phase = rng.uniform(0, usb_batching_s)
+            poll = np.ceil((ts - phase) / usb_batching_s) * usb_batching_s + phase
+            ts = np.maximum.accumulate(poll + 60e-6 + _jitter(rng, len(ts), 3e-6))
+        else:
+            ts = np.maximum.accumulate(ts + _jitter(rng, len(ts)))
         frames[bus] = {
             "timestamp_ns": start_ns + np.round(ts * 1e9).astype(np.int64),
             "arbitration_id": np.concatenate([p[1] for p in parts])[order].astype(np.uint32),
@@ -596,6 +611,7 @@ def simulate_run(
         "gps_leap_s": GPS_LEAP_S,
         "drop_rate": float(drop_rate),
         "soil_variability": float(soil_variability),
+        "usb_batching_s": float(usb_batching_s),
         "lost_wft_samples": lost,
         "seed": int(seed),
         "duration_s": float(n * dt),
@@ -999,6 +1015,10 @@ def register(subparsers) -> None:
     p.add_argument("--drop-rate", type=float, default=0.0, metavar="P",
                    help="probability of losing a WFT sample's frames (default 0)")
     p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    p.add_argument("--soil-variability", type=float, default=0.03, metavar="F",
+                   help="relative sd of c, kc, kphi along the track (default 0.03; 0 = the lab soil everywhere)")
+    p.add_argument("--usb-batching", type=float, default=0.0, metavar="S",
+                   help="host timestamps of a USB adapter polled every S seconds, e.g. 0.001 (default 0: per frame)")
     p.add_argument("--duration", type=float, default=None, metavar="S",
                    help="run length [s] (>= 30); default: --cycles accelerate-brake cycles")
     p.add_argument("--cycles", type=int, default=6, help="accelerate-brake cycles when no --duration (default 6)")
@@ -1040,7 +1060,8 @@ def _cmd_simulate(args) -> int:
     run = simulate_run(
         terrain, effect=args.effect, params=_parse_params(args.param), wheel=wheel, added_load_n=added,
         gnss_latency_s=args.gnss_latency, drop_rate=args.drop_rate, seed=args.seed,
-        duration_s=args.duration, n_cycles=args.cycles,
+        duration_s=args.duration, n_cycles=args.cycles, soil_variability=args.soil_variability,
+        usb_batching_s=args.usb_batching,
     )
     out = write_simulation(run, args.output)
     per_bus = ", ".join(f"{b}: {len(f['timestamp_ns'])}" for b, f in sorted(run.frames.items()))
