@@ -41,15 +41,16 @@ def _cli(*args, timeout=300):
 
 
 def _cases():
-    """Five cases: a random permutation of the five effects (each drawn once), the
-    rest of each case (terrain, latency, lost frames, coefficients) drawn by seed."""
+    """Seven cases: a random permutation of the five effects (each drawn once) and two
+    cases drawn entirely at random; the rest of each case (terrain, latency, lost
+    frames, coefficients) drawn by its seed."""
     order = np.random.default_rng(2026).permutation(len(EFFECTS))
     out = []
     for i, k in enumerate(order):
         case = draw_case(100 + i)
         case["effect"] = str(EFFECTS[k])
         out.append(case)
-    return out
+    return out + [draw_case(105), draw_case(106)]
 
 
 def _explain(report, verdict):
