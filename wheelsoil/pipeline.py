@@ -272,7 +272,7 @@ output: DIR/report.html (self-contained, opens offline), DIR/report.json
 
 verdict: 'none' (Wong's residuals show no significant structure), 'slip_sinkage',
 'terrain_mismatch' (lab K and phi re-fitted explain it), or 'unexplained'. A candidate
-must lower the cross-validated error by >= 10 % and the BIC by >= 10; see
+must lower the cross-validated error by >= 25 % and the BIC by >= 10; see
 wheelsoil.model.diagnosis for the full rule.
 """
 
