@@ -9,6 +9,7 @@ then run through the real command line: ``wheelsoil import`` ->
 compared with the hidden truth (``wheelsoil.simulate.judge``).
 
     python benchmarks/bench_hidden_effect.py [--seeds 20] [--first 0] [--duration 120] [--jobs 2]
+        [--drop-rate P] [--soil-variability F] [--usb-batching S]   (harder conditions)
 
 Prints one line per seed, the confusion table (true effect x verdict) and
 the counts. Acceptance (issue 7): right in >= 19 of 20, every miss
@@ -29,12 +30,13 @@ from pathlib import Path
 VERDICTS = ("none", "slip_sinkage", "terrain_mismatch", "unexplained")
 
 
-def run_case(seed: int, duration_s: float, workdir: str) -> dict:
+def run_case(seed: int, duration_s: float, workdir: str, overrides: dict | None = None) -> dict:
     """Simulate, import, fit one drawn case; returns the judgement plus the truth."""
     from wheelsoil.model import load_terrain
     from wheelsoil.simulate import draw_case, judge, simulate_run, write_simulation
 
     case = draw_case(seed)
+    case.update(overrides or {})
     terrain = case.pop("terrain")
     t0 = time.perf_counter()
     run = simulate_run(load_terrain(terrain), duration_s=duration_s, **case)
@@ -65,7 +67,12 @@ def main(argv=None) -> int:
     ap.add_argument("--duration", type=float, default=120.0, help="simulated run length [s] (default 120)")
     ap.add_argument("--jobs", type=int, default=2, help="parallel cases (default 2)")
     ap.add_argument("--keep", default=None, metavar="DIR", help="keep the recordings and reports here")
+    ap.add_argument("--drop-rate", type=float, default=None, help="override the drawn lost-sample rate")
+    ap.add_argument("--soil-variability", type=float, default=None, help="override the soil variability (default 0.03)")
+    ap.add_argument("--usb-batching", type=float, default=None, metavar="S", help="USB-adapter timestamps (e.g. 0.001)")
     args = ap.parse_args(argv)
+    overrides = {k: v for k, v in (("drop_rate", args.drop_rate), ("soil_variability", args.soil_variability),
+                                   ("usb_batching_s", args.usb_batching)) if v is not None}
     from wheelsoil.simulate import EFFECTS
 
     seeds = list(range(args.first, args.first + args.seeds))
@@ -73,7 +80,8 @@ def main(argv=None) -> int:
     with tempfile.TemporaryDirectory() as tmp:
         workdir = args.keep or tmp
         with ProcessPoolExecutor(max_workers=args.jobs) as pool:
-            results = list(pool.map(run_case, seeds, [args.duration] * len(seeds), [workdir] * len(seeds)))
+            results = list(pool.map(run_case, seeds, [args.duration] * len(seeds), [workdir] * len(seeds),
+                                    [overrides] * len(seeds)))
     wall = time.perf_counter() - t0
     print(f"{'seed':>4} {'terrain':7} {'true effect':17} {'coefficients':30} {'verdict':16} {'model':16} "
           f"{'conf':6} {'ok':3} {'param z (bare / floored)':28} {'dlat ms':>7}")
