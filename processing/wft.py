@@ -87,7 +87,9 @@ def unwrap_counter(timestamp_ns: np.ndarray, counter: np.ndarray, *, modulo: int
         if abs(shift + (steps[i] - clock[i]) * period_s) < abs(shift):
             steps[i] = clock[i]
             jumps += 1
-    steps = np.maximum(steps, 0)
+    # a small negative step is a frame delivered out of order: keep it, so the frames
+    # after it stay on their own samples (clamping it to 0 shifted them all by one)
+    steps = np.where(steps < -3, 0, steps)
     index = np.empty(ts.shape[0], dtype=np.int64)
     index[0] = c[0]
     np.cumsum(steps, out=index[1:])
@@ -142,7 +144,8 @@ def _gap_report(ts: np.ndarray, idx: np.ndarray) -> GapReport:
     steps = np.diff(idx)
     rep = GapReport(repeated=int(np.count_nonzero(steps == 0)))
     where = np.flatnonzero(steps > 1)
-    rep.lost = int(np.sum(steps[where] - 1))
+    # samples never seen between the first and the last (out-of-order frames fill their gap)
+    rep.lost = int(idx.max() - idx.min() + 1 - np.unique(idx).size) if idx.size else 0
     rep.gaps = [(int(ts[i]), int(ts[i + 1]), int(steps[i] - 1)) for i in where]
     return rep
 
@@ -194,7 +197,9 @@ def assemble_wft_samples(streams: dict[str, tuple[np.ndarray, np.ndarray, dict[s
     for name, (t, idx, o) in unwrapped.items():
         rows = idx - lo
         keep = np.ones(rows.shape[0], dtype=bool)
-        keep[1:] = np.diff(rows) > 0  # repeated counter values: keep the first frame
+        # repeated counter values: keep the first frame; an out-of-order frame whose
+        # sample was already passed is dropped (its neighbours keep their rows)
+        keep[1:] = rows[1:] > np.maximum.accumulate(rows)[:-1]
         here = np.zeros(m, dtype=bool)
         here[rows[keep]] = True
         present &= here
