@@ -46,7 +46,7 @@ uint8[] data            # N*data_width payload bytes
 """
 FRAMES_TOPIC = "/can/{bus}/frames"
 STATUS_TOPIC = "/wheelsoil/logger_status"
-#: Frames per MCAP message at most (a batch is also cut by the logger every 100 ms).
+#: Frames per MCAP message at most (a batch is also cut by the logger every 0.5 s).
 MAX_FRAMES_PER_MESSAGE = 2000
 
 _CDR_HEADER = b"\x00\x01\x00\x00"  # CDR little-endian, XCDR1 (what ROS 2 writes)
