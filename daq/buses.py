@@ -90,7 +90,9 @@ def parse_bus_specs(texts) -> list[BusSpec]:
     dup = {n for n in names if names.count(n) > 1}
     if dup:
         raise ValueError(f"duplicate bus name(s) {', '.join(sorted(dup))}: give names, "
-                         "e.g. --bus can0=udp_multicast:239.0.0.1 --bus can1=udp_multicast:239.0.0.2")
+                         "e.g. --bus can0=udp_multicast:239.0.0.1,port=43113 "
+                         "--bus can1=udp_multicast:239.0.0.2,port=43114 (udp_multicast buses "
+                         "on one port receive each other's frames: give each its own port)")
     return specs
 
 
