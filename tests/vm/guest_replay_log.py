@@ -19,7 +19,7 @@ import pytest
 
 can = pytest.importorskip("can")
 
-from wheelsoil.daq import RecordingWriter, read_frames  # noqa: E402
+from wheelsoil.daq import RecordingWriter, read_frames, read_recording_info  # noqa: E402
 
 N_PER_BUS = 1500
 SPACING_S = 0.5e-3  # recorded frame spacing per bus
@@ -139,6 +139,8 @@ def test_replay_then_log_same_frames(vcan0, vcan1, tmp_path, record_property):
           f"{logger_stop_s:.1f} s (guest, TCG)\nreplay said:\n{rep_out[-800:]}\nlogger said:\n{log_out[-1500:]}")
 
     got = read_frames(out)
+    # the CLI logger read through OverflowAwareSocketcanBus: kernel drop counts recorded (none here)
+    assert read_recording_info(out).rx_dropped() == {"can0": 0, "can1": 0}
     for bus in ("can0", "can1"):
         w, g = want[bus], got.get(bus)
         assert g is not None, f"no frames logged on {bus}; logged buses {sorted(got)}"
