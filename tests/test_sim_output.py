@@ -14,7 +14,8 @@ from wheelsoil.model import load_terrain
 from wheelsoil.simulate import EFFECTS, simulate_run, write_simulation
 
 #: Words that would give a hidden effect (or the fact of a simulation) away.
-LEAKS = ("vasilev", "lyasko", "ding", "mismatch", "effect", "truth", "simulat", "seed", "m1", "m2", "n1")
+LEAKS = ("vasilev", "lyasko", "ding", "terrain_mismatch", "terrain mismatch", "effect", "truth", "simulat", "seed",
+         "m1", "m2", "n1")
 
 
 @pytest.fixture(scope="module")
@@ -99,7 +100,7 @@ def test_python_can_formats_round_trip(run, tmp_path, suffix):
     if suffix == ".log":
         assert chans == ["can0", "can1"]
     text = path.read_bytes()
-    for word in LEAKS[:6]:
+    for word in LEAKS[:8]:
         assert word.encode() not in text.lower()
 
 

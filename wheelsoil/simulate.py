@@ -773,38 +773,64 @@ def _vehicle_bus_frames(dbs, rng, t_rel, speed, omega, slip, r, latency_s, start
 
 # ------------------------------------------------------------------------ output
 def logger_metadata(run: SimulatedRun, path) -> dict[str, str]:
-    """The recording facts ``wheelsoil log`` writes (start time, host, command), nothing else.
+    """The recording facts ``wheelsoil log`` writes (start time, host, command, bus specs), nothing else.
 
-    The start time is the first frame's receive time; the host is the vehicle's
-    logging PC. Nothing about the simulation or its hidden effect.
+    The start time is just before the first frame's receive time; the host is
+    the vehicle's logging PC. Nothing about the simulation or its hidden effect.
     """
     import time as _time
 
-    start_s = run.start_ns / 1e9
+    start_ns = run.start_ns - 180_000_000  # logger start, just before the first frame
     buses = sorted(run.frames)
     return {
-        "start_time_ns": str(run.start_ns - 180_000_000),  # logger start, just before the first frame
-        "start_time_utc": _time.strftime("%Y-%m-%dT%H:%M:%SZ", _time.gmtime(start_s)),
+        "start_time_ns": str(start_ns),
+        "start_time_utc": _time.strftime("%Y-%m-%dT%H:%M:%SZ", _time.gmtime(start_ns / 1e9)),
         "host": "wft-logger",
         "command": "wheelsoil log " + " ".join(f"--bus socketcan:{b}" for b in buses) + f" -o {Path(path).name}",
-        **{f"bus.{b}": f"socketcan:{b}" for b in buses},
+        "bus_specs": " ".join(f"{b}=socketcan:{b}" for b in buses),
+        "file_index": "1",
     }
 
 
 def _write_mcap(run: SimulatedRun, path: Path, config=None) -> None:
-    """Write ``run`` as ``wheelsoil log`` does: 100 ms batches per bus in receive order,
-    a logger status record every second, the summary counters on close."""
+    """Write ``run`` as ``wheelsoil log`` does: frame batches per bus every
+    ``wheelsoil.daq.logger.BATCH_INTERVAL_S`` in receive order, a logger status
+    record every second, the summary counters on close."""
     from wheelsoil.daq import RecordingWriter, load_vehicle_config
     from wheelsoil.daq.stats import StatsAccumulator
 
+    try:
+        from wheelsoil.daq.logger import BATCH_INTERVAL_S
+    except ImportError:  # pragma: no cover - older daq
+        BATCH_INTERVAL_S = 0.1
     config = config or load_vehicle_config()
     batches = run.frame_batches()
     acc = StatsAccumulator(config)
     t_end = max(int(b.timestamp_ns[-1]) for b in batches.values() if len(b)) + 1
-    step = 100_000_000
+    step = int(round(BATCH_INTERVAL_S * 1e9))
+    per_status = max(1, int(round(1.0 / BATCH_INTERVAL_S)))
     edges = np.arange(run.start_ns, t_end + step, step, dtype=np.int64)
     cuts = {bus: np.searchsorted(b.timestamp_ns, edges) for bus, b in batches.items()}
     prev_frames = {bus: 0 for bus in batches}
+    t0 = run.start_ns - 180_000_000
+
+    def status(w, t_ns, dt_s):
+        st = acc.stats
+        buses = {}
+        for bus in sorted(batches):
+            names = set(st.names.get(bus, {}).values())
+            n = st.frames.get(bus, 0)
+            buses[bus] = {
+                "frames": n, "fps": round((n - prev_frames[bus]) / dt_s, 1),
+                "lost_wft_frames": int(sum(v for k, v in st.lost_frames.items() if k in names)),
+                "error_frames": st.error_frames.get(bus, 0), "bus_errors": 0, "rx_dropped": 0,
+                "unknown_id_frames": sum(st.unknown_ids.get(bus, {}).values()),
+                "dlc_mismatch_frames": sum(st.dlc_mismatch.get(bus, {}).values()), "queued": 0,
+            }
+            prev_frames[bus] = n
+        return {"elapsed_s": round((t_ns - t0) * 1e-9, 3), "file": Path(path).name, "file_bytes": w.file_size(),
+                "files": 1, "bad_frames": 0, "last_error": "", "buses": buses}
+
     with RecordingWriter(path, config=config, metadata=logger_metadata(run, path)) as writer:
         for bus in sorted(batches):
             writer.add_bus(bus, interface="socketcan", channel=bus)
@@ -815,25 +841,18 @@ def _write_mcap(run: SimulatedRun, path: Path, config=None) -> None:
                     part = batches[bus].select(slice(lo, hi))
                     writer.write_batch(part)
                     acc.update(part)
-            if (w + 1) % 10 == 0 or w == len(edges) - 2:
-                st = acc.stats
-                status = {"elapsed_s": round((w + 1) * 0.1, 1), "file_bytes": writer.file_size(), "buses": {}}
-                for bus in sorted(batches):
-                    lost = sum(v for k, v in st.lost_frames.items() if st.names.get(bus) and k in st.names[bus].values())
-                    status["buses"][bus] = {
-                        "frames": st.frames.get(bus, 0), "fps": float(st.frames.get(bus, 0) - prev_frames[bus]),
-                        "lost_wft_frames": int(lost), "error_frames": st.error_frames.get(bus, 0),
-                        "bus_errors": 0, "rx_dropped": 0,
-                    }
-                    prev_frames[bus] = st.frames.get(bus, 0)
-                writer.write_status(status, time_ns=int(edges[w + 1]))
+            if (w + 1) % per_status == 0:
+                writer.write_status(status(writer, int(edges[w + 1]), per_status * BATCH_INTERVAL_S),
+                                    time_ns=int(edges[w + 1]))
         st = acc.stats
-        writer.summary = {
-            "end_time_ns": str(t_end + 250_000_000),
+        last = status(writer, t_end, max(((len(edges) - 1) % per_status) * BATCH_INTERVAL_S, BATCH_INTERVAL_S))
+        writer.summary.update({
+            "end_time_ns": str(t_end + 120_000_000),  # the logger stops just after the last frame
             "lost_frames": {k: int(v) for k, v in st.lost_frames.items()},
             "rx_dropped": {b: 0 for b in batches}, "error_frames": {b: st.error_frames.get(b, 0) for b in batches},
-            "bus_errors": {b: 0 for b in batches}, "bad_frames": {b: 0 for b in batches},
-        }
+            "bus_errors": {b: 0 for b in batches}, "bad_frames": 0, "logger_status": last,
+        })
+        writer.write_status(last, time_ns=t_end)
 
 
 def write_simulation(run: SimulatedRun, path, *, config=None) -> Path:
@@ -841,8 +860,8 @@ def write_simulation(run: SimulatedRun, path, *, config=None) -> Path:
 
     ``.mcap``: through ``wheelsoil.daq.RecordingWriter`` with the vehicle
     configuration (default: the shipped one), laid out as ``wheelsoil log``
-    writes it (100 ms frame batches per bus, a status record per second,
-    logger metadata). ``.log`` (candump -L), ``.asc``, ``.blf``, ``.trc``:
+    writes it (frame batches per bus at the logger's batch interval, a status
+    record per second, logger metadata). ``.log`` (candump -L), ``.asc``, ``.blf``, ``.trc``:
     python-can's writers (``can.Logger``), exactly what ``wheelsoil import``
     reads; channel ``can0`` (WFT) and ``can1`` (wheel speeds, GNSS) (numbered
     0 and 1 in the formats with numeric channels).
