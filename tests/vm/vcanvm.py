@@ -152,10 +152,13 @@ def missing_prerequisites() -> str | None:
     if shutil.which("qemu-system-x86_64") is None:
         return "qemu-system-x86_64 not found (apt-get install qemu-system-x86; make vm-packages)"
     try:
-        find_kernel()
+        _, kver = find_kernel()
         _static_busybox()
     except RuntimeError as exc:
         return str(exc)
+    zst = [m for m in _module_order(kver, INITRAMFS_MODULES) if m.endswith(".zst")]
+    if zst:
+        return f"zstd-compressed kernel modules ({os.path.basename(zst[0])}) are not supported by this harness"
     for tool in ("ip", "modprobe", "mount", "unshare"):
         if not any(os.access(os.path.join(d, tool), os.X_OK) for d in _guest_path().split(":")):
             return f"'{tool}' not found on the host root the guest boots from"
