@@ -1041,7 +1041,9 @@ def register(subparsers) -> None:
     p.add_argument("--duration", type=float, default=None, metavar="S",
                    help="run length [s] (>= 30); default: --cycles accelerate-brake cycles")
     p.add_argument("--cycles", type=int, default=6, help="accelerate-brake cycles when no --duration (default 6)")
-    p.add_argument("--wheel-radius", type=float, default=None, metavar="M", help="wheel radius [m] (default 0.47)")
+    p.add_argument("--wheel-radius", type=float, default=None, metavar="M",
+                   help="wheel radius [m] (default 0.47; the recording carries the shipped vehicle "
+                   "configuration, so fit such a run with the same --wheel-radius/--wheel-width)")
     p.add_argument("--wheel-width", type=float, default=None, metavar="M", help="wheel width [m] (default 0.32)")
     p.add_argument("--truth", default=None, metavar="FILE", help="also write the hidden truth to this JSON file")
     p.add_argument("-o", "--output", required=True, help="output: .mcap (like `wheelsoil log`) or .log/.asc/.blf/.trc")
