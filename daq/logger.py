@@ -73,6 +73,16 @@ class _Reader(threading.Thread):
                 self.bus_errors += 1
                 self.last_error = f"{type(exc).__name__}: {exc}"
                 time.sleep(0.05)
+        # on stop, take what the kernel still queues for us, so nothing received is lost
+        try:
+            for _ in range(1_000_000):
+                msg = recv(0)
+                if msg is None:
+                    break
+                append(msg)
+        except Exception as exc:
+            self.bus_errors += 1
+            self.last_error = f"{type(exc).__name__}: {exc}"
 
 
 class CanLogger:
