@@ -1161,7 +1161,12 @@ def cross_validate(data: FitData, fit: ModelFit, terrain, wheel, *, sinkage: str
                 train_rows = ~test[aux["rows"]]
                 J, r = aux["jac"][train_rows], aux["r"][train_rows]
                 ok = np.all(np.isfinite(J)) and np.all(np.isfinite(r))
-                du = np.linalg.lstsq(J, -r, rcond=None)[0] if ok else np.zeros_like(aux["u"])
+                du = np.zeros_like(aux["u"])
+                # parameters at a bound stay there (a step along a nearly degenerate
+                # direction, then clipped, would wreck the held-out prediction)
+                free = ~(np.isclose(aux["u"], aux["lo"]) | np.isclose(aux["u"], aux["hi"]))
+                if ok and free.any():
+                    du[free] = np.linalg.lstsq(J[:, free], -r, rcond=None)[0]
                 mp, tv = split(np.clip(aux["u"] + du, aux["lo"], aux["hi"]))
             else:
                 res, mp, tv, _ = _fit_once(model_obj, terrain, wheel, data.subset(~test), free_t,
