@@ -38,6 +38,8 @@ from typing import Any
 
 import numpy as np
 
+from wheelsoil.daq.frames import FrameBatch
+
 __all__ = [
     "DecodedMessage",
     "Decoder",
@@ -419,19 +421,6 @@ class _Accumulator:
 CHUNK_FRAMES = 1 << 16
 
 
-@dataclass
-class _Chunk:
-    """Frames of one bus gathered from several batches (FrameBatch-like views)."""
-
-    bus: str
-    timestamp_ns: np.ndarray
-    arbitration_id: np.ndarray
-    is_extended: np.ndarray
-    flags: np.ndarray
-    dlc: np.ndarray
-    data: np.ndarray
-
-
 class _ChunkBuffer:
     """Preallocated column buffers of one bus, filled batch by batch and reused."""
 
@@ -460,10 +449,10 @@ class _ChunkBuffer:
             self.data[a:a + k, d.shape[1]:] = 0
         self.n = a + k
 
-    def take(self) -> _Chunk:
+    def take(self) -> FrameBatch:
         """The frames gathered so far as views (valid until the next :meth:`add`)."""
         n, self.n = self.n, 0
-        return _Chunk(self.bus, self.ts[:n], self.ids[:n], self.ext[:n], self.flags[:n], self.dlc[:n],
+        return FrameBatch(self.bus, self.ts[:n], self.ids[:n], self.ext[:n], self.flags[:n], self.dlc[:n],
                       self.data[:n])
 
 

@@ -8,7 +8,6 @@ frame at a time and by ``wheelsoil.processing.decode`` in one call.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from pathlib import Path
 
 import cantools
@@ -19,22 +18,10 @@ from cantools.database.conversion import BaseConversion
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from wheelsoil.daq.frames import FrameBatch
 from wheelsoil.processing.decode import Decoder, decode_batches
 
 DBC_DIR = Path(__file__).resolve().parents[1] / "dbc"
-
-
-@dataclass
-class Batch:
-    """Minimal stand-in for ``wheelsoil.daq.FrameBatch``."""
-
-    bus: str
-    timestamp_ns: np.ndarray
-    arbitration_id: np.ndarray
-    is_extended: np.ndarray
-    flags: np.ndarray
-    dlc: np.ndarray
-    data: np.ndarray
 
 
 def make_batch(bus, frame_ids, extended, payloads, width=8, dlc=None):
@@ -44,7 +31,7 @@ def make_batch(bus, frame_ids, extended, payloads, width=8, dlc=None):
         data[i, : len(p)] = np.frombuffer(bytes(p), dtype=np.uint8)
     dlc = np.array([len(p) for p in payloads] if dlc is None else dlc, dtype=np.uint8)
     ext = np.asarray(extended, dtype=bool)
-    return Batch(bus, np.arange(n, dtype=np.int64) * 1000, np.asarray(frame_ids, dtype=np.uint32),
+    return FrameBatch(bus, np.arange(n, dtype=np.int64) * 1000, np.asarray(frame_ids, dtype=np.uint32),
                  ext, ext.astype(np.uint8), dlc, data)
 
 
