@@ -109,8 +109,8 @@ def bench_wheelsoil(traffic, n, tmp: Path) -> float:
     return cpu / n * 1e6
 
 
-def bench_python_can(traffic, n, tmp: Path) -> float:
-    rx = _feed("bpc", traffic, n)
+def _python_can_path(rx, n, log_path: Path) -> None:
+    """python-can's own logging path: buses -> Notifier -> CanutilsLogWriter, until ``n`` frames."""
     done = threading.Event()
     count = [0]
 
@@ -120,12 +120,17 @@ def bench_python_can(traffic, n, tmp: Path) -> float:
             if count[0] >= n:
                 done.set()
 
-    writer = can.CanutilsLogWriter(str(tmp / "bench.log"))
-    c0 = time.process_time()
+    writer = can.CanutilsLogWriter(str(log_path))
     notifier = can.Notifier(list(rx.values()), [writer, Count()], timeout=0.1)
     done.wait(600)
     notifier.stop()
     writer.stop()
+
+
+def bench_python_can(traffic, n, tmp: Path) -> float:
+    rx = _feed("bpc", traffic, n)
+    c0 = time.process_time()
+    _python_can_path(rx, n, tmp / "bench.log")
     cpu = time.process_time() - c0
     for b in rx.values():
         b.shutdown()
@@ -164,20 +169,7 @@ def bench_live(traffic, n, tmp: Path) -> tuple[float, float]:
         CanLogger(rx, tmp / "live.mcap", config=load_vehicle_config()).run(max_frames=n)
 
     def pc(rx):
-        done = threading.Event()
-        count = [0]
-
-        class Count(can.Listener):
-            def on_message_received(self, msg):
-                count[0] += 1
-                if count[0] >= n:
-                    done.set()
-
-        writer = can.CanutilsLogWriter(str(tmp / "live.log"))
-        notifier = can.Notifier(list(rx.values()), [writer, Count()], timeout=0.1)
-        done.wait(600)
-        notifier.stop()
-        writer.stop()
+        _python_can_path(rx, n, tmp / "live.log")
 
     return _live("lws", traffic, n, ws), _live("lpc", traffic, n, pc)
 
