@@ -55,10 +55,8 @@ def load_inputs(inputs, *, progress: bool = False):
             raise ValueError(f"{path}: no such file")
         suffix = path.suffix.lower()
         if suffix in RECORDING_SUFFIXES:
-            try:
-                from wheelsoil.processing import process_recording
-            except ImportError as exc:  # pragma: no cover - processing not installed
-                raise ValueError(f"{path}: recordings need wheelsoil.processing ({exc})") from None
+            from wheelsoil.processing import process_recording
+
             res = process_recording(path, progress=progress)
             df = res.signals.copy()
             df["cycle"] = res.cycle
@@ -66,23 +64,12 @@ def load_inputs(inputs, *, progress: bool = False):
             sync.append({
                 "input": str(path),
                 "gnss_latency_s": res.gnss_latency_s,
-                "gnss_latency_stderr_s": getattr(res, "gnss_latency_stderr_s", None),
-                "gps_time_mapping": getattr(res, "gps_time_mapping", None),
+                "gnss_latency_stderr_s": res.gnss_latency_stderr_s,
+                "gps_time_mapping": res.gps_time_mapping,
             })
-            for w in getattr(res, "warnings", []) or []:
-                notes.append(f"{path.name}: {w}")
+            notes.extend(f"{path.name}: {w}" for w in res.warnings)
             if radius is None:  # the first recording's vehicle configuration
-                radius = getattr(res, "wheel_radius_m", None)
-                width = getattr(res, "wheel_width_m", None)
-                if radius is None or width is None:
-                    try:
-                        from wheelsoil.daq import load_vehicle_config
-
-                        cfg = load_vehicle_config()
-                        radius = radius or cfg.wheel_radius_m
-                        width = width or cfg.wheel_width_m
-                    except Exception:  # noqa: BLE001 - fall back to the documented default
-                        radius, width = radius or 0.47, width or 0.32
+                radius, width = res.wheel_radius_m, res.wheel_width_m
         elif suffix in TABLE_SUFFIXES:
             df = _read_table(path)
             kinds.append("table")
