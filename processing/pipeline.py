@@ -138,8 +138,6 @@ def _resolve_config(path: Path, config: Any, warnings: list[str]):
         if cfg is not None:
             return cfg
         warnings.append(f"{path}: no vehicle configuration attached; using the shipped default")
-    except OSError:
-        raise
     except ValueError as exc:  # not an MCAP file is reported by the reader; a bad attachment here
         warnings.append(f"{path}: attached vehicle configuration not usable ({exc}); "
                         "using the shipped default")
