@@ -7,6 +7,7 @@ import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from .provenance import PROVENANCE_RECORD, provenance_from_metadata
 from .recording import _iter_records, _Records
 from .stats import FrameStats, StatsAccumulator
 
@@ -61,6 +62,11 @@ class RecordingInfo:
         """Time from the first to the last frame [s]."""
         return 0.0 if self.start_ns is None else (self.end_ns - self.start_ns) / 1e9
 
+    @property
+    def provenance(self) -> dict | None:
+        """The ``wheelsoil.provenance`` record (see :mod:`wheelsoil.daq.provenance`), None if absent."""
+        return provenance_from_metadata(self.metadata.get(PROVENANCE_RECORD))
+
     def rx_dropped(self) -> dict[str, int]:
         """Kernel receive-queue drops per bus as last recorded by the logger ({} if unknown)."""
         buses = (self.status or {}).get("buses", {})
@@ -79,7 +85,7 @@ class RecordingInfo:
             "path": str(self.path), "size_bytes": self.size_bytes, "complete": self.complete,
             "warnings": self.warnings, "start_ns": self.start_ns, "end_ns": self.end_ns,
             "duration_s": self.duration_s, "channels": self.channels, "attachments": self.attachments,
-            "metadata": self.metadata, "config_source": self.config_source,
+            "metadata": self.metadata, "config_source": self.config_source, "provenance": self.provenance,
             "buses": {bus: {
                 "frames": s.frames[bus], "first_ns": s.first_ns[bus], "last_ns": s.last_ns[bus],
                 "error_frames": s.error_frames.get(bus, 0), "remote_frames": s.remote_frames.get(bus, 0),

@@ -30,6 +30,7 @@ from typing import Iterable, Iterator, Mapping
 
 import numpy as np
 
+from .provenance import PROVENANCE_RECORD, provenance_to_metadata
 from .frames import CLASSIC_WIDTH, FD_WIDTH, FrameBatch
 
 #: ROS 2 message definition of one frame batch (schema encoding ``ros2msg``).
@@ -155,6 +156,9 @@ class RecordingWriter:
         fsync: call ``os.fsync`` after each flush (default True).
         write_facts: write the ``wheelsoil.recording`` metadata (False when
             copying another recording's records, as ``recover`` does).
+        provenance: where the frames come from, a record made by
+            :func:`wheelsoil.daq.provenance.make_provenance` (recorded,
+            imported or simulated); written as ``wheelsoil.provenance``.
 
     Raises:
         OSError: the file cannot be created.
@@ -162,7 +166,7 @@ class RecordingWriter:
 
     def __init__(self, path, *, config=None, metadata: Mapping | None = None,
                  flush_interval_s: float = 0.5, compression: str = "zstd", fsync: bool = True,
-                 write_facts: bool = True):
+                 write_facts: bool = True, provenance: Mapping | None = None):
         from mcap.writer import CompressionType, Writer
 
         self.path = Path(path)
@@ -200,6 +204,8 @@ class RecordingWriter:
         facts.update({str(k): str(v) for k, v in (metadata or {}).items()})
         if write_facts:
             self.add_metadata("wheelsoil.recording", facts)
+        if provenance is not None:
+            self.add_metadata(PROVENANCE_RECORD, provenance_to_metadata(provenance))
         if config is not None:
             if config.text:
                 self.add_attachment("vehicle.toml", "application/toml", config.text.encode())
