@@ -265,9 +265,8 @@ def derived_flags(fits: dict) -> list:
         for p in getattr(res, "at_bound", ()) or ():
             v = f.params.get(p, res.params.get(p) if hasattr(res, "params") else None)
             flags.append({"model": name, "parameter": p, "kind": "at_bound",
-                          "detail": f"{p} = {fmt_param(p, v)} ended on a bound of its search box: "
-                                    "the data push it outside the model's range; its standard error is not "
-                                    "a confidence interval"})
+                          "detail": f"{p} = {fmt_param(p, v)} ended on a bound of its allowed range: the best "
+                                    "fit lies at the edge, so its standard error is not a confidence interval"})
         names = list(getattr(res, "names", ()) or ())
         corr = np.asarray(getattr(res, "correlation", np.empty((0, 0))), dtype=float)
         for i in range(len(names)):
@@ -594,8 +593,14 @@ def findings(rep) -> list:
         fixed = list(mm.get("params_fixed_terrain") or [])
         out.append(f"Terrain parameters fitted in {_title(chosen)}: {', '.join(fitted) or 'none'}; held at the "
                    f"given terrain's values: {', '.join(fixed) or 'none'} (as in the coefficient table).")
-    for fl in rep.get("flags") or []:
-        out.append(f"Flag ({_title(fl.get('model'))}, {fl.get('kind')}): {fl.get('detail') or ''}".rstrip(": "))
+    flags = rep.get("flags") or []
+    for fl in flags:
+        if fl.get("model") == chosen:
+            out.append(f"Flag on the chosen model ({fl.get('kind')}): {fl.get('detail') or ''}".rstrip(": "))
+    others = sorted({fl.get("model") for fl in flags if fl.get("model") != chosen} - {None}, key=_model_order)
+    if others:
+        out.append(f"{sum(fl.get('model') != chosen for fl in flags)} flag(s) on other models ("
+                   + ", ".join(_title(k) for k in others) + "): see the coefficient table and Flags.")
     return out
 
 
@@ -990,6 +995,17 @@ def _provenance_html(p: dict) -> str:
     return "".join(parts)
 
 
+def _plain(v) -> str:
+    """A value of a generic dict: integers as they are, floats by the one formatter."""
+    if isinstance(v, bool) or v is None:
+        return str(v)
+    if isinstance(v, (int, np.integer)):
+        return str(int(v))
+    if isinstance(v, (float, np.floating)):
+        return num(v)
+    return json.dumps(v, sort_keys=True) if isinstance(v, (dict, list)) else str(v)
+
+
 def _quality_rows(q: dict) -> list:
     rows = []
     if q.get("kind") == "table":
@@ -1017,7 +1033,7 @@ def _quality_rows(q: dict) -> list:
         rows.append(["kernel receive drops", ", ".join(f"{b}: {'unknown' if n is None else n}" for b, n in sorted(rx.items()))])
     g = q.get("gnss_fix") or {}
     if g:
-        rows.append(["GNSS fix", "; ".join(f"{k} = {num(v) if isinstance(v, (int, float)) else v}" for k, v in g.items())])
+        rows.append(["GNSS fix", "; ".join(f"{k} = {_plain(v)}" for k, v in g.items())])
     lat = q.get("gnss_latency_s")
     rows.append(["GNSS latency found and removed", "not estimated" if lat is None else
                  f"{fmt(lat, 'latency')} ± {fmt(q.get('gnss_latency_stderr_s'), 'latency', 2)} "
@@ -1025,12 +1041,16 @@ def _quality_rows(q: dict) -> list:
     ine = q.get("inertia") or {}
     if ine:
         rows.append(["inertia compensation", ("applied" if ine.get("applied") else "not applied") + "; "
-                     + ", ".join(f"{k} = {num(v) if isinstance(v, (int, float)) and not isinstance(v, bool) else v}"
-                                 for k, v in ine.items() if k != "applied")])
+                     + ", ".join(f"{k} = {_plain(v)}" for k, v in ine.items() if k != "applied")])
     else:
         rows.append(["inertia compensation", "not reported by processing (not applied)"])
     for k, v in sorted((q.get("processing_quality") or {}).items()):
-        rows.append([f"processing: {k}", json.dumps(v, sort_keys=True) if isinstance(v, (dict, list)) else str(v)])
+        rows.append([f"processing: {k}", _plain(v)])
+    spans = q.get("excluded_spans") or []
+    if spans:
+        rows.append(["spans excluded by processing", "; ".join(
+            f"{num(e.get('t0_s'))}-{num(e.get('t1_s'))} s: {e.get('reason')}" for e in spans[:20])
+            + (f"; ... {len(spans) - 20} more" if len(spans) > 20 else "")])
     for w in q.get("warnings") or []:
         rows.append(["warning", w])
     return rows
