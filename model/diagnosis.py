@@ -405,12 +405,13 @@ def _paired(data: FitData, wong: HypFit, f: HypFit) -> dict:
     """Per channel: paired one-sided t-tests over folds of held-out squared errors (module doc)."""
     cells = data.cells
     out = {}
-    groups = np.unique(cells.group)
+    fold = f.cv["fold"]
+    groups = np.unique(fold)
     for c, y in cells.channels.items():
         ew = (y - wong.cv["held_cells"][c]) ** 2 / cells.var[c]
         eh = (y - f.cv["held_cells"][c]) ** 2 / cells.var[c]
         ok = np.isfinite(ew) & np.isfinite(eh)
-        d = np.array([np.sum((ew - eh)[ok & (cells.group == g)]) for g in groups])
+        d = np.array([np.sum((ew - eh)[ok & (fold == g)]) for g in groups])
         n_c = max(int(ok.sum()), 1)
         gain = float(np.sum(d) / n_c)  # mean gain per cell, in noise variances
         G = d.size
@@ -453,8 +454,10 @@ def _effective(f: HypFit) -> bool:
     if f.cov is None or f.cov.size == 0:
         return False
     cov = f.cov[np.ix_(idx, idx)] * np.outer(g, g)
-    # the lab-prior and jackknife parts of the standard errors (diagonal) widen it
-    se = np.array([f.stderr.get(p, np.nan) for p in names]) * g
+    # the jackknife over folds (cycle-to-cycle variation) widens it; the lab-prior part does not:
+    # whether the lab terrain could mimic the effect is asked by the terrain hypotheses themselves
+    jk = (f.cv or {}).get("stderr_jackknife", {})
+    se = np.array([max(f.stderr_fit.get(p, np.nan), jk.get(p, 0.0)) for p in names]) * g
     sd0 = np.sqrt(np.clip(np.diag(cov), 1e-300, None))
     scale = np.where(np.isfinite(se) & (se > sd0), se / sd0, 1.0)
     cov = cov * np.outer(scale, scale)
@@ -839,10 +842,12 @@ def diagnose(
 
 
 def _changed_terrain(f: HypFit) -> list:
-    """Terrain parameters whose fitted value differs from the prior centre by > WALD_Z prior sds."""
+    """Terrain parameters whose fitted value differs from the lab value by more than WALD_Z
+    standard errors (posterior, on the prior's scale)."""
     out = []
     for p, (mu, sd) in f.prior.items():
-        if abs(_on_prior_scale(p, f.params[p]) - mu) > WALD_Z * sd:
+        se = _se_prior_scale(p, f) if np.isfinite(f.stderr.get(p, np.nan)) else sd
+        if abs(_on_prior_scale(p, f.params[p]) - mu) > WALD_Z * min(se, sd):
             out.append(p)
     return out
 
