@@ -176,13 +176,15 @@ def physical_consistency(
     reasons: list[str] = []
     if not load_ok:
         worst_bins = [b for b in bins if b["used"] and abs(b["ratio_median"] - 1.0) > load_tol]
-        where = ", ".join(f"{b['slip_lo']:.2f}-{b['slip_hi']:.2f}" for b in worst_bins[:4])
+        worst = max(worst_bins, key=lambda b: abs(b["ratio_median"] - 1.0)) if worst_bins else None
+        where = (f"in {len(worst_bins)} of {len(used_z)} slip bins between s = {worst_bins[0]['slip_lo']:.2f} "
+                 f"and {worst_bins[-1]['slip_hi']:.2f}, worst at s = {worst['slip_lo']:.2f}-"
+                 f"{worst['slip_hi']:.2f}" if worst else "over all samples")
         sense = "more" if used_ratio[k_dev] > 1 else "less"
         reasons.append(
             f"vertical balance (Eq. 7): the model carries {used_ratio[k_dev]:.2f}x the measured load "
-            f"({sense} than W by {100 * max_dev:.0f} %, tolerance {100 * load_tol:.0f} %) in slip bin(s) "
-            f"{where}; its contact stress does not carry the wheel, so its sinkage, Dp and T belong "
-            f"to another load."
+            f"({sense} than W by {100 * max_dev:.0f} %, tolerance {100 * load_tol:.0f} %) {where}; its "
+            f"contact stress does not carry the wheel, so its sinkage, Dp and T belong to another load."
         )
     if not sinkage_ok:
         if max_z >= r:
