@@ -407,3 +407,16 @@ def test_stress_balance_vectorised_equals_one_by_one_and_array_coefficients():
 def test_stress_bad_input_names_the_rule(stress, message):
     with pytest.raises(ValueError, match=message):
         wong_forces(load_terrain("clay"), DEFAULT_WHEEL, [8000.0, 8000.0], [0.1, 0.9], stress=stress)
+
+
+def test_stress_with_a_slip_dependent_exponent_matches_quadrature():
+    # Ding's N = n + n1 s (Eq. 13) enters Eqs. (2) and (10); with the Wong-Reece distribution
+    # both regions use N.
+    sand = load_terrain("sand")
+    w = np.array([6000.0, 9000.0, 12000.0])
+    s = np.array([0.1, 0.5, 0.8])
+    n_eff = sand.n + 0.3 * s
+    ours = wong_forces(sand, DEFAULT_WHEEL, w, s, n_fn=lambda sl: sand.n + 0.3 * sl, stress=(0.35, 0.2))
+    ref = wong_forces_quad(sand, DEFAULT_WHEEL, w, s, n=n_eff, stress=(0.35, 0.2))
+    _assert_close(ours, ref)
+    np.testing.assert_allclose(ours.sinkage_m, ref.sinkage_m, rtol=1e-12)
