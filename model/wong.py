@@ -363,8 +363,10 @@ def wong_forces(
       Eq. (10) (derived for the paper's distribution); use ``balance`` for the
       vertical balance with this distribution.
       Source: Wong, Theory of Ground Vehicles, 4th ed., Wiley 2008, ch. 2
-      (Wong & Reece, J. Terramechanics 4(1) 1967). Typical values there:
-      a1 ~ 0.4, a2 ~ 0.15-0.3 (sand).
+      (Wong & Reece, J. Terramechanics 4(1) 1967). Values commonly quoted
+      from Wong & Reece for sand: a1 ~ 0.43, a2 ~ 0.32 (secondary citation,
+      not checked against the 1967 paper here). A fitter should bound
+      a1 + a2 s_max below 1 (e.g. a1 <= 0.6, a2 <= 0.35).
 
     Quadrature: each region by the substituted 24-point Gauss-Legendre rule
     (u^3 substitution at the end where the stress vanishes like a power n);
