@@ -37,13 +37,16 @@ from wheelsoil.model.wong import QUAD_ORDER, wong_forces_quad  # noqa: E402
 FIELDS = ("load_model_n", "drawbar_pull_n", "torque_nm")
 
 
-def _best_rate(fn, n_samples: int, repeat: int) -> float:
-    best = float("inf")
+def _best_rates(fns: dict, n_samples: int, repeat: int) -> dict[str, float]:
+    """Samples/s of each function, best of ``repeat`` runs, timed round-robin so that load
+    from other processes on a shared machine hits every variant alike."""
+    best = dict.fromkeys(fns, float("inf"))
     for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        best = min(best, time.perf_counter() - t0)
-    return n_samples / best
+        for key, fn in fns.items():
+            t0 = time.perf_counter()
+            fn()
+            best[key] = min(best[key], time.perf_counter() - t0)
+    return {key: n_samples / t for key, t in best.items()}
 
 
 def _errors(got, ref) -> tuple[float, float]:
@@ -81,18 +84,18 @@ def main(argv: list[str] | None = None) -> int:
         load = rng.uniform(2000.0, 20000.0, args.samples)
         slip = rng.uniform(0.01, 0.95, args.samples)
         load_b = rng.uniform(2000.0, 12000.0, args.samples)
-        ours = _best_rate(lambda: wong_forces(terrain, wheel, load, slip), args.samples, args.repeat)
-        ours_wr = _best_rate(lambda: wong_forces(terrain, wheel, load, slip, stress=stress),
-                             args.samples, args.repeat)
-        rep_b = max(1, args.repeat // 2)
-        balance = _best_rate(lambda: wong_forces(terrain, wheel, load_b, slip, sinkage="balance"),
-                             args.samples, rep_b)
-        balance_wr = _best_rate(
-            lambda: wong_forces(terrain, wheel, load_b, slip, sinkage="balance", stress=stress),
-            args.samples, rep_b)
         lyasko = get_model("lyasko")
-        lyasko_rate = _best_rate(lambda: lyasko.predict(terrain, wheel, load, slip, {"m1": 0.1, "m2": 0.05}),
-                                 args.samples, args.repeat)
+        rates = _best_rates({
+            "eq10": lambda: wong_forces(terrain, wheel, load, slip),
+            "eq10_wr": lambda: wong_forces(terrain, wheel, load, slip, stress=stress),
+            "lyasko": lambda: lyasko.predict(terrain, wheel, load, slip, {"m1": 0.1, "m2": 0.05}),
+        }, args.samples, args.repeat)
+        rates_b = _best_rates({
+            "balance": lambda: wong_forces(terrain, wheel, load_b, slip, sinkage="balance"),
+            "balance_wr": lambda: wong_forces(terrain, wheel, load_b, slip, sinkage="balance", stress=stress),
+        }, args.samples, max(1, args.repeat // 2))
+        ours, ours_wr, lyasko_rate = rates["eq10"], rates["eq10_wr"], rates["lyasko"]
+        balance, balance_wr = rates_b["balance"], rates_b["balance_wr"]
         q = slice(0, args.quad_samples)
         t0 = time.perf_counter()
         ref = wong_forces_quad(terrain, wheel, load[q], slip[q])
