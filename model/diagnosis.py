@@ -512,7 +512,8 @@ def _consistency(f: HypFit, data: FitData, wheel) -> dict:
         forces = WheelForces(sinkage_m=f.cell_sinkage, theta1_rad=np.arccos(np.clip(1 - f.cell_sinkage / wheel.radius, -1, 1)),
                              load_model_n=f.cell_load_model, drawbar_pull_n=f.cell_pred["drawbar_pull_n"],
                              torque_nm=f.cell_pred.get("torque_nm", np.full(cells.n, np.nan)))
-        k = physical_consistency(forces, cells.load_n, cells.slip, f.terrain, wheel)
+        k = physical_consistency(forces, cells.load_n, cells.slip, f.terrain, wheel,
+                                 load_tol=LOAD_RATIO_TOL - 1.0, min_count=3)
         if isinstance(k, dict) and "consistent" in k:
             out["kernel"] = _clean(k)
             out["consistent"] = bool(out["consistent"] and k["consistent"])
