@@ -46,7 +46,10 @@ __all__ = ["write_report", "report_dict", "fmt", "fmt_param", "param_unit", "SCH
 
 SCHEMA = "wheelsoil.report/1"
 #: Models always listed (a missing one says why); others the diagnosis fits are appended.
-ALL_MODELS = ("wong", "vasilev", "lyasko", "ding", "terrain_mismatch")
+ALL_MODELS = ("wong", "vasilev", "lyasko", "ding", "terrain_mismatch", "vasilev+terrain", "ding+terrain",
+              "wong_reece", "drift_linear")
+#: report name -> the diagnosis's fit name where they differ (the terrain hypothesis)
+_FIT_ALIAS = {"terrain_mismatch": "terrain"}
 #: Top-level keys every report.json has.
 REQUIRED_KEYS = ("schema", "input", "provenance", "terrain", "wheel", "samples_used", "slip_min", "time_sync",
                  "models", "diagnosis", "gain", "flags", "data_quality", "findings", "metric_definitions")
@@ -54,9 +57,29 @@ CORRELATION_LIMIT = 0.95  #: |correlation| of two fitted parameters above this i
 CONDITION_LIMIT = 100.0  #: condition number of the scaled Jacobian above this is flagged (derived flags)
 _PALETTE = ("#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b", "#e377c2", "#17becf", "#bcbd22")
 COLORS = {"wong": "#444444", "vasilev": "#1f77b4", "lyasko": "#d62728", "ding": "#2ca02c",
-          "terrain_mismatch": "#9467bd"}
+          "terrain_mismatch": "#9467bd", "vasilev+terrain": "#17becf", "ding+terrain": "#bcbd22",
+          "wong_reece": "#8c564b", "drift_linear": "#e377c2"}
 _CHANNEL_UNIT = {"drawbar_pull_n": "force", "torque_nm": "torque", "sinkage_m": "length_mm"}
 _CHANNEL_SUFFIX = {"drawbar_pull_n": "n", "torque_nm": "nm", "sinkage_m": "m"}
+
+
+def _canon(name):
+    """The report's name of a fit (``terrain`` -> ``terrain_mismatch``)."""
+    for k, v in _FIT_ALIAS.items():
+        if name == v:
+            return k
+    return name
+
+
+def _fit_of(diag, name):
+    """The fit shown under ``name`` (``terrain_mismatch`` is the diagnosis's ``terrain`` hypothesis)."""
+    fits = getattr(diag, "fits", {}) or {}
+    return fits.get(name) if name in fits else fits.get(_FIT_ALIAS.get(name, name))
+
+
+def _fit_names(diag) -> list:
+    """Report names of the fitted models, in display order."""
+    return sorted({_canon(k) for k in (getattr(diag, "fits", {}) or {})}, key=_model_order)
 
 
 def _title(name) -> str:
@@ -209,10 +232,11 @@ def _legacy_diagnosis(diag) -> dict:
     g = lambda k, d=None: getattr(diag, k, d)  # noqa: E731
     structure = {}
     for k, v in (g("structure") or {}).items():
-        structure[k] = {c: {"p": t.get("p"), "p_poly": t.get("p_poly"), "p_bins": t.get("p_bins"),
-                            "effect_sigma": t.get("effect"), "effect_abs": t.get("effect_abs"),
-                            "effect_rel": t.get("effect_rel"), "units": t.get("units")}
-                        for c, t in v.items()}
+        structure[_canon(k)] = {c: {"p": t.get("p"), "p_poly": t.get("p_poly"), "p_bins": t.get("p_bins"),
+                                    "effect_sigma": t.get("effect"), "effect_abs": t.get("effect_abs"),
+                                    "effect_rel": t.get("effect_rel"), "units": t.get("units"),
+                                    "channel": t.get("channel", c.partition("@")[0])}
+                                for c, t in v.items()}
     data = g("data")
     out = {
         "effect": g("effect"),
@@ -348,18 +372,21 @@ def _worse_than_wong(models: dict, channels: list) -> dict:
 
 def _model_entry(name, f, data, wheel, dd_model: dict | None) -> dict:
     res = f.result
-    at_bound = set(getattr(res, "at_bound", ()) or ()) if res is not None else set()
+    at_bound = set(getattr(f, "at_bound", ()) or ()) | (set(getattr(res, "at_bound", ()) or ()) if res is not None else set())
     params = {}
     for p, v in f.params.items():
-        params[p] = {"value": v, "se": f.stderr.get(p), "unit": param_unit(p), "at_bound": p in at_bound}
+        params[p] = {"value": v, "se": f.stderr.get(p), "unit": (getattr(f, "units", None) or {}).get(p) or param_unit(p),
+                     "at_bound": p in at_bound}
     for p, e in ((dd_model or {}).get("params") or {}).items():  # contract D overrides
         if isinstance(e, dict):
             params.setdefault(p, {}).update({k: e[k] for k in ("value", "se", "unit", "at_bound") if k in e})
     return {
         "status": "ok" if f.success else f"did not converge: {f.message}",
+        "fit_name": getattr(f, "name", name),
+        "effect": getattr(f, "effect", None),
         "params": {k: v for k, v in f.params.items()},
         "stderr": {k: v for k, v in f.stderr.items()},
-        "params_unit": {k: param_unit(k) for k in f.params},
+        "params_unit": {k: (getattr(f, "units", None) or {}).get(k) or param_unit(k) for k in f.params},
         "parameters": params,
         "params_fixed_terrain": list(f.fixed_terrain),
         "terrain_used": _terrain_dict(f.terrain, wheel),
@@ -371,6 +398,7 @@ def _model_entry(name, f, data, wheel, dd_model: dict | None) -> dict:
         "cv_score": f.cv["cv_score"] if f.cv else None,
         "cv_folds": f.cv["n_groups"] if f.cv else None,
         "stderr_jackknife": f.cv.get("stderr_jackknife") if f.cv else None,
+        "probability": None,
         "stderr_method": ("max(cluster-robust over cycle x slip cells, jackknife over cycles)"
                           if f.cv and f.cv.get("stderr_jackknife") else
                           "cluster-robust over cycle x slip cells" if data.kind == "timeseries"
@@ -380,7 +408,8 @@ def _model_entry(name, f, data, wheel, dd_model: dict | None) -> dict:
         "k": f.k,
         "iterations": None if res is None else res.iterations,
         "correlation": None if res is None else {"names": list(res.names), "matrix": res.correlation},
-        "condition_number": None if res is None else res.condition_number,
+        "condition_number": getattr(f, "condition_number", None) if res is None or getattr(f, "condition_number", None)
+        is not None else res.condition_number,
         "notes": list(f.notes),
     }
 
@@ -397,8 +426,8 @@ def _per_run(diag) -> list:
     for r in runs:
         m = data.run == r
         row = {"run": int(r), "samples": int(m.sum()), "models": {}}
-        for k in sorted(diag.fits, key=_model_order):
-            f = diag.fits[k]
+        for k in _fit_names(diag):
+            f = _fit_of(diag, k)
             row["models"][k] = _metrics(data.channels["drawbar_pull_n"][m], f.predictions["drawbar_pull_n"][m])
         out.append(row)
     return out
@@ -433,6 +462,23 @@ METRIC_DEFINITIONS = {
 }
 
 
+def _definitions(data, dd) -> dict:
+    """:data:`METRIC_DEFINITIONS`, adapted to how this diagnosis computed them (cell means, BIC form)."""
+    out = dict(METRIC_DEFINITIONS)
+    if getattr(data, "cells", None) is not None:
+        out["cv_R0"] = ("out-of-sample R0: each cross-validation group (accelerate cycle, or block of table rows) "
+                        "is predicted by the model fitted without it; RMS of the held-out errors of the cell means "
+                        "(averages over cycle x slip cells, the units the models are fitted to), so it is smaller "
+                        "than the in-sample R0 over the samples: compare CV R0 between models, not with R0.")
+    if "c_hat" in dd:
+        out["bic"] = ("Bayesian information criterion of the fit on the cell means: chi-square of the data divided "
+                      "by the common overdispersion c_hat, plus the chi-square of the lab priors, plus k ln(number "
+                      "of cells); lower is better; a difference of 10 or more is 'very strong' evidence (Kass & "
+                      "Raftery 1995). Shown as the difference to Wong; the probabilities (Laplace evidence) are "
+                      "the verdict's measure.")
+    return out
+
+
 def report_dict(diag, *, terrain, wheel, inputs, time_sync: dict | None = None,
                 figures: list | None = None, extra_notes: list | None = None, provenance: dict | None = None,
                 data_quality: list | None = None, figure_notes: dict | None = None) -> dict:
@@ -450,9 +496,9 @@ def report_dict(diag, *, terrain, wheel, inputs, time_sync: dict | None = None,
     dd = diagnosis_dict(diag)
     dmodels = dd.get("models") if isinstance(dd.get("models"), dict) else {}
     models = {}
-    names = list(ALL_MODELS) + sorted((k for k in diag.fits if k not in ALL_MODELS), key=str)
+    names = list(ALL_MODELS) + [k for k in _fit_names(diag) if k not in ALL_MODELS]
     for name in names:
-        f = diag.fits.get(name)
+        f = _fit_of(diag, name)
         if f is None:
             why = "not fitted"
             for msg in list(getattr(diag, "failures", [])) + list(getattr(diag, "notes", [])):
@@ -462,16 +508,19 @@ def report_dict(diag, *, terrain, wheel, inputs, time_sync: dict | None = None,
                             "metrics": {"M0_pct": None, "R0_n": None, "R2": None},
                             "cv_R0_n": None, "bic": None, "flags": []}
             continue
-        models[name] = _model_entry(name, f, data, wheel, dmodels.get(name))
+        models[name] = _model_entry(name, f, data, wheel, dmodels.get(name, dmodels.get(_FIT_ALIAS.get(name))))
     flags = [fl for fl in dd.get("flags") or [] if isinstance(fl, dict)]
     for name, m in models.items():
-        m["flags"] = [fl for fl in flags if fl.get("model") == name]
+        m["flags"] = [fl for fl in flags if _canon(fl.get("model")) == name]
         for p, e in (m.get("parameters") or {}).items():
             e["flags"] = sorted({fl.get("kind") for fl in m["flags"]
                                  if p in str(fl.get("parameter") or "").split(",") or
                                  (fl.get("kind") == "at_bound" and fl.get("parameter") == p)} - {None})
             if e.get("at_bound") and "at_bound" not in e["flags"]:
                 e["flags"].append("at_bound")
+    probs = dd.get("probabilities") or {}
+    for name, m in models.items():
+        m["probability"] = probs.get(name, probs.get(_FIT_ALIAS.get(name)))
     worse = _worse_than_wong(models, list(data.channels))
     for k, v in worse.items():
         models[k]["worse_than_wong"] = v
@@ -499,7 +548,7 @@ def report_dict(diag, *, terrain, wheel, inputs, time_sync: dict | None = None,
         "not_done": list(getattr(diag, "failures", [])),
         "figures": list(figures or []),
         "figure_notes": dict(figure_notes or {}),
-        "metric_definitions": dict(METRIC_DEFINITIONS),
+        "metric_definitions": _definitions(data, dd),
     }
     out = _clean(out)
     out["findings"] = findings(out)
@@ -510,15 +559,28 @@ def report_dict(diag, *, terrain, wheel, inputs, time_sync: dict | None = None,
 
 
 def _n_tests(rep) -> int:
+    """Number of structure tests the Bonferroni correction divides by: every test of Wong's residuals
+    (keys ``<channel>``, ``<channel>@load``, ``<channel>@x``); before those keys existed the load test
+    was separate (``load_test``)."""
     d = rep["diagnosis"]
-    n = len((d.get("structure_tests") or {}).get("wong") or {})
-    return max(1, n + (1 if d.get("load_test") else 0))
+    tests = (d.get("structure_tests") or {}).get("wong") or {}
+    if any("@" in k for k in tests):
+        return max(1, len(tests))
+    return max(1, len(tests) + (1 if d.get("load_test") else 0))
+
+
+_AGAINST = {"": "against slip", "load": "against load", "x": "against distance/time"}
+
+
+def _test_label(key: str) -> str:
+    c, _, against = key.partition("@")
+    return f"{CHANNEL_TITLES.get(c, c)} {_AGAINST.get(against, 'against ' + against)}"
 
 
 def structure_statements(rep) -> list:
     """One sentence per channel on Wong's residual structure, from the test numbers and the rule's
     thresholds: significant and large enough / significant but too small (which size rule failed) /
-    not significant.  Returns list of dicts ``{channel, kind, text}`` (kind: ``systematic``,
+    not significant.  Returns list of dicts ``{test, channel, kind, text}`` (kind: ``systematic``,
     ``small``, ``not_significant``, ``untested``)."""
     d = rep["diagnosis"]
     th = d.get("thresholds") or {}
@@ -529,11 +591,12 @@ def structure_statements(rep) -> list:
     if alpha is None or not tests:
         return out
     lvl = alpha / _n_tests(rep)
-    for c, t in tests.items():
+    for key, t in tests.items():
+        c = t.get("channel") or key.partition("@")[0]
         p, es, er, ea = t.get("p"), t.get("effect_sigma"), t.get("effect_rel"), t.get("effect_abs")
-        ch = CHANNEL_TITLES.get(c, c)
+        ch = _test_label(key)
         if p is None:
-            out.append({"channel": c, "kind": "untested", "text": f"{ch}: too few independent units to test."})
+            out.append({"test": key, "channel": c, "kind": "untested", "text": f"{ch}: too few independent units to test."})
             continue
         size = (f"{_chan_fmt(ea, c)} RMS, {num(es, 2)} noise sigma, {num(100 * er, 2) if er is not None else 'n/a'} % "
                 f"of the channel's magnitude")
@@ -544,14 +607,14 @@ def structure_statements(rep) -> list:
             if min_r is not None and (er is None or er < min_r):
                 fails.append(f"{num(100 * er, 2) if er is not None else 'n/a'} % < {num(100 * min_r, 2)} %")
             if fails:
-                out.append({"channel": c, "kind": "small", "text":
+                out.append({"test": key, "channel": c, "kind": "small", "text":
                             f"{ch}: statistically significant (p = {num(p, 2)} < {num(lvl, 2)}) but too small to "
                             f"attribute to a cause ({size}; size rule failed: {'; '.join(fails)})."})
             else:
-                out.append({"channel": c, "kind": "systematic", "text":
+                out.append({"test": key, "channel": c, "kind": "systematic", "text":
                             f"{ch}: systematic (p = {num(p, 2)} < {num(lvl, 2)}) and large enough ({size})."})
         else:
-            out.append({"channel": c, "kind": "not_significant", "text":
+            out.append({"test": key, "channel": c, "kind": "not_significant", "text":
                         f"{ch}: not significant (p = {num(p, 2)} >= {num(lvl, 2)}; {size})."})
     return out
 
@@ -563,10 +626,10 @@ def findings(rep) -> list:
     d = rep["diagnosis"]
     out = [s["text"] for s in structure_statements(rep)]
     lt = d.get("load_test")
-    if lt and lt.get("p") is not None:
+    if lt and lt.get("p") is not None and lt.get("slope") is not None:
         out.append(f"Drawbar pull error against load: slope {num(lt.get('slope'), 2)} per N "
                    f"(p = {num(lt.get('p'), 2)}).")
-    chosen = d.get("model")
+    chosen = _canon(d.get("model"))
     m = rep["models"].get(chosen) if chosen else None
     w = rep["models"].get("wong") or {}
     if chosen and chosen != "wong" and m and m.get("per_channel"):
@@ -587,19 +650,22 @@ def findings(rep) -> list:
                        f"{_chan_fmt(_r0(rep['models'][k]['per_channel'], c), c)}, out of sample "
                        f"{_chan_fmt(_r0(w.get('per_channel') or {}, c, True), c)} -> "
                        f"{_chan_fmt(_r0(rep['models'][k]['per_channel'], c, True), c)}): {v['reason']}.")
-    if d.get("fit_terrain") and chosen in rep["models"] and rep["models"][chosen].get("params") is not None:
-        mm = rep["models"][chosen]
+    shown = chosen if chosen in rep["models"] else "wong"
+    if d.get("fit_terrain") and (rep["models"].get(shown) or {}).get("params") is not None:
+        mm = rep["models"][shown]
         fitted = [p for p in (mm.get("params") or {}) if p in ("k_eq", "n", "c", "phi", "K")]
         fixed = list(mm.get("params_fixed_terrain") or [])
-        out.append(f"Terrain parameters fitted in {_title(chosen)}: {', '.join(fitted) or 'none'}; held at the "
+        out.append(f"Terrain parameters fitted in {_title(shown)}: {', '.join(fitted) or 'none'}; held at the "
                    f"given terrain's values: {', '.join(fixed) or 'none'} (as in the coefficient table).")
     flags = rep.get("flags") or []
     for fl in flags:
-        if fl.get("model") == chosen:
-            out.append(f"Flag on the chosen model ({fl.get('kind')}): {fl.get('detail') or ''}".rstrip(": "))
-    others = sorted({fl.get("model") for fl in flags if fl.get("model") != chosen} - {None}, key=_model_order)
+        if _canon(fl.get("model")) == chosen:
+            par = f", {fl['parameter']}" if fl.get("parameter") else ""
+            out.append(f"Flag on the chosen model ({fl.get('kind')}{par}): {fl.get('detail') or ''}".rstrip(": "))
+    others = sorted({_canon(fl.get("model")) for fl in flags if _canon(fl.get("model")) != chosen} - {None},
+                    key=_model_order)
     if others:
-        out.append(f"{sum(fl.get('model') != chosen for fl in flags)} flag(s) on other models ("
+        out.append(f"{sum(_canon(fl.get('model')) != chosen for fl in flags)} flag(s) on other models ("
                    + ", ".join(_title(k) for k in others) + "): see the coefficient table and Flags.")
     return out
 
@@ -620,7 +686,10 @@ def exclusion_masks(signals, slip_min: float, excluded_spans=None) -> tuple:
     Returns ``(used (N,) bool, {reason: (N,) bool})``; reasons overlap (a
     standstill sample has no slip either).
     """
-    from .fit import _ZERO_SLIP
+    try:
+        from .data import _ZERO_SLIP
+    except ImportError:  # before the diagnosis split
+        from .fit import _ZERO_SLIP
 
     t = signals["t_s"].to_numpy(float)
     s = signals["slip"].to_numpy(float)
@@ -740,9 +809,12 @@ def _model_curves(diag, wheel, slip_grid, load):
     from wheelsoil.model import get_model
 
     out = {}
-    for k in sorted(diag.fits, key=_model_order):
-        f = diag.fits[k]
+    for k in _fit_names(diag):
+        f = _fit_of(diag, k)
         try:
+            if hasattr(f, "curve"):  # hypothesis fits evaluate themselves (drift: mid-run)
+                out[k] = f.curve(np.full(slip_grid.size, load), slip_grid)
+                continue
             mobj = get_model(f.model)
             mp = {p: v for p, v in f.params.items() if p in {q.name for q in mobj.params}}
             out[k] = mobj.predict(f.terrain, wheel, np.full(slip_grid.size, load), slip_grid, mp)
@@ -786,13 +858,13 @@ def _figures(diag, wheel, out_dir: Path, plt) -> tuple:
     files, notes = [], {}
 
     # 1. Dp vs slip, one panel per model (paper Figs. 4-5)
-    names = sorted(diag.fits, key=_model_order)
+    names = _fit_names(diag)
     ncol = 3 if len(names) > 2 else len(names)
     nrow = int(math.ceil(len(names) / ncol))
     fig, axes = plt.subplots(nrow, ncol, figsize=(5.6 * ncol, 4.6 * nrow), squeeze=False, sharey=True)
     order = np.argsort(s, kind="stable")
     for i, (ax, k) in enumerate(zip(axes.flat, names)):
-        f = diag.fits[k]
+        f = _fit_of(diag, k)
         col = _color(k, i)
         ax.scatter(s, dp, label="measured Dp", **meas)
         ax.plot(s[order], f.predictions["drawbar_pull_n"][order], "x", ms=2.5 if big else 5, mew=0.8, color=col,
@@ -1069,11 +1141,11 @@ def _metrics_section(rep) -> list:
                      _e(fmt(mm.get("R0_n"), "force", unit=False)), _e(num(mm.get("R2"))),
                      _e(fmt(m.get("cv_R0_n"), "force", unit=False)), _e(num(m.get("cv_score"))),
                      _e("n/a" if dbic is None else f"{dbic:+.0f}"),
-                     _e(num(probs.get(k), 2) if k in probs else "-"),
+                     _e(num(m.get("probability"), 2) if m.get("probability") is not None else "-"),
                      _e(m["status"]) + _flag_marks(sorted({f.get("kind") for f in m.get("flags") or []} - {None}))])
     parts.append(_table(["model", "M0 [%]", "R0 Dp [N]", "R² Dp [-]", "CV R0 Dp [N]", "CV score [-]",
                          "BIC - BIC(Wong) [-]", "probability [-]", "status, flags"], rows, raw=True))
-    extra = {k: v for k, v in probs.items() if k not in rep["models"]}
+    extra = {k: v for k, v in probs.items() if _canon(k) not in rep["models"]}
     if extra:
         parts.append("<p>Probabilities of the other hypotheses tried: "
                      + _e(", ".join(f"{_title(k)} {num(v, 2)}" for k, v in extra.items())) + ".</p>")
@@ -1181,12 +1253,17 @@ def _coefficients_section(rep) -> list:
     if cons:
         parts.append("<h3>Physical consistency of the fits</h3>")
         rows = []
-        for k, v in cons.items():
+        for k, v in sorted(cons.items(), key=lambda kv: _model_order(_canon(kv[0]))):
             v = v if isinstance(v, dict) else {}
-            detail = "; ".join(f"{a} = {json.dumps(b) if isinstance(b, (list, dict)) else b}" for a, b in v.items()
-                               if a not in ("consistent",))
-            rows.append([_title(k), {True: "yes", False: "NO", None: "n/a"}.get(v.get("consistent"), "n/a"), detail])
-        parts.append(_table(["model", "consistent", "checks"], rows))
+            ratios = [r.get("ratio") for r in v.get("load_ratio_by_slip") or [] if isinstance(r, dict)
+                      and r.get("ratio") is not None]
+            rows.append([_title(_canon(k)), {True: "yes", False: "NO"}.get(v.get("consistent"), "n/a"),
+                         f"{num(min(ratios))} to {num(max(ratios))}" if ratios else "n/a",
+                         f"{fmt(v.get('sinkage_static_m'), 'length_mm')} (limit {fmt(v.get('sinkage_limit_m'), 'length_mm')})"
+                         if v.get("sinkage_limit_m") is not None else "n/a",
+                         "; ".join(map(str, v.get("reasons") or [])) or "-"])
+        parts.append(_table(["model", "consistent", "model W / measured W over slip bins (Eq. 7) [-]",
+                             "static sinkage (limit D/6, Eq. 10)", "reasons"], rows))
     return parts
 
 
@@ -1210,7 +1287,7 @@ def _html(rep: dict, figs: list, overviews: list) -> str:
     eff = d.get("effect")
     parts.append(
         f"<div class='verdict'><div class='effect'>Effect: {_e(eff)} &nbsp;·&nbsp; model: "
-        f"{_e(_title(d.get('model')))} &nbsp;·&nbsp; confidence: {_e(d.get('confidence'))}</div>"
+        f"{_e(_title(_canon(d.get('model'))))} &nbsp;·&nbsp; confidence: {_e(d.get('confidence'))}</div>"
         f"<p>{_e(d.get('summary', ''))}</p></div>")
     if rep.get("not_done"):
         parts.append("<h2>What could not be done</h2><div class='warn'><ul>"
@@ -1223,7 +1300,7 @@ def _html(rep: dict, figs: list, overviews: list) -> str:
                      + (f". The measurement that would separate them: {_e(d.get('separating_measurement'))}."
                         if d.get("separating_measurement") else ".") + "</p>")
     g = rep["gain"]
-    parts.append(_table(["drawbar pull R0 [N]", "Wong", _title(d.get("model"))],
+    parts.append(_table(["drawbar pull R0 [N]", "Wong", _title(_canon(d.get("model")) or "wong")],
                         [["in sample", fmt(g.get("R0_n_before"), "force", unit=False), fmt(g.get("R0_n_after"), "force", unit=False)],
                          ["out of sample (CV)", fmt(g.get("cv_R0_n_before"), "force", unit=False),
                           fmt(g.get("cv_R0_n_after"), "force", unit=False)]]))

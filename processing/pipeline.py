@@ -14,7 +14,15 @@ Steps (each in its own module):
 4. per source and per contiguous segment: uniform resampling at the source's
    own rate, zero-phase Butterworth low-pass (:mod:`.filters`), linear
    interpolation onto the output grid (``rate_hz``, from the first frame);
-5. slip (Eq. 6), phase, cycle id, ``valid`` (:mod:`.slip`).
+5. inertia compensation: the WFT measures what the wheel assembly outboard
+   of it transmits, ``Fx = Dp - m_w dV/dt``, ``My = T + I_w domega/dt``
+   (hardware.md), so ``Dp = Fx + m_w dV/dt`` and ``T = My - I_w domega/dt``
+   with ``m_w``, ``I_w`` from the vehicle configuration; dV/dt and domega/dt
+   are the derivatives of the filtered V and omega (same zero-phase filter,
+   same cutoff, same segments, :func:`.filters.filter_to_grid`), so the
+   correction has the same response as the filtered forces (on by default);
+6. slip (Eq. 6) with the wheel radius of the configuration or the one given
+   (the radius the fit then uses), phase, cycle id, ``valid`` (:mod:`.slip`).
 
 Every problem met on the way is appended to ``ProcessResult.warnings`` with
 what is missing and what was still computed; nothing silently turns into
@@ -41,7 +49,9 @@ __all__ = ["ProcessResult", "process_recording", "COLUMNS", "MAX_FILL_SAMPLES"]
 
 #: The columns of ``ProcessResult.signals``, in order (docs/architecture.md).
 COLUMNS = ("t_s", "slip", "load_n", "drawbar_pull_n", "torque_nm", "speed_mps", "omega_radps",
-           "phase", "valid")
+           "phase", "valid", "distance_m", "fx_n", "my_nm")
+#: Plausible wheel radius [m] for ``wheel_radius_m`` (as ``daq.config.VEHICLE_RANGES``).
+RADIUS_RANGE_M = (0.05, 2.0)
 #: r*omega below this [m/s] leaves the slip undefined (NaN).
 MIN_WHEEL_SPEED_MPS = 0.1
 #: WFT Status bits that invalidate a sample (overload, bridge fault, encoder fault).
@@ -67,8 +77,24 @@ class ProcessResult:
     None; ``lost_frames`` message -> dict(lost, gaps, longest_gap_s, received,
     method); ``warnings`` list of sentences; ``cycle`` int64 (N,)
     accelerate-cycle id (-1 outside); plus ``t0_ns`` (host time of the first
-    frame), ``rate_hz``, ``cutoff_hz``, ``wheel_radius_m``, ``wheel_width_m`` (from
-    the vehicle configuration used), ``latency_reference``.
+    frame), ``rate_hz``, ``cutoff_hz``, ``wheel_radius_m`` (the radius slip was
+    computed with: the ``wheel_radius_m`` argument, else the vehicle
+    configuration's) and ``wheel_radius_source``, ``wheel_width_m``,
+    ``latency_reference``.
+
+    Signals also carry ``distance_m`` (travelled distance, integral of V from
+    the first GNSS sample [m], NaN where V is), ``fx_n`` and ``my_nm`` (the
+    WFT's Fx [N] and My [N m], filtered, before the inertia compensation);
+    ``drawbar_pull_n = fx_n + m_w dV/dt`` and ``torque_nm = my_nm - I_w
+    domega/dt`` when the compensation is applied.
+
+    ``inertia`` dict: ``applied`` bool, ``wheel_mass_kg``, ``wheel_inertia_kgm2``,
+    ``max_abs_force_n`` / ``max_abs_torque_nm`` (largest correction applied, None
+    if not applied), ``method``, ``source``.
+    ``excluded`` list of dicts ``{t0_s, t1_s, reason}`` (+ details): spans of
+    data set aside (outlier timestamps, long gaps, the gap between joined parts).
+    ``quality`` dict: frames with outlier timestamps, non-monotonic parts, lost
+    frames per message (None = unknown), grid size.
     """
 
     signals: pd.DataFrame
@@ -85,13 +111,27 @@ class ProcessResult:
     wheel_width_m: float = float("nan")
     latency_reference: str = ""
     latency_detail: LatencyEstimate | None = field(default=None, repr=False)
+    wheel_radius_source: str = ""
+    inertia: dict = field(default_factory=dict)
+    excluded: list = field(default_factory=list)
+    quality: dict = field(default_factory=dict)
 
     def summary(self) -> str:
         """Human-readable report: latency, GPS time mapping, lost frames, valid share, warnings."""
         s = self.signals
         lines = [f"samples: {len(s)} at {self.rate_hz:g} Hz ({len(s) / self.rate_hz:.1f} s), "
                  f"low-pass {self.cutoff_hz:g} Hz (zero-phase Butterworth, order 4 x2), "
-                 f"wheel radius {self.wheel_radius_m:g} m"]
+                 f"wheel radius {self.wheel_radius_m:g} m ({self.wheel_radius_source}) for slip (Eq. 6)"]
+        ine = self.inertia or {}
+        if ine.get("applied"):
+            lines.append(f"inertia compensated: Dp = Fx + m_w dV/dt, T = My - I_w domega/dt with "
+                         f"m_w = {ine['wheel_mass_kg']:g} kg, I_w = {ine['wheel_inertia_kgm2']:g} kg m^2 "
+                         f"({ine.get('source', '')}); largest correction "
+                         f"{_fmt(ine.get('max_abs_force_n'), ' N')} on Dp, "
+                         f"{_fmt(ine.get('max_abs_torque_nm'), ' N m')} on T")
+        elif ine:
+            lines.append("inertia NOT compensated: drawbar_pull_n = Fx and torque_nm = My as measured "
+                         f"({ine.get('reason', 'switched off')})")
         if self.gnss_latency_s is not None:
             lines.append(f"GNSS latency: {self.gnss_latency_s * 1e3:.1f} ms +- "
                          f"{self.gnss_latency_stderr_s * 1e3:.1f} ms (reference: {self.latency_reference}; removed)")
@@ -110,7 +150,8 @@ class ProcessResult:
         if self.lost_frames:
             lines.append("lost frames:")
             for name, d in self.lost_frames.items():
-                lines.append(f"  {name}: {d['lost']} lost in {d['gaps']} gaps (longest "
+                lost = "unknown number" if d['lost'] is None else d['lost']
+                lines.append(f"  {name}: {lost} lost in {d['gaps']} gaps (longest "
                              f"{d['longest_gap_s'] * 1e3:.0f} ms), {d['received']} received [{d['method']}]")
         n = len(s)
         share = float(s["valid"].mean()) if n else 0.0
@@ -119,29 +160,63 @@ class ProcessResult:
         lines.append(f"valid samples: {share * 100:.1f} % of {n}; phases: "
                      + ", ".join(f"{k} {counts.get(k, 0)}" for k in ("accel", "brake", "standstill", "other"))
                      + f"; accelerate cycles: {n_cycles}")
+        q = self.quality or {}
+        ts = q.get("timestamps") or {}
+        if ts.get("outlier_frames") or ts.get("joined_parts"):
+            lines.append(f"time base: {ts.get('outlier_frames', 0)} frames with outlier timestamps set "
+                         f"aside; {ts.get('joined_parts', 0)} out-of-order parts sorted")
+        if self.excluded:
+            lines.append(f"excluded spans: {len(self.excluded)}")
+            for e in self.excluded[:10]:
+                lines.append(f"  {e['t0_s']:.3f}-{e['t1_s']:.3f} s: {e['reason']}")
+            if len(self.excluded) > 10:
+                lines.append(f"  ... {len(self.excluded) - 10} more")
         for w in self.warnings:
             lines.append(f"warning: {w}")
         return "\n".join(lines)
 
 
+def _fmt(v, unit: str) -> str:
+    return "n/a" if v is None else f"{v:.3g}{unit}"
+
+
 # --------------------------------------------------------------------------- configuration
 def _resolve_config(path: Path, config: Any, warnings: list[str]):
-    """VehicleConfig from an object, a TOML path, the recording's attachment, or the default."""
+    """VehicleConfig from an object, a TOML path, the recording's attachment, or the default.
+
+    Returns ``(config, where)``, ``where`` naming the source for messages."""
     from wheelsoil.daq import VehicleConfig, load_recording_config, load_vehicle_config
 
     if isinstance(config, VehicleConfig):
-        return config
+        return config, f"vehicle configuration {config.source or '(given)'}"
     if config is not None:
-        return load_vehicle_config(config)
+        return load_vehicle_config(config), f"vehicle configuration {config}"
     try:
         cfg = load_recording_config(path)
         if cfg is not None:
-            return cfg
+            return cfg, "the recording's vehicle configuration"
         warnings.append(f"{path}: no vehicle configuration attached; using the shipped default")
     except ValueError as exc:  # not an MCAP file is reported by the reader; a bad attachment here
         warnings.append(f"{path}: attached vehicle configuration not usable ({exc}); "
                         "using the shipped default")
-    return load_vehicle_config()
+    return load_vehicle_config(), "the shipped default vehicle.toml"
+
+
+def check_wheel_radius(value, what: str = "wheel radius") -> float:
+    """``value`` as a float radius [m], checked finite and within :data:`RADIUS_RANGE_M`.
+
+    Raises ``ValueError`` naming ``what`` and the value (hint for millimetres)."""
+    try:
+        if isinstance(value, bool):
+            raise TypeError
+        r = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{what} = {value!r}: must be a number in m") from None
+    lo, hi = RADIUS_RANGE_M
+    if not (math.isfinite(r) and lo <= r <= hi):
+        hint = "; did you give mm?" if math.isfinite(r) and lo * 1e3 <= r <= hi * 1e3 else ""
+        raise ValueError(f"{what} = {value!r}: not a plausible radius in m ({lo:g}-{hi:g}){hint}")
+    return r
 
 
 def _front_wheel_refs(config) -> list:
@@ -181,7 +256,8 @@ def _time_gaps(name: str, ts_ns: np.ndarray) -> tuple[dict, float]:
 LOG_SUFFIXES = (".log", ".asc", ".blf", ".trc")
 
 
-def _process_log(path: Path, *, config, rate_hz, cutoff_hz, progress) -> "ProcessResult":
+def _process_log(path: Path, *, config, rate_hz, cutoff_hz, progress, wheel_radius_m=None,
+                 inertia=True) -> "ProcessResult":
     """Import a candump/ASC/BLF/TRC log into a temporary MCAP, then process that."""
     import tempfile
     import warnings as _w
@@ -195,7 +271,8 @@ def _process_log(path: Path, *, config, rate_hz, cutoff_hz, progress) -> "Proces
         with _w.catch_warnings():
             _w.simplefilter("ignore", RuntimeWarning)  # listed in conv.warnings
             conv = import_log(path, mcap, config=cfg)
-        res = process_recording(mcap, config=cfg, rate_hz=rate_hz, cutoff_hz=cutoff_hz, progress=progress)
+        res = process_recording(mcap, config=cfg, rate_hz=rate_hz, cutoff_hz=cutoff_hz, progress=progress,
+                                wheel_radius_m=wheel_radius_m, inertia=inertia)
     res.warnings[:0] = [f"{path}: imported {sum(conv.frames.values())} frames "
                         f"({', '.join(f'{b}: {n}' for b, n in conv.frames.items())})"] + list(conv.warnings)
     return res
@@ -203,6 +280,7 @@ def _process_log(path: Path, *, config, rate_hz, cutoff_hz, progress) -> "Proces
 
 # --------------------------------------------------------------------------- main entry
 def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: float | None = None,
+                      wheel_radius_m: float | None = None, inertia: bool = True,
                       progress: bool = False) -> ProcessResult:
     """Decode, synchronise, filter and compute slip for one MCAP recording.
 
@@ -213,16 +291,22 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
     configuration attached to the recording, else ``dbc/vehicle.toml``);
     ``rate_hz`` output grid rate [Hz] (default 100); ``cutoff_hz`` low-pass
     cutoff [Hz] (default :data:`~.filters.DEFAULT_CUTOFF_HZ` = 5 Hz, capped at
-    0.4 x ``rate_hz`` so it also serves as anti-alias filter); ``progress``
-    shows a tqdm bar over the frames read.
+    0.4 x ``rate_hz`` so it also serves as anti-alias filter);
+    ``wheel_radius_m`` the radius r [m] for slip (Eq. 6), overriding the
+    configuration's (a different value is reported in ``warnings``; the fit
+    must use the same r: ``wheelsoil fit --wheel-radius`` passes it here);
+    ``inertia`` compensate the wheel assembly's inertia (hardware.md:
+    ``Dp = Fx + m_w dV/dt``, ``T = My - I_w domega/dt``, ``m_w``/``I_w`` from
+    the configuration; default on); ``progress`` shows a tqdm bar over the
+    frames read.
 
     Returns :class:`ProcessResult` (columns :data:`COLUMNS`, one row per grid
     point from the first frame of the recording to the last). Slip is Eq. (6)
-    of the seed paper with r = ``config.wheel_radius_m``.
+    of the seed paper with r = ``wheel_radius_m`` or ``config.wheel_radius_m``.
 
     Raises: ``OSError`` unreadable file; ``ValueError`` not an MCAP
-    recording, bad options, or a recording holding none of the configured
-    messages (names what was looked for). Missing parts (no GNSS, no wheel
+    recording, bad options (an implausible ``wheel_radius_m``), or a recording
+    holding none of the configured messages (names what was looked for). Missing parts (no GNSS, no wheel
     speed, no WFT, lost frames) are reported in ``warnings`` instead.
     """
     from wheelsoil.daq import iter_frame_batches
@@ -237,12 +321,26 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
     if cutoff > 0.4 * rate_hz:
         warns.append(f"cutoff {cutoff:g} Hz lowered to {0.4 * rate_hz:g} Hz (0.4 x the output rate, anti-alias)")
         cutoff = 0.4 * rate_hz
+    if wheel_radius_m is not None:
+        wheel_radius_m = check_wheel_radius(wheel_radius_m, "wheel_radius_m (--wheel-radius)")
     if not path.exists():
         raise OSError(f"{path}: no such file")
     if path.suffix.lower() in LOG_SUFFIXES:
-        return _process_log(path, config=config, rate_hz=rate_hz, cutoff_hz=cutoff_hz, progress=progress)
-    cfg = _resolve_config(path, config, warns)
-    r = float(cfg.wheel_radius_m)
+        return _process_log(path, config=config, rate_hz=rate_hz, cutoff_hz=cutoff_hz, progress=progress,
+                            wheel_radius_m=wheel_radius_m, inertia=inertia)
+    cfg, cfg_where = _resolve_config(path, config, warns)
+    warns.extend(getattr(cfg, "notes", []) or [])
+    cfg_r = float(cfg.wheel_radius_m)
+    if wheel_radius_m is None:
+        r = cfg_r
+        r_source = f"from {cfg_where}"
+    else:
+        r = wheel_radius_m
+        r_source = "given"
+        if not math.isclose(r, cfg_r, rel_tol=1e-6):
+            warns.append(f"WHEEL RADIUS CONFLICT: {r:g} m given, {cfg_where} says {cfg_r:g} m; slip (Eq. 6) "
+                         f"is computed with the given {r:g} m (and the fit must use it too): check which "
+                         "radius is right")
     sig = cfg.signals
     fronts = _front_wheel_refs(cfg)
 
@@ -311,6 +409,8 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
         raise ValueError(f"{path}: none of the configured messages found in {n_frames[0]} frames ({seen}) "
                          f"(looked for {looked}); wrong vehicle configuration or bus names?")
 
+    excluded: list[dict] = []
+    quality: dict = {}
     t0_ns = int(span[0])
     n_grid = int(math.floor((span[1] - t0_ns) * 1e-9 * rate_hz)) + 1
     t_grid = np.arange(n_grid) / rate_hz
@@ -322,7 +422,7 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
     nan = np.full(n_grid, np.nan)
 
     # ---- 2. WFT -------------------------------------------------------------------------
-    load = dp = torque = nan
+    load = dp = torque = fx_f = my_f = nan
     wft_period = None
     streams = {}
     for ckey, cols in (("wft_counter_force", ("wft_fx_w", "wft_fz_w")), ("wft_counter_moment", ("wft_my",)),
@@ -373,13 +473,13 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
                 fx, fz = rotate_to_hub(cols["wft_fx_w"], cols["wft_fz_w"], cols["wft_angle"])
                 fx[bad] = np.nan
                 fz[bad] = np.nan
-                dp = filter_to_grid(t_w, fx, ws.period_s, t_grid, cutoff)
+                fx_f = filter_to_grid(t_w, fx, ws.period_s, t_grid, cutoff)
                 load = filter_to_grid(t_w, fz, ws.period_s, t_grid, cutoff)
             else:
                 warns.append("WFT force or angle frames missing: load_n and drawbar_pull_n not computed (NaN)")
             if "wft_my" in cols:
                 my = np.where(bad, np.nan, cols["wft_my"])
-                torque = filter_to_grid(t_w, my, ws.period_s, t_grid, cutoff)
+                my_f = filter_to_grid(t_w, my, ws.period_s, t_grid, cutoff)
             else:
                 warns.append("WFT moment frames missing: torque_nm not computed (NaN)")
             total_lost = sum(rep.lost for rep in ws.reports.values())
@@ -398,7 +498,7 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
                      "still computed")
 
     # ---- 3a. wheel speeds -----------------------------------------------------------------
-    omega = nan
+    omega = domega = nan
     ws_ref = sig["wheel_speed"]
     got = get("wheel_speed")
     wss_t = wss_rel = None
@@ -413,10 +513,17 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
         rep, period = _time_gaps(ws_ref.message, wss_t)
         lost_frames[ws_ref.message] = rep
         wss_rel = rel_s(wss_t)
-        omega = filter_to_grid(wss_rel, w_rl, period, t_grid, cutoff)
+        omega, domega = filter_to_grid(wss_rel, w_rl, period, t_grid, cutoff, derivative=True)
+
+    # ---- 3a'. inertia: T = My - I_w domega/dt (hardware.md) ------------------------------
+    m_w, i_w = float(cfg.wheel_mass_kg), float(cfg.wheel_inertia_kgm2)
+    torque = my_f - i_w * domega if inertia else my_f
+    if inertia and np.isfinite(my_f).any() and not np.isfinite(domega).any():
+        warns.append("inertia compensation needs the wheel speed (domega/dt): torque_nm is NaN; "
+                     "my_nm has the measured, uncompensated My")
 
     # ---- 3b. GNSS speed, GPS time, latency ---------------------------------------------
-    speed = nan
+    speed = dspeed = nan
     latency: LatencyEstimate | None = None
     lat_ref = ""
     g_fwd, g_spd = get("gnss_forward_velocity"), get("gnss_speed")
@@ -482,7 +589,31 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
             warns.append("GNSS latency not estimated: no free-rolling wheel speed to compare with; "
                          "GNSS timestamps used as received")
         shift = latency.latency_s if latency is not None else 0.0
-        speed = filter_to_grid(g_rel - shift, g_v, g_period, t_grid, min(cutoff, 0.4 / g_period))
+        speed, dspeed = filter_to_grid(g_rel - shift, g_v, g_period, t_grid, min(cutoff, 0.4 / g_period),
+                                       derivative=True)
+
+    # ---- 3c. inertia: Dp = Fx + m_w dV/dt (hardware.md) ----------------------------------
+    dp = fx_f + m_w * dspeed if inertia else fx_f
+    if inertia and np.isfinite(fx_f).any() and not np.isfinite(dspeed).any():
+        warns.append("inertia compensation needs the vehicle speed (dV/dt): drawbar_pull_n is NaN; "
+                     "fx_n has the measured, uncompensated Fx")
+    if inertia:
+        corr_f = m_w * dspeed[np.isfinite(fx_f) & np.isfinite(dspeed)]
+        corr_t = i_w * domega[np.isfinite(my_f) & np.isfinite(domega)]
+        inertia_info = {
+            "applied": True, "wheel_mass_kg": m_w, "wheel_inertia_kgm2": i_w,
+            "max_abs_force_n": float(np.max(np.abs(corr_f))) if corr_f.size else None,
+            "max_abs_torque_nm": float(np.max(np.abs(corr_t))) if corr_t.size else None,
+            "method": "Dp = Fx + m_w dV/dt, T = My - I_w domega/dt; dV/dt and domega/dt are derivatives "
+                      "(cubic spline) of V and omega after the same zero-phase low-pass as Fx and My",
+            "source": cfg_where,
+        }
+    else:
+        inertia_info = {"applied": False, "wheel_mass_kg": m_w, "wheel_inertia_kgm2": i_w,
+                        "max_abs_force_n": None, "max_abs_torque_nm": None,
+                        "reason": "switched off (inertia=False / --no-inertia)", "source": cfg_where}
+        warns.append("inertia not compensated (--no-inertia): drawbar_pull_n and torque_nm include the wheel "
+                     f"assembly's inertia (m_w = {m_w:g} kg, I_w = {i_w:g} kg m^2)")
 
     # ---- 4. slip, phase, cycles, valid --------------------------------------------------------
     rw = r * omega
@@ -508,6 +639,7 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
     df = pd.DataFrame({
         "t_s": t_grid, "slip": slip, "load_n": load, "drawbar_pull_n": dp, "torque_nm": torque,
         "speed_mps": speed, "omega_radps": omega, "phase": phase.astype(object), "valid": valid,
+        "distance_m": _distance(speed, 1.0 / rate_hz), "fx_n": fx_f, "my_nm": my_f,
     }, columns=list(COLUMNS))
     return ProcessResult(
         signals=df,
@@ -517,4 +649,16 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
         t0_ns=t0_ns, rate_hz=float(rate_hz), cutoff_hz=cutoff, wheel_radius_m=r,
         wheel_width_m=float(cfg.wheel_width_m),
         latency_reference=lat_ref if latency is not None else "", latency_detail=latency,
+        wheel_radius_source=r_source, inertia=inertia_info, excluded=excluded, quality=quality,
     )
+
+
+def _distance(speed: np.ndarray, dt: float) -> np.ndarray:
+    """Travelled distance [m] (N,): trapezoidal integral of V [m/s] (N,) on a grid of step ``dt``
+    [s], from 0 at the first finite V; no distance accrues across NaN; NaN where V is NaN."""
+    v = np.asarray(speed, dtype=np.float64)
+    fin = np.isfinite(v)
+    inc = np.where(fin[1:] & fin[:-1], 0.5 * (np.nan_to_num(v[1:]) + np.nan_to_num(v[:-1])) * dt, 0.0)
+    d = np.concatenate([[0.0], np.cumsum(inc)])
+    d[~fin] = np.nan
+    return d

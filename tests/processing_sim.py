@@ -26,6 +26,9 @@ R = 0.47
 FORCE_NOISE_N = 30.0
 MOMENT_NOISE_NM = 5.0
 GPS_EPOCH_UNIX_S = 315_964_800
+#: hardware.md: rim + tyre outboard of the WFT (and dbc/vehicle.toml's [vehicle] values).
+WHEEL_MASS_KG = 80.0
+WHEEL_INERTIA_KGM2 = 11.5
 
 
 @dataclass
@@ -38,6 +41,7 @@ class Truth:
     drawbar_pull_n: np.ndarray
     torque_nm: np.ndarray
     phase: np.ndarray
+    radius_m: float = R
 
 
 def _smooth(u):
@@ -45,7 +49,8 @@ def _smooth(u):
     return u * u * (3 - 2 * u)
 
 
-def truth_profile(n_cycles: int = 3, dt: float = 0.002, *, standstill_s: float = 1.5) -> Truth:
+def truth_profile(n_cycles: int = 3, dt: float = 0.002, *, standstill_s: float = 1.5,
+                  radius_m: float = R) -> Truth:
     """Accelerate-brake cycles: standstill, accel (slip sweep 0.05->0.8->0.1), cruise, brake."""
     v_parts, s_parts, ph = [], [], []
 
@@ -70,19 +75,21 @@ def truth_profile(n_cycles: int = 3, dt: float = 0.002, *, standstill_s: float =
     speed = np.concatenate(v_parts)
     slip = np.concatenate(s_parts)
     t = np.arange(speed.size) * dt
-    omega = np.where(speed > 0, speed / (R * (1 - slip)), 0.0)
+    omega = np.where(speed > 0, speed / (radius_m * (1 - slip)), 0.0)
     load = 11000.0 + 400.0 * np.sin(2 * np.pi * 0.3 * t) + 200.0 * np.sin(2 * np.pi * 1.1 * t)
     dp = load * (0.45 * (1 - np.exp(-np.maximum(slip, -0.5) / 0.15)) - 0.08)
     moving = _smooth(speed / 0.5)  # forces build up smoothly as the wheel starts rolling
     dp = dp * moving
-    torque = R * (dp + 0.1 * load) * moving
-    return Truth(t, speed, slip, omega, load, dp, torque, np.concatenate(ph))
+    torque = radius_m * (dp + 0.1 * load) * moving
+    return Truth(t, speed, slip, omega, load, dp, torque, np.concatenate(ph), radius_m)
 
 
 def write_recording(path, truth: Truth, *, latency_s: float = 0.1, seed: int = 0,
                     gps_offset_s: float = 1234.5678, no_gnss: bool = False, no_wheel_speed: bool = False,
                     drop_wft_bursts: int = 0, counter_jumps: int = 0,
-                    wheel_speed_zero: tuple[float, float] | None = None) -> dict:
+                    wheel_speed_zero: tuple[float, float] | None = None,
+                    wheel_mass_kg: float = WHEEL_MASS_KG, wheel_inertia_kgm2: float = WHEEL_INERTIA_KGM2,
+                    config=None, ts_edit=None) -> dict:
     """Encode ``truth`` as frames and write an MCAP recording.
 
     Returns ``{"path", "lost_samples", "start_ns"}`` (WFT samples dropped).
@@ -91,6 +98,13 @@ def write_recording(path, truth: Truth, *, latency_s: float = 0.1, seed: int = 0
     ``counter_jumps``: that many random jumps of the WFT counter (all three
     messages) by 17..200 without lost time; ``wheel_speed_zero`` (t0, t1):
     the measured wheel's speed reads 0 rpm in that window.
+
+    The WFT measures what the wheel assembly transmits (hardware.md):
+    ``Fx = Dp - m_w dV/dt``, ``My = T + I_w domega/dt`` with ``wheel_mass_kg``,
+    ``wheel_inertia_kgm2`` (0 for none); ``truth`` holds the soil's Dp and T.
+    ``config`` the VehicleConfig attached (default: the shipped one);
+    ``ts_edit(bus, ts_ns) -> ts_ns`` edits a bus's int64 timestamps (in
+    file order) before writing, for time-base tests.
     """
     rng = np.random.default_rng(seed)
     wft = cantools.database.load_file(str(DBC / "wft.dbc"))
@@ -106,9 +120,11 @@ def write_recording(path, truth: Truth, *, latency_s: float = 0.1, seed: int = 0
     # ---- WFT, 500 Hz
     angle = np.cumsum(truth.omega_radps) * (t[1] - t[0])
     ca, sa = np.cos(angle), np.sin(angle)
-    fx_w = truth.drawbar_pull_n * ca - truth.load_n * sa + rng.normal(0, FORCE_NOISE_N, n)
-    fz_w = truth.drawbar_pull_n * sa + truth.load_n * ca + rng.normal(0, FORCE_NOISE_N, n)
-    my = truth.torque_nm + rng.normal(0, MOMENT_NOISE_NM, n)
+    fx_hub = truth.drawbar_pull_n - wheel_mass_kg * np.gradient(truth.speed_mps, t)
+    my_hub = truth.torque_nm + wheel_inertia_kgm2 * np.gradient(truth.omega_radps, t)
+    fx_w = fx_hub * ca - truth.load_n * sa + rng.normal(0, FORCE_NOISE_N, n)
+    fz_w = fx_hub * sa + truth.load_n * ca + rng.normal(0, FORCE_NOISE_N, n)
+    my = my_hub + rng.normal(0, MOMENT_NOISE_NM, n)
     counter = np.arange(n) % 256
     for j in rng.integers(100, n - 100, counter_jumps):
         counter[j:] = (counter[j:] + rng.integers(17, 200)) % 256
@@ -146,7 +162,8 @@ def write_recording(path, truth: Truth, *, latency_s: float = 0.1, seed: int = 0
             if wheel_speed_zero and wheel_speed_zero[0] <= tw < wheel_speed_zero[1]:
                 om = 0.0
             rpm = lambda w: float(np.clip(abs(w * (1 + rng.normal(0, 0.002))) * 60 / (2 * np.pi), 0, 655))
-            can1.append((tw, m_ws, m_ws.encode({"WheelSpeed_FL": rpm(v / R), "WheelSpeed_FR": rpm(v / R),
+            can1.append((tw, m_ws, m_ws.encode({"WheelSpeed_FL": rpm(v / truth.radius_m),
+                                                 "WheelSpeed_FR": rpm(v / truth.radius_m),
                                                  "WheelSpeed_RL": rpm(om), "WheelSpeed_RR": rpm(om)})))
     # ---- GNSS, 20 Hz fixes on the GPS clock, received latency_s later
     if not no_gnss:
@@ -170,7 +187,7 @@ def write_recording(path, truth: Truth, *, latency_s: float = 0.1, seed: int = 0
             can1.append((rx + 4e-4, m_t, m_t.encode({"GPS_Week": week, "GPS_Time": round(gfix - week * 604800, 3),
                                                       "Accuracy_GPS_Time": 3, "Validity_GPS_Week": 1,
                                                       "Validity_GPS_Time": 1})))
-    cfg = load_vehicle_config()
+    cfg = load_vehicle_config() if config is None else config
     path = Path(path)
     with RecordingWriter(path, config=cfg, metadata={"source": "tests/processing_sim.py"}) as w:
         for bus, frames in (("can0", can0), ("can1", can1)):
@@ -186,6 +203,8 @@ def write_recording(path, truth: Truth, *, latency_s: float = 0.1, seed: int = 0
             for i, f in enumerate(frames):
                 data[i, :len(f[2])] = np.frombuffer(f[2], np.uint8)
             ts_ns = start_ns + np.round(ts * 1e9).astype(np.int64)
+            if ts_edit is not None:
+                ts_ns = np.asarray(ts_edit(bus, ts_ns.copy()), dtype=np.int64)
             for a in range(0, len(frames), 2000):
                 w.write_batch(FrameBatch.from_columns(bus, ts_ns[a:a + 2000], ids[a:a + 2000], ext[a:a + 2000],
                                                       dlc[a:a + 2000], data[a:a + 2000]))

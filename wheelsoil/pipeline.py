@@ -48,6 +48,10 @@ def load_inputs(inputs, *, progress: bool = False, rate_hz: float = 100.0, cutof
 
     ``rate_hz``, ``cutoff_hz``, ``wheel_radius_m`` (slip radius, Eq. 6) and
     ``inertia`` are passed to ``process_recording`` for recordings.
+    ``wheel_radius_m`` [m], when given, is the radius recordings compute slip
+    with (Eq. 6), so the fit's radius is the slip radius; radius conflicts
+    (recordings whose configurations disagree, a table's ``wheel_radius_m``
+    column, or a table's slip of unknown radius) are loud notes.
 
     Raises ValueError (naming the file) for a missing file, an unknown suffix,
     an unreadable table, or a recording processing cannot read.
@@ -65,7 +69,7 @@ def load_inputs(inputs, *, progress: bool = False, rate_hz: float = 100.0, cutof
             from wheelsoil.processing import process_recording
 
             res = process_recording(path, progress=progress, rate_hz=rate_hz, cutoff_hz=cutoff_hz,
-                                    **_processing_options(process_recording, wheel_radius_m, inertia))
+                                    wheel_radius_m=wheel_radius_m, inertia=inertia)
             df = res.signals.copy()
             df["cycle"] = res.cycle
             kinds.append("recording")
@@ -80,11 +84,28 @@ def load_inputs(inputs, *, progress: bool = False, rate_hz: float = 100.0, cutof
             notes.extend(f"{path.name}: {w}" for w in res.warnings)
             if radius is None:  # the first recording's vehicle configuration
                 radius, width = res.wheel_radius_m, res.wheel_width_m
+            elif abs(res.wheel_radius_m - radius) > 1e-6 * radius:
+                notes.append(f"WHEEL RADIUS CONFLICT: {path.name} computed slip with r = {res.wheel_radius_m:g} m "
+                             f"(its vehicle configuration), the first recording with {radius:g} m; the fit uses "
+                             f"{radius:g} m for all; give --wheel-radius to use one radius for slip and fit")
         elif suffix in TABLE_SUFFIXES:
             df = _read_table(path)
             kinds.append("table")
             results.append(None)
             tables.append(df)
+            tr = df["wheel_radius_m"].dropna().unique() if "wheel_radius_m" in df.columns else []
+            if len(tr) > 1 or (len(tr) == 1 and wheel_radius_m is not None
+                               and abs(float(tr[0]) - wheel_radius_m) > 1e-6 * wheel_radius_m):
+                notes.append(f"WHEEL RADIUS CONFLICT: {path.name} states wheel_radius_m = "
+                             f"{', '.join(f'{float(x):g}' for x in tr)} m; the fit uses "
+                             f"{wheel_radius_m if wheel_radius_m is not None else float(tr[0]):g} m while the "
+                             "table's slip was computed with its own radius (Eq. 6)")
+            elif len(tr) == 1 and radius is None:
+                radius = float(tr[0])
+            elif wheel_radius_m is not None:
+                notes.append(f"{path.name}: the table's slip was computed outside wheelsoil with a radius it "
+                             f"does not state; the fit uses r = {wheel_radius_m:g} m: it must be the radius "
+                             "that slip (Eq. 6) was computed with")
             sync.append({"input": str(path), "gnss_latency_s": None})
         else:
             raise ValueError(
@@ -101,22 +122,6 @@ def load_inputs(inputs, *, progress: bool = False, rate_hz: float = 100.0, cutof
         df["t_s"] = df["t_s"].fillna(df.groupby("run").cumcount().astype(float))
     return df, {"kinds": kinds, "time_sync": sync, "wheel_radius_m": radius, "wheel_width_m": width,
                 "notes": notes, "results": results, "tables": tables}
-
-
-def _processing_options(process_recording, wheel_radius_m, inertia) -> dict:
-    """``wheel_radius_m``/``inertia`` for ``process_recording`` (interface C) when it takes them."""
-    import inspect
-
-    params = inspect.signature(process_recording).parameters
-    out = {}
-    if "wheel_radius_m" in params:
-        out["wheel_radius_m"] = wheel_radius_m
-    elif wheel_radius_m is not None:
-        raise ValueError("this processing cannot compute slip with a given wheel radius (--wheel-radius); "
-                         "the fit's radius must be the slip radius (Eq. 6)")
-    if "inertia" in params:
-        out["inertia"] = inertia
-    return out
 
 
 def _time_sync_summary(sync: list) -> dict:
@@ -488,11 +493,12 @@ def run_fit(
     df, info = load_inputs(inputs, progress=progress, rate_hz=rate_hz, cutoff_hz=cutoff_hz,
                            wheel_radius_m=wheel_radius, inertia=inertia)
     recording = "recording" in info["kinds"]
-    r = wheel_radius or (info["wheel_radius_m"] if recording and info["wheel_radius_m"] else DEFAULT_WHEEL.radius)
+    r = wheel_radius or (info["wheel_radius_m"] if info["wheel_radius_m"] else DEFAULT_WHEEL.radius)
     b = wheel_width or (info["wheel_width_m"] if recording and info["wheel_width_m"] else DEFAULT_WHEEL.width)
     wheel = Wheel(float(r), float(b))
     wheel_source = ("radius: " + ("command line" if wheel_radius else
-                                  "vehicle configuration" if recording else "model default")
+                                  "vehicle configuration" if recording else
+                                  "the table's wheel_radius_m column" if info["wheel_radius_m"] else "model default")
                     + ", width: " + ("command line" if wheel_width else
                                      "vehicle configuration" if recording else "model default"))
     settings = {
