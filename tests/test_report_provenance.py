@@ -15,6 +15,7 @@ from test_report_html import check_html
 from wheelsoil.daq.provenance import file_sha256
 from wheelsoil.model import DEFAULT_WHEEL, load_terrain
 from wheelsoil.model.fit import synthetic_data
+from wheelsoil.model.report import _canon
 from wheelsoil.pipeline import run_fit
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -104,7 +105,7 @@ def test_every_readme_report_has_provenance_overview_flags_and_defined_metrics(r
         for fl in rep["flags"]:
             assert fl["kind"] in {"at_bound", "correlation", "ill_conditioned", "inconsistent"}
             if fl.get("parameter") and "," not in fl["parameter"]:
-                par = rep["models"][fl["model"]]["parameters"][fl["parameter"]]
+                par = rep["models"][_canon(fl["model"])]["parameters"][fl["parameter"]]
                 assert fl["kind"] in par["flags"]
         assert "<h3>Flags</h3>" in text
         for term in ("M0", "R0", "R²", "CV R0", "BIC", "probability"):

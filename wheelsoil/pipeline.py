@@ -81,6 +81,7 @@ def load_inputs(inputs, *, progress: bool = False, rate_hz: float = 100.0, cutof
                 "gnss_latency_stderr_s": res.gnss_latency_stderr_s,
                 "gps_time_mapping": res.gps_time_mapping,
             })
+            res.warnings[:] = [_attachment_name(w, path) for w in res.warnings]
             notes.extend(f"{path.name}: {w}" for w in res.warnings)
             if radius is None:  # the first recording's vehicle configuration
                 radius, width = res.wheel_radius_m, res.wheel_width_m
@@ -122,6 +123,14 @@ def load_inputs(inputs, *, progress: bool = False, rate_hz: float = 100.0, cutof
         df["t_s"] = df["t_s"].fillna(df.groupby("run").cumcount().astype(float))
     return df, {"kinds": kinds, "time_sync": sync, "wheel_radius_m": radius, "wheel_width_m": width,
                 "notes": notes, "results": results, "tables": tables}
+
+
+def _attachment_name(warning: str, path: Path) -> str:
+    """A warning about the recording's attached configuration names the attachment, not the
+    temporary directory it was unpacked to (which differs on every run: the report must not)."""
+    import re
+
+    return re.sub(r"\S*wheelsoil-cfg-[^/\s]+/", f"{path.name}:attached ", warning)
 
 
 def _time_sync_summary(sync: list) -> dict:
