@@ -774,11 +774,15 @@ def overview_figure(signals, wheel_radius_m: float, slip_min: float, excluded_sp
         ax.set_ylabel(f"{lab.split()[-1]} [{unit}]")
         if not np.isfinite(y).any():
             ax.text(0.5, 0.5, "not measured", transform=ax.transAxes, ha="center", va="center", color="#888")
-    for ax in axes[:5]:
+    handles = [Patch(color=col, alpha=0.25, label=lab) for ph, (col, lab) in _PHASE_COLORS.items() if (phase == ph).any()]
+    for i, ax in enumerate(axes[:5]):
         shade(ax)
         ax.grid(alpha=0.3)
-        _legend(ax, markerscale=4.0, fontsize=8, loc="lower left", bbox_to_anchor=(0.0, 1.0), ncol=4, frameon=False,
-                  borderaxespad=0.1)
+        h, lab = ax.get_legend_handles_labels()
+        if i == 0:  # the phase shading, once, with the first panel's lines
+            h, lab = h + handles, lab + [x.get_label() for x in handles]
+        _legend(ax, handles=h, labels=lab, markerscale=4.0, fontsize=8, loc="lower left", bbox_to_anchor=(0.0, 1.0),
+                ncol=5, frameon=False, borderaxespad=0.1)
     # exclusion strip
     ax = axes[5]
     keys = list(reasons)
@@ -795,9 +799,6 @@ def overview_figure(signals, wheel_radius_m: float, slip_min: float, excluded_sp
         ax.text(0.5, 0.5, "nothing excluded", transform=ax.transAxes, ha="center", va="center")
     ax.set_xlabel("time t [s] since the first frame")
     ax.grid(alpha=0.3, axis="x")
-    handles = [Patch(color=col, alpha=0.25, label=lab) for ph, (col, lab) in _PHASE_COLORS.items() if (phase == ph).any()]
-    if handles:
-        fig.legend(handles=handles, loc="outside upper center", ncol=len(handles), fontsize=9, frameon=False)
     fig.suptitle(title, fontsize=11)
     _save(fig, path, plt)
     return {"samples": int(t.size), "used": int(used.sum()),
@@ -866,9 +867,9 @@ def _figures(diag, wheel, out_dir: Path, plt) -> tuple:
     for i, (ax, k) in enumerate(zip(axes.flat, names)):
         f = _fit_of(diag, k)
         col = _color(k, i)
-        ax.scatter(s, dp, label="measured Dp", **meas)
         ax.plot(s[order], f.predictions["drawbar_pull_n"][order], "x", ms=2.5 if big else 5, mew=0.8, color=col,
-                alpha=0.35 if big else 1.0, label="model at each sample's measured W")
+                alpha=0.15 if big else 1.0, label="model at each sample's measured W", zorder=2)
+        ax.scatter(s, dp, label="measured Dp", zorder=3, **meas)
         if k in curves:
             ax.plot(grid, curves[k].drawbar_pull_n, "-", color=col, lw=2.2, label=f"model curve at W = {fmt(load, 'force')}")
         m = f.metrics
@@ -951,8 +952,12 @@ def _figures(diag, wheel, out_dir: Path, plt) -> tuple:
 
 def _legend(ax, **kw):
     """A legend whose markers are opaque and large enough to see (the points may be faint)."""
+    from matplotlib.patches import Rectangle
+
     leg = ax.legend(markerscale=kw.pop("markerscale", 2.0), **kw)
     for h in getattr(leg, "legend_handles", getattr(leg, "legendHandles", [])):
+        if isinstance(h, Rectangle):  # shading keeps its own transparency
+            continue
         try:
             h.set_alpha(1.0)
         except AttributeError:
