@@ -1042,7 +1042,7 @@ def _provenance_html(p: dict) -> str:
         kind = pv.get("kind", "unknown")
         detail = ", ".join(f"{k}: {v}" for k, v in pv.items() if k not in ("kind",) and v not in (None, "", []))
         irows.append([f"<code>{_e(inp.get('path'))}</code>", _e(kind), f"<code>{_e(inp.get('sha256'))}</code>",
-                      _e(num(inp.get("size_bytes"), 6)) + " B", _e(detail)])
+                      _e(_plain(inp.get("size_bytes"))) + " bytes", _e(detail)])
     parts.append(_table(["path", "origin", "sha256", "size", "its own provenance"], irows, raw=True))
     vc = p.get("vehicle_config") or {}
     if vc:
@@ -1061,25 +1061,28 @@ def _provenance_html(p: dict) -> str:
     if st:
         parts.append("<h3>Settings</h3>")
         rows = []
-        for k, v in st.items():
+        for k, v in st.items():  # 6 significant figures: the values a re-run must match
             if isinstance(v, dict):
-                v = ", ".join(f"{a} = {b}" for a, b in v.items() if not isinstance(b, dict)) + "".join(
-                    f"; {a}: " + ", ".join(f"{x} = {y}" for x, y in b.items()) for a, b in v.items() if isinstance(b, dict))
+                v = ", ".join(f"{a} = {_plain(b, 6)}" for a, b in v.items() if not isinstance(b, dict)) + "".join(
+                    f"; {a}: " + ", ".join(f"{x} = {_plain(y, 6)}" for x, y in b.items())
+                    for a, b in v.items() if isinstance(b, dict))
             elif isinstance(v, list):
                 v = ", ".join(map(str, v))
+            else:
+                v = _plain(v, 6)
             rows.append([k, v])
         parts.append(_table(["setting", "value (SI)"], rows))
     return "".join(parts)
 
 
-def _plain(v) -> str:
+def _plain(v, sig: int = 3) -> str:
     """A value of a generic dict: integers as they are, floats by the one formatter."""
     if isinstance(v, bool) or v is None:
         return str(v)
     if isinstance(v, (int, np.integer)):
         return str(int(v))
     if isinstance(v, (float, np.floating)):
-        return num(v)
+        return num(v, sig)
     return json.dumps(v, sort_keys=True) if isinstance(v, (dict, list)) else str(v)
 
 

@@ -531,6 +531,7 @@ def run_fit(
     except ValueError as exc:
         _failure_report(out, inputs, ter, wheel, slip_min, str(exc), provenance=prov)
         raise ValueError(f"{exc} (a report saying so was written to {out / 'report.html'})") from None
+    prov["settings"]["hypotheses_tried"] = list(getattr(diag, "tried", None) or diag.fits)
     prov["settings"]["diagnosis_thresholds"] = dict(getattr(diag, "thresholds", {}) or {})
     prov["settings"]["cross_validation"] = getattr(data, "group_kind", None)
     notes = list(info["notes"])
