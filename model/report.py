@@ -1213,10 +1213,19 @@ def _metrics_section(rep) -> list:
         for c, v in dch.items():
             v = v if isinstance(v, dict) else {"value": v}
             rows.append([CHANNEL_TITLES.get(c, c)] + [
-                (_chan_fmt(v.get(k), c) if k.endswith("rmse") else (num(v.get(k)) if isinstance(v.get(k), float)
-                                                                       else ("-" if v.get(k) is None else str(v.get(k)))))
+                (_chan_fmt(v.get(k), c) if k.endswith(("rmse", "sigma_cell"))
+                 else _title(_canon(v.get(k))) if k in ("model", "compared_model") and v.get(k)
+                 else {True: "yes", False: "no"}[v.get(k)] if isinstance(v.get(k), bool)
+                 else num(v.get(k), 2) if isinstance(v.get(k), float)
+                 else ("-" if v.get(k) is None else str(v.get(k))))
                 for k in keys])
-        parts.append(_table(["channel"] + keys, rows))
+        names = {"effect": "effect", "measured": "measured", "wong_cv_rmse": "Wong CV R0 (channel unit)",
+                 "best_cv_rmse": "model CV R0 (channel unit)", "improves": "model improves it out of sample",
+                 "worsens": "model worsens it out of sample", "compared_model": "model compared",
+                 "model": "model", "gain_noise_var": "held-out gain [noise variances per cell]",
+                 "noise_sigma_cell": "cell noise sigma (channel unit)", "p_improve": "p (improves)",
+                 "p_worse": "p (worsens)", "structure_p": "p (Wong's structure)"}
+        parts.append(_table(["channel"] + [names.get(k, k.replace("_", " ")) for k in keys], rows))
     return parts
 
 

@@ -184,3 +184,42 @@ def test_sinkage_figure_says_which_curves_overlap(table_report):
         notes = rep["figure_notes"].get("sinkage_vs_slip.png", [])
         assert any("Wong" in n and "terrain mismatch" in n and "overlap" in n for n in notes)
         assert "overlap" in (out / "report.html").read_text()
+
+
+def _signals(seed, t0_excluded=None):
+    """A processed-recording-like signals DataFrame (columns of process_recording) from the model."""
+    df = synthetic_data(SAND, DEFAULT_WHEEL, "ding", {"n1": 0.3}, kind="timeseries", duration_s=40.0,
+                        load_n=13000.0, seed=seed)
+    r = DEFAULT_WHEEL.radius
+    df["speed_mps"] = 2.0
+    with np.errstate(divide="ignore"):
+        df["omega_radps"] = np.where(df["slip"] < 1, 2.0 / (r * (1 - df["slip"].clip(upper=0.99))), np.nan)
+    df["phase"] = np.where(df["cycle"] >= 0, "accel", "brake")
+    df.loc[df.index[:150], "valid"] = False
+    return df
+
+
+def test_overview_per_input_marks_exactly_the_fitted_samples_and_processing_spans(tmp_path):
+    import pandas as pd
+
+    a, b = _signals(1), _signals(2)
+    spans = [{"t0_s": 20.0, "t1_s": 24.0, "reason": "outlier timestamps"}]
+    # the fit sees what processing kept: the excluded span is not valid
+    b.loc[(b["t_s"] >= 20.0) & (b["t_s"] <= 24.0), "valid"] = False
+    df = pd.concat([a.assign(run=0), b.assign(run=1)], ignore_index=True)
+    diag = diagnose(df, SAND, DEFAULT_WHEEL, models=("ding",))
+    details = [{"path": "a.mcap", "signals": a, "wheel_radius_m": DEFAULT_WHEEL.radius, "excluded": [],
+                "quality": {"kind": "recording", "valid_share": float(a["valid"].mean())}},
+               {"path": "b.mcap", "signals": b, "wheel_radius_m": DEFAULT_WHEEL.radius, "excluded": spans,
+                "quality": {"kind": "recording", "valid_share": float(b["valid"].mean()), "excluded_spans": spans}}]
+    rep = write_report(diag, tmp_path, terrain=SAND, wheel=DEFAULT_WHEEL, inputs=["a.mcap", "b.mcap"],
+                       input_details=details)
+    assert {"overview_0.png", "overview_1.png"} <= set(rep["figures"])
+    q0, q1 = rep["data_quality"]
+    assert q0["used_in_fit"] + q1["used_in_fit"] == rep["samples_used"]
+    assert q1["excluded_samples"]["processing: outlier timestamps"] == int(((b["t_s"] >= 20) & (b["t_s"] <= 24)).sum())
+    assert q0["excluded_samples"]["marked invalid by processing"] == 150
+    text = (tmp_path / "report.html").read_text()
+    check_html(text)
+    assert text.count("data:image/png;base64,") == len(rep["figures"])
+    assert "20.0-24.0 s: outlier timestamps" in text
