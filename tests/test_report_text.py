@@ -85,6 +85,9 @@ def test_each_summary_path_renders_and_its_statements_match_the_numbers(rendered
         if sig:
             assert "not significant" not in stm[c]["text"] and "below the significance" not in stm[c]["text"]
     assert _p_statements_hold(rep["findings"]) >= len(stm)
+    # the statements agree with the verdict: 'none' has no systematic-and-relevant structure, a verdict has
+    kinds = {x["kind"] for x in stm.values()}
+    assert ("systematic" in kinds) == (case != "none"), kinds
     # the verdict box and the gain table quote the JSON's numbers
     page = _text(text)
     assert f"Effect: {case}" in page
