@@ -110,6 +110,7 @@ def test_bad_tables_give_a_clear_message_and_a_report_saying_so(tmp_path, conten
     if content:  # the file was readable: the report says what could not be done
         rep = _strict_json(out / "report.json")
         assert rep["samples_used"] == 0 and rep["not_done"]
+        assert rep["provenance"]["inputs"][0]["sha256"] and rep["provenance"]["command"][:2] == ["wheelsoil", "fit"]
         assert "Nothing could be fitted" in (out / "report.html").read_text()
 
 

@@ -605,10 +605,12 @@ excluded spans; dp_vs_slip, residuals, sinkage_vs_slip). Both carry the provenan
 command, input sha256s and origins, vehicle configuration and DBCs, every setting; running the
 recorded command again gives the same report.json except the analysis time.
 
-verdict: 'none' (Wong's residuals show no significant structure), 'slip_sinkage',
-'terrain_mismatch' (lab K and phi re-fitted explain it), or 'unexplained'. A candidate
-must lower the cross-validated error by >= 25 % and the BIC by >= 10; see
-wheelsoil.model.diagnosis for the full rule.
+verdict (report.json diagnosis.effect): 'none' (Wong's residuals show no relevant
+structure), a named cause ('slip_sinkage', 'terrain_mismatch', 'stress_distribution',
+'terrain_drift') when it lowers the drawbar pull error out of sample, worsens no measured
+channel and is probable enough, or 'unexplained'; wheelsoil.model.diagnosis states the rule.
+The report defines every metric where it shows it and flags degenerate or physically
+inconsistent fits next to their coefficients.
 """
 
 
