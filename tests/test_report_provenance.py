@@ -166,12 +166,16 @@ def test_a_simulated_recording_is_said_to_be_simulated_without_its_hidden_effect
     from wheelsoil.daq import info as info_mod
 
     secret = {"kind": "simulated", "seed": 7, "simulator": "wheelsoil.simulate 0.1.0", "wheelsoil_version": "0.1.0",
-              "effect": "ding", "params": {"n1": 0.3}, "command": ["wheelsoil", "simulate"]}
+              "effect": "ding", "params": {"n1": 0.3},
+              "command": ["wheelsoil", "simulate", "--terrain", "clay", "--effect", "ding", "--param=n1=0.3",
+                          "-o", "x.mcap"]}
     monkeypatch.setattr(info_mod.RecordingInfo, "provenance", property(lambda self: dict(secret)))
     rep = run_fit([RECORDINGS[0]], RECORDINGS[0].stem.split("-")[0], tmp_path / "r", models=["vasilev"])
     prov = rep["provenance"]["inputs"][0]["provenance"]
     assert prov["kind"] == "simulated" and prov["seed"] == 7
     assert "effect" not in prov and "params" not in prov
+    assert prov["command"] == ["wheelsoil", "simulate", "--terrain", "clay", "--effect", "(hidden)",
+                               "--param=(hidden)", "-o", "x.mcap"]
     text = (tmp_path / "r" / "report.html").read_text()
     assert "Simulated recording." in text and "--truth" in text
     assert '"ding"' not in json.dumps(rep["provenance"])  # the hidden effect; vasilev was asked for

@@ -148,6 +148,27 @@ def _time_sync_summary(sync: list) -> dict:
 _HIDDEN_KEYS = ("effect", "truth", "hidden_effect", "params", "family", "acceptable")
 
 
+_HIDDEN_OPTIONS = ("--effect", "--param", "--size")
+
+
+def _hide_effect(command: list) -> list:
+    """A ``wheelsoil simulate`` argument list with the hidden effect's options blanked
+    (``--effect X`` -> ``--effect (hidden)``; also ``--param``, ``--size`` and their ``=`` forms)."""
+    out, hide = [], False
+    for a in map(str, command):
+        if hide:
+            out.append("(hidden)")
+            hide = False
+        elif a in _HIDDEN_OPTIONS:
+            out.append(a)
+            hide = True
+        elif a.startswith(tuple(o + "=" for o in _HIDDEN_OPTIONS)):
+            out.append(a.split("=", 1)[0] + "=(hidden)")
+        else:
+            out.append(a)
+    return out
+
+
 def _version() -> str:
     from wheelsoil import __version__
 
@@ -257,6 +278,8 @@ def _input_record(path: Path, kind: str, res, table) -> tuple[dict, dict]:
             prov = {"kind": "unknown", "detail": "the recording has no wheelsoil.provenance record"}
         elif prov.get("kind") == "simulated":  # the hidden effect stays hidden
             prov = {k: v for k, v in prov.items() if k not in _HIDDEN_KEYS}
+            if isinstance(prov.get("command"), list):
+                prov["command"] = _hide_effect(prov["command"])
         entry["provenance"] = prov
     elif "provenance" not in entry:
         entry["provenance"] = {"kind": "log file", "format": path.suffix.lower().lstrip("."),
