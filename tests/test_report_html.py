@@ -223,3 +223,19 @@ def test_overview_per_input_marks_exactly_the_fitted_samples_and_processing_span
     check_html(text)
     assert text.count("data:image/png;base64,") == len(rep["figures"])
     assert "20.0-24.0 s: outlier timestamps" in text
+
+
+def test_flags_are_derived_from_the_fit_when_the_diagnosis_gives_none():
+    from types import SimpleNamespace
+
+    from wheelsoil.model.report import derived_flags
+
+    res = SimpleNamespace(at_bound=("m2",), names=("m1", "m2"), params={"m1": 0.09, "m2": 0.0},
+                          correlation=np.array([[1.0, -0.99995], [-0.99995, 1.0]]), condition_number=401.0)
+    ok = SimpleNamespace(at_bound=(), names=("H",), params={"H": 0.01}, correlation=np.eye(1), condition_number=1.0)
+    flags = derived_flags({"lyasko": SimpleNamespace(result=res, params=res.params),
+                           "vasilev": SimpleNamespace(result=ok, params=ok.params)})
+    kinds = [(f["model"], f["kind"], f["parameter"]) for f in flags]
+    assert kinds == [("lyasko", "at_bound", "m2"), ("lyasko", "correlation", "m1,m2"),
+                     ("lyasko", "ill_conditioned", None)]
+    assert "-0.99995" in flags[1]["detail"] and "401" in flags[2]["detail"]
