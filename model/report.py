@@ -1104,7 +1104,8 @@ def _quality_rows(q: dict) -> list:
     if not lf:
         rows.append(["lost frames", "none counted"])
     rej = q.get("rejected_frames")
-    rows.append(["rejected frames (import)", "n/a (not imported)" if rej is None else str(rej)])
+    rows.append(["rejected frames (import)", _plain(rej) if rej is not None else
+                 ("none reported by the import" if q.get("imported") else "n/a (not imported)")])
     dmg = q.get("damaged_chunks") or []
     rows.append(["damaged chunks", "none" if not dmg else f"{len(dmg)}: " + " | ".join(dmg)])
     rows.append(["recording complete", {True: "yes", False: "no (truncated)", None: "n/a"}[q.get("complete")]])

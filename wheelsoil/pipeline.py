@@ -295,7 +295,10 @@ def _input_record(path: Path, kind: str, res, table) -> tuple[dict, dict]:
         "cutoff_hz": res.cutoff_hz,
         "valid_share": float(sig["valid"].mean()) if len(sig) else None,
         "lost_frames": {k: dict(v) for k, v in sorted((res.lost_frames or {}).items())},
-        "rejected_frames": _find_key(entry["provenance"], "rejected"),
+        "imported": entry["provenance"].get("kind") in ("imported", "log file"),
+        "rejected_frames": _find_key(entry["provenance"], "rejected")
+        if _find_key(entry["provenance"], "rejected") is not None
+        else ("; ".join(w for w in warns if "reject" in w.lower()) or None),
         "damaged_chunks": _damaged(warns),
         "complete": None if info is None else bool(info.complete),
         "kernel_rx_dropped": None if info is None else {
