@@ -287,6 +287,7 @@ def _input_record(path: Path, kind: str, res, table) -> tuple[dict, dict]:
     entry["vehicle_config"] = _vehicle_config_record(path)
     sig = res.signals
     warns = list(res.warnings) + ([w for w in info.warnings if w not in res.warnings] if info else [])
+    imp = _import_record(info)
     quality = {
         "input": str(path),
         "kind": "recording",
@@ -295,10 +296,11 @@ def _input_record(path: Path, kind: str, res, table) -> tuple[dict, dict]:
         "cutoff_hz": res.cutoff_hz,
         "valid_share": float(sig["valid"].mean()) if len(sig) else None,
         "lost_frames": {k: dict(v) for k, v in sorted((res.lost_frames or {}).items())},
-        "imported": entry["provenance"].get("kind") in ("imported", "log file"),
-        "rejected_frames": _find_key(entry["provenance"], "rejected")
-        if _find_key(entry["provenance"], "rejected") is not None
-        else ("; ".join(w for w in warns if "reject" in w.lower()) or None),
+        "imported": entry["provenance"].get("kind") in ("imported", "log file") or imp is not None,
+        "rejected_frames": next((v for v in (_find_key(imp or {}, "rejected"),
+                                             _find_key(entry["provenance"], "rejected")) if v is not None),
+                                "; ".join(w for w in warns if "reject" in w.lower()) or None),
+        "import_record": imp,
         "damaged_chunks": _damaged(warns),
         "complete": None if info is None else bool(info.complete),
         "kernel_rx_dropped": None if info is None else {
@@ -313,6 +315,22 @@ def _input_record(path: Path, kind: str, res, table) -> tuple[dict, dict]:
         "warnings": warns,
     }
     return entry, quality
+
+
+def _import_record(info) -> dict | None:
+    """The ``wheelsoil.import`` metadata record of an imported recording (values JSON-decoded)."""
+    import json
+
+    rec = ((info.metadata if info is not None else None) or {}).get("wheelsoil.import")
+    if not rec:
+        return None
+    out = {}
+    for k, v in rec.items():
+        try:
+            out[k] = json.loads(v)
+        except (TypeError, ValueError):
+            out[k] = v
+    return out
 
 
 def _gnss_fix(res) -> dict:
