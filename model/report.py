@@ -53,6 +53,8 @@ _FIT_ALIAS = {"terrain_mismatch": "terrain"}
 #: Top-level keys every report.json has.
 REQUIRED_KEYS = ("schema", "input", "provenance", "terrain", "wheel", "samples_used", "slip_min", "time_sync",
                  "models", "diagnosis", "gain", "flags", "data_quality", "findings", "metric_definitions")
+#: terrain parameters a fit can identify (k_eq = kc/b + kphi: one wheel width cannot separate kc and kphi)
+TERRAIN_KEYS = ("k_eq", "n", "c", "phi", "K")
 CORRELATION_LIMIT = 0.95  #: |correlation| of two fitted parameters above this is flagged
 CONDITION_LIMIT = 100.0  #: condition number of the scaled Jacobian above this is flagged (derived flags)
 _PALETTE = ("#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b", "#e377c2", "#17becf", "#bcbd22")
@@ -388,7 +390,9 @@ def _model_entry(name, f, data, wheel, dd_model: dict | None) -> dict:
         "stderr": {k: v for k, v in f.stderr.items()},
         "params_unit": {k: (getattr(f, "units", None) or {}).get(k) or param_unit(k) for k in f.params},
         "parameters": params,
-        "params_fixed_terrain": list(f.fixed_terrain),
+        "params_fixed_terrain": list(getattr(f, "fixed_terrain", ()) or ()),
+        "terrain_fitted": [p for p in TERRAIN_KEYS if p in f.params],
+        "terrain_held_fixed": [p for p in TERRAIN_KEYS if p not in f.params],
         "terrain_used": _terrain_dict(f.terrain, wheel),
         "metrics": dict(f.metrics),
         "channel_metrics": f.channel_metrics,
@@ -653,8 +657,8 @@ def findings(rep) -> list:
     shown = chosen if chosen in rep["models"] else "wong"
     if d.get("fit_terrain") and (rep["models"].get(shown) or {}).get("params") is not None:
         mm = rep["models"][shown]
-        fitted = [p for p in (mm.get("params") or {}) if p in ("k_eq", "n", "c", "phi", "K")]
-        fixed = list(mm.get("params_fixed_terrain") or [])
+        fitted = list(mm.get("terrain_fitted") or [])
+        fixed = list(mm.get("terrain_held_fixed") or [])
         out.append(f"Terrain parameters fitted in {_title(shown)}: {', '.join(fitted) or 'none'}; held at the "
                    f"given terrain's values: {', '.join(fixed) or 'none'} (as in the coefficient table).")
     flags = rep.get("flags") or []
@@ -1236,19 +1240,20 @@ def _coefficients_section(rep) -> list:
     for k, m in rep["models"].items():
         ps = m.get("parameters")
         if not ps:
-            rows.append([_e(_title(k)), "(no free parameters)" if m["status"] == "ok" else _e(m["status"]), "-", "-", "-"])
+            rows.append([_e(_title(k)), "(no free parameters)" if m["status"] == "ok" else _e(m["status"]),
+                         _e(", ".join(m.get("terrain_fitted") or []) or "-"),
+                         _e(", ".join(m.get("terrain_held_fixed") or []) or "-"), "-"])
             continue
         cells = []
         for p, e in ps.items():
-            u = param_unit(p, display=True)
             cells.append(f"{_e(p)} = {_e(fmt_param(p, e.get('value'), e.get('se')))}" + _flag_marks(e.get("flags") or []))
-        fitted_t = [p for p in ps if p in ("k_eq", "n", "c", "phi", "K")]
-        fixed = ", ".join(m.get("params_fixed_terrain") or []) or "-"
+        fitted_t = m.get("terrain_fitted") or []
+        fixed = ", ".join(m.get("terrain_held_fixed") or []) or "-"
         cn = m.get("condition_number")
         cn_txt = _e(num(cn)) + (_flag_marks(["ill_conditioned"]) if any(
             f.get("kind") == "ill_conditioned" for f in m.get("flags") or []) else "")
         rows.append([_e(_title(k)), "<br>".join(cells), _e(", ".join(fitted_t) or "-"), _e(fixed), cn_txt])
-    parts.append(_table(["model", "parameters (display units)", "terrain fitted", "terrain held fixed",
+    parts.append(_table(["model", "parameters (display units)", "terrain fitted", "terrain held at the given values",
                          "condition no. [-]"], rows, raw=True))
     parts.append("<p>Units: c in kPa, phi in degrees, K, H and sinkage in mm, kc in kN/m^(n+1), kphi and "
                  "k_eq = kc/b + kphi in kN/m^(n+2), n, n1, m1, m2 dimensionless. report.json has every value in "

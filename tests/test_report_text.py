@@ -147,18 +147,19 @@ def test_table_input_terrain_fitted_and_held_fixed_match_the_table(tmp_path):
         if m.get("params") is None:
             continue
         fitted = set(m["params"]) & terrain
-        fixed = set(m["params_fixed_terrain"])
-        assert not fitted & fixed, k  # a parameter is either fitted or held, never both
+        assert fitted == set(m["terrain_fitted"]), k
+        assert set(m["terrain_held_fixed"]) == terrain - fitted, k  # each is either fitted or held, never both
     chosen = _canon(rep["diagnosis"]["model"]) or "wong"  # no named model: the baseline's split
     m = rep["models"][chosen]
     line = next(f for f in rep["findings"] if f.startswith("Terrain parameters fitted in"))
-    fitted = [p for p in m["params"] if p in terrain]
+    fitted = [p for p in ("k_eq", "n", "c", "phi", "K") if p in m["params"]]
+    held = [p for p in ("k_eq", "n", "c", "phi", "K") if p not in m["params"]]
     assert f": {', '.join(fitted) or 'none'};" in line
-    assert f"held at the given terrain's values: {', '.join(m['params_fixed_terrain']) or 'none'}" in line
+    assert f"held at the given terrain's values: {', '.join(held) or 'none'}" in line
     # the coefficient table shows the same split for the chosen model
     from wheelsoil.model.report import _title
 
     coef = text[text.index("Fitted coefficients"):]
     row = re.search(r"<tr><td>" + re.escape(html.escape(_title(chosen), quote=True)) + r"</td>(.*?)</tr>", coef)
     cells = re.findall(r"<td>(.*?)</td>", row.group(1))
-    assert cells[1] == (", ".join(fitted) or "-") and cells[2] == (", ".join(m["params_fixed_terrain"]) or "-")
+    assert cells[1] == (", ".join(fitted) or "-") and cells[2] == (", ".join(held) or "-")
