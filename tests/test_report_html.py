@@ -3,7 +3,6 @@
 import html
 import re
 from html.parser import HTMLParser
-from pathlib import Path
 
 import numpy as np
 import pytest
