@@ -489,7 +489,8 @@ class LogSource:
             head = f.read(65536) if self.suffix == ".asc" else b""
             f.seek(max(size - 4096, 0))
             tail = f.read()
-        ends_nl = size == 0 or tail[-1:] in (b"\n", b"\r")
+        # a file with CR LF line ends that ends in a bare CR was cut between the two
+        ends_nl = size == 0 or tail[-1:] == b"\n" or (tail[-1:] == b"\r" and b"\r\n" not in tail)
         open_block = False
         if self.suffix == ".asc" and re.search(rb"(?im)^\s*begin\s+triggerblock", head):
             last = [ln.strip() for ln in tail.splitlines() if ln.strip()]
@@ -707,7 +708,7 @@ def import_log(inputs, output, *, channel_map: Mapping[str, str] | None = None, 
     out = check_output_path(output, inputs, overwrite=overwrite)
     cmap = dict(channel_map or {})
     config = load_vehicle_config() if config is None else config
-    sources = [{"path": str(p), "sha256": file_sha256(p), "size_bytes": p.stat().st_size} for p in inputs]
+    sources = [{"path": os.path.abspath(p), "sha256": file_sha256(p), "size_bytes": p.stat().st_size} for p in inputs]
     prov = make_provenance("imported", sources=sources)
     res = ConvertResult(out)
     names: dict[object, str] = {}

@@ -264,7 +264,7 @@ def checked_batch_from_messages(bus: str, msgs) -> tuple["FrameBatch", np.ndarra
     for i in bad.tolist():
         k = int(code[i])
         if k == 1:
-            reasons.append(f"timestamp {ts[i]!r} s is not a time (finite, 0 <= t < {MAX_TIMESTAMP_S:.3g} s)")
+            reasons.append(f"timestamp {float(ts[i])!r} s is not a time (finite, 0 <= t < {MAX_TIMESTAMP_S:.3g} s)")
         elif k == 2:
             wide = bool(ext[i] or err[i])
             reasons.append(f"identifier 0x{int(ids[i]) & 0x1FFFFFFFF:X} out of range for a "
