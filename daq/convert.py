@@ -13,12 +13,14 @@ writes the bus name as the channel; python-can's ASC/BLF/TRC writers turn
 from __future__ import annotations
 
 import heapq
+import itertools
 import json
 import os
 import re
 import secrets
 import time
 import warnings
+from collections import deque
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Mapping
@@ -195,11 +197,11 @@ _BYTE_DEC = re.compile(r"\d{1,3}")
 #: A candump -L line (can-utils lib.c sprint_canframe/parse_canframe): "(sec.usec) channel id#data [R|T]"
 #: with a 3-digit 11-bit id (<= 7FF) or an 8-digit 29-bit id (<= 1FFFFFFF; 2xxxxxxx/3xxxxxxx is
 #: an error frame, CAN_ERR_FLAG), data as hex pairs, "##<flags><pairs>" for CAN FD, "R[dlc]" for remote.
-_CANDUMP_RE = re.compile(
-    r"\s*\((\d+(?:\.\d*)?)\)\s+(\S+)\s+"
-    r"(?:[0-7][0-9A-Fa-f]{2}|[01][0-9A-Fa-f]{7}|(?P<err>[23][0-9A-Fa-f]{7}))#"
-    r"(?:#[0-9A-Fa-f](?:[0-9A-Fa-f]{2})*|[Rr][0-8]?|(?:[0-9A-Fa-f]{2})*)"
-    r"(?P<dir>\s+[RrTt])?\s*")
+_CANDUMP_TAIL = (r"#(?:#[0-9A-Fa-f](?:[0-9A-Fa-f]{2})*|[Rr][0-8]?|(?:[0-9A-Fa-f]{2})*)"
+                 r"(?P<dir>\s+[RrTt])?\s*")
+_CANDUMP_RE = re.compile(r"\s*\(\d+(?:\.\d*)?\)\s+\S+\s+(?:[0-7][0-9A-Fa-f]{2}|[01][0-9A-Fa-f]{7})"
+                         + _CANDUMP_TAIL)
+_CANDUMP_ERR_RE = re.compile(r"\s*\(\d+(?:\.\d*)?\)\s+\S+\s+[23][0-9A-Fa-f]{7}" + _CANDUMP_TAIL)
 
 
 def _candump_reason(line: str) -> str:
@@ -292,29 +294,61 @@ class _Lines:
         pass
 
 
-class _CandumpLines(_Lines):
-    """Hands python-can's candump reader only lines that match the candump -L
-    grammar (its own parser takes odd-length hex, '+1' bytes, ids of any length,
-    'nan' times, ...); the others are recorded in ``rejected`` with their line number."""
+class _CandumpFilter:
+    """The lines of a candump file that match the candump -L grammar, for
+    python-can's reader (its own parser takes odd-length hex, '+1' bytes, ids of
+    any length, 'nan' times, ...). Works on chunks of lines: a regex per line
+    and list operations, no Python call per line; iterating hands the good
+    lines to the reader at C speed.
+
+    ``lines`` (a deque) holds the line number of each good line not yet turned
+    into a message, in order: python-can makes exactly one message (or raises)
+    per non-blank line, so the k-th message comes from the k-th good line.
+    Rejected lines go to ``rejected`` as ``(line number, reason)``; line
+    numbers of error frames (CAN_ERR_FLAG ids) to ``errors``, with their text.
+    """
 
     def __init__(self, f, rejected: list):
-        super().__init__(f)
-        self.in_header = False  # candump files have no header to replay
+        self._f = f
         self.rejected = rejected
-        self.match = None
+        self.lines: deque[int] = deque()
+        self.errors: dict[int, str] = {}
+        self._it = itertools.chain.from_iterable(self._chunks())
 
-    def __next__(self) -> str:
-        if self.replay:
-            return self.replay.pop(0)
-        match = _CANDUMP_RE.fullmatch
+    def _chunks(self):
+        match, err_match = _CANDUMP_RE.fullmatch, _CANDUMP_ERR_RE.fullmatch
+        base = 0
         while True:
-            line = self._next_line()
-            m = match(line)
-            if m is not None:
-                self.match = m
-                return line
-            if line.strip():
-                self.rejected.append((self.lineno, _candump_reason(line)))
+            chunk = self._f.readlines(1 << 20)
+            if not chunk:
+                return
+            ok = list(map(match, chunk))
+            if None in ok:
+                for i in [i for i, m in enumerate(ok) if m is None]:
+                    line = chunk[i]
+                    if not line.strip():
+                        continue
+                    m = err_match(line)
+                    if m is not None:
+                        ok[i] = m
+                        self.errors[base + i + 1] = line
+                    else:
+                        self.rejected.append((base + i + 1, _candump_reason(line)))
+            last = chunk[-1]
+            if not last.endswith("\n") and ok[-1] is not None and ok[-1]["dir"] is None:
+                self.rejected.append((base + len(chunk), "cut off: the file ends inside this line "
+                                                          "(truncated); not imported"))
+                ok[-1] = None
+            good = [i for i, m in enumerate(ok, base + 1) if m is not None]
+            self.lines.extend(good)
+            yield [chunk[i - base - 1] for i in good] if len(good) < len(chunk) else chunk
+            base += len(chunk)
+
+    def __iter__(self):
+        return self._it
+
+    def close(self) -> None:
+        pass
 
 
 def _reader_class(path: Path):
@@ -329,12 +363,29 @@ def _reader_class(path: Path):
 
 
 def _count_bytes(tokens, pattern) -> int:
+    """Leading tokens of ``tokens`` that match ``pattern`` (one data byte each)."""
+    if all(map(pattern.fullmatch, tokens)):
+        return len(tokens)
     n = 0
     for t in tokens:
         if not pattern.fullmatch(t):
             break
         n += 1
     return n
+
+
+_PC: dict = {}
+
+
+def _python_can_tables() -> dict:
+    """python-can names the checks use, imported once (python-can loads lazily here)."""
+    if not _PC:
+        from can.io.trc import TRCFileVersion
+        from can.util import dlc2len
+
+        _PC.update(dlc2len=dlc2len, v2=(TRCFileVersion.V2_0, TRCFileVersion.V2_1),
+                   first_byte={TRCFileVersion.V1_1: 5, TRCFileVersion.V1_3: 7})
+    return _PC
 
 
 def _asc_reason(msg, line: str, reader) -> str | None:
@@ -350,24 +401,24 @@ def _asc_reason(msg, line: str, reader) -> str | None:
     toks = line.split()
     try:
         if not msg.is_fd:
-            if toks[4].lower() != "d":
+            if toks[4] not in ("d", "D"):
                 return f"frame type {toks[4][:10]!r} is not 'd' (data) or 'r' (remote)"
             code = int(toks[5], base)
             if code > 8:
                 return f"classic CAN frame with DLC {code} (at most 8 data bytes)"
+            data = toks[6:6 + code]
+            if len(data) == code and all(map(pat.fullmatch, data)) \
+                    and (len(toks) == 6 + code or not pat.fullmatch(toks[6 + code])):
+                return None
             n = _count_bytes(toks[6:], pat)
-            if n != code:
-                return f"DLC {code} but {n} data bytes" + (" (line cut off?)" if n < code else "")
-        else:
-            from can.util import dlc2len
-
-            i = 5 if toks[5].isdigit() else 6
-            code, dlen = int(toks[i + 2], base), int(toks[i + 3])
-            if code > 15 or dlc2len(code) != dlen:
-                return f"CAN FD DLC {code} does not give data length {dlen}"
-            n = _count_bytes(toks[i + 4:i + 4 + dlen], pat)
-            if n != dlen:
-                return f"data length {dlen} but {n} data bytes" + (" (line cut off?)" if n < dlen else "")
+            return f"DLC {code} but {n} data bytes" + (" (line cut off?)" if n < code else "")
+        i = 5 if toks[5].isdigit() else 6
+        code, dlen = int(toks[i + 2], base), int(toks[i + 3])
+        if code > 15 or _python_can_tables()["dlc2len"](code) != dlen:
+            return f"CAN FD DLC {code} does not give data length {dlen}"
+        n = _count_bytes(toks[i + 4:i + 4 + dlen], pat)
+        if n != dlen:
+            return f"data length {dlen} but {n} data bytes" + (" (line cut off?)" if n < dlen else "")
     except (IndexError, ValueError):
         return "not a complete ASC frame line"
     return None
@@ -378,24 +429,21 @@ def _trc_reason(msg, line: str, reader) -> str | None:
 
     Also turns the DLC code python-can keeps for TRC 2.x into the payload
     length (``dlc`` means bytes in a :class:`FrameBatch`)."""
-    from can.io.trc import TRCFileVersion
-    from can.util import dlc2len
-
-    v = getattr(reader, "file_version", TRCFileVersion.UNKNOWN)
+    pc = _PC or _python_can_tables()
+    v = getattr(reader, "file_version", None)
     try:
-        if v in (TRCFileVersion.V2_0, TRCFileVersion.V2_1):
+        if v in pc["v2"]:
             if 0 <= msg.dlc <= 15:
-                msg.dlc = dlc2len(msg.dlc)
-            cols = getattr(reader, "columns", {})
+                msg.dlc = pc["dlc2len"](msg.dlc)
+            cols = reader.columns
             if msg.is_remote_frame or "D" not in cols:
                 return None
-            parts = line.split(maxsplit=getattr(reader, "_num_columns", -1))
+            parts = line.split(maxsplit=reader._num_columns)
             toks = parts[cols["D"]].split() if len(parts) > cols["D"] else []
         else:
             if msg.is_remote_frame:
                 return None
-            k = {TRCFileVersion.V1_1: 5, TRCFileVersion.V1_3: 7}.get(v, 4)
-            toks = line.split()[k:]
+            toks = line.split()[pc["first_byte"].get(v, 4):]
             if len(toks) != msg.dlc:
                 return f"DLC {msg.dlc} but {len(toks)} data bytes"
         n = _count_bytes(toks, _BYTE_HEX)
@@ -479,6 +527,8 @@ class LogSource:
     def __iter__(self):
         if self.suffix == ".blf":
             return self._iter_blf()
+        if self.suffix == ".log":
+            return self._iter_candump()
         return self._iter_text()
 
     # -- text formats
@@ -497,21 +547,24 @@ class LogSource:
             open_block = not (last and last[-1].lower().startswith(b"end triggerblock"))
         return ends_nl, open_block
 
-    def _iter_text(self):
-        path, cls, suffix = self.path, self.cls, self.suffix
-        kwargs = {"relative_timestamp": False} if suffix == ".asc" else {}
+    def _check_end(self) -> None:
+        """File-level truncation signs of a text log (see :meth:`_text_tail`) into ``notes``."""
         ends_nl, open_block = self._text_tail()
         if open_block:
             self.truncated = True
-            self.notes.append(f"{path}: truncated: the trigger block is not closed ('End TriggerBlock' "
+            self.notes.append(f"{self.path}: truncated: the trigger block is not closed ('End TriggerBlock' "
                               "missing at the end of the file)")
         if not ends_nl:
             self.truncated = True
-            self.notes.append(f"{path}: truncated: the file ends inside its last line (no line end)")
-        candump = suffix == ".log"
-        check = _asc_reason if suffix == ".asc" else _trc_reason if suffix == ".trc" else None
+            self.notes.append(f"{self.path}: truncated: the file ends inside its last line (no line end)")
+
+    def _iter_text(self):
+        path, cls, suffix = self.path, self.cls, self.suffix
+        kwargs = {"relative_timestamp": False} if suffix == ".asc" else {}
+        self._check_end()
+        check = _asc_reason if suffix == ".asc" else _trc_reason
         with open(path, "r", encoding="utf-8", errors="replace", newline=None) as f:
-            lines = _CandumpLines(f, self.rejected) if candump else _Lines(f, track=suffix == ".trc")
+            lines = _Lines(f, track=suffix == ".trc")
             last_fail = -1
             while True:
                 reader = cls(lines, **kwargs)
@@ -521,19 +574,10 @@ class LogSource:
                         pos = lines.lineno
                         if lines.track:
                             self._dropped(lines, pos)
-                        if candump:
-                            m = lines.match
-                            if m["err"] is not None:
-                                msg = _candump_error_frame(msg, lines.last, m)
-                            if m["dir"] is None and not lines.last.endswith("\n"):
-                                self.rejected.append((pos, "cut off: the file ends inside this line "
-                                                            "(truncated); not imported"))
-                                continue
-                        elif check is not None:
-                            why = check(msg, lines.last, reader)
-                            if why is not None:
-                                self.rejected.append((pos, why))
-                                continue
+                        why = check(msg, lines.last, reader)
+                        if why is not None:
+                            self.rejected.append((pos, why))
+                            continue
                         self.pos = pos
                         yield msg
                     if lines.track:
@@ -550,10 +594,31 @@ class LogSource:
                     last_fail = bad
                     if lines.in_header and lines.header:
                         lines.header.pop()
-                    why = _candump_reason(lines.last) if candump else ""
                     self.rejected.append((bad, f"unparsable line {lines.last.strip()[:60]!r} "
-                                               f"({why or f'{type(exc).__name__}: {exc}'})"))
+                                               f"({type(exc).__name__}: {exc})"))
                     lines.replay = list(lines.header)
+
+    def _iter_candump(self):
+        """candump -L: pre-filtered lines (:class:`_CandumpFilter`) through python-can's reader."""
+        self._check_end()
+        with open(self.path, "r", encoding="utf-8", errors="replace", newline=None) as f:
+            lines = _CandumpFilter(f, self.rejected)
+            nos, errors = lines.lines, lines.errors
+            while True:
+                try:
+                    for msg in self.cls(lines):
+                        pos = nos.popleft()
+                        if errors and pos in errors:
+                            msg = _candump_error_frame(msg, errors[pos])
+                        self.pos = pos
+                        yield msg
+                    return
+                except Exception as exc:  # a line the grammar lets through but python-can refuses
+                    if not nos:  # cannot tell the line: stop with what was read
+                        self.notes.append(f"{self.path}: reading stopped ({type(exc).__name__}: {exc})")
+                        return
+                    bad = nos.popleft()
+                    self.rejected.append((bad, f"unparsable line ({type(exc).__name__}: {exc})"))
 
     def _dropped(self, lines: _Lines, pos: int | None) -> None:
         """TRC: frame-like lines python-can passed over without a message or an error."""
@@ -606,7 +671,7 @@ class LogSource:
                                   "(python-can skips the other object types)")
 
 
-def _candump_error_frame(msg, line: str, m):
+def _candump_error_frame(msg, line: str):
     """The error frame of a candump line with CAN_ERR_FLAG (python-can's reader
     drops its channel, error class and data, or reads it as a data frame)."""
     import can
@@ -734,41 +799,48 @@ def import_log(inputs, output, *, channel_map: Mapping[str, str] | None = None, 
             src = LogSource(p)
             trc = src.suffix == ".trc"
             text = src.unit == "line"
-            pending: dict[str, tuple[list, list]] = {}
+            pending: dict[str, tuple[str, list, list]] = {}  # bus -> (bus, messages, places)
+            by_channel: dict = {}  # python-can channel -> the pending entry of its bus
             rejected = src.rejected
             good = 0
+            need_first = state["first_ns"] is None
             for msg in src:
-                if state["first_ns"] is None:
+                if need_first:
                     b, _, _ = checked_batch_from_messages("", [msg])
                     if len(b):
                         t = int(b.timestamp_ns[0])
                         state["first_ns"] = (t + 500) // 1000 * 1000 if text else t
-                ch = msg.channel
-                bus = names.get((trc, ch))
-                if bus is None:
-                    raw = ch
-                    if trc and isinstance(ch, int):
-                        raw = ch - 1  # python-can's TRC reader keeps the 1-based number
-                    dflt = default_bus_name(raw)
-                    bus = cmap.get(str(ch), cmap.get(dflt, dflt))
-                    names[(trc, ch)] = bus
-                lst = pending.get(bus)
-                if lst is None:
-                    lst = pending[bus] = ([], [])
-                lst[0].append(msg)
-                lst[1].append(src.pos)
-                if len(lst[0]) >= MAX_FRAMES_PER_MESSAGE:
-                    b = _pending_flush(writer, bus, lst[0], lst[1], text, rejected)
+                        need_first = False
+                entry = by_channel.get(msg.channel)
+                if entry is None:
+                    ch = msg.channel
+                    bus = names.get((trc, ch))
+                    if bus is None:
+                        raw = ch
+                        if trc and isinstance(ch, int):
+                            raw = ch - 1  # python-can's TRC reader keeps the 1-based number
+                        dflt = default_bus_name(raw)
+                        bus = cmap.get(str(ch), cmap.get(dflt, dflt))
+                        names[(trc, ch)] = bus
+                    entry = by_channel[ch] = pending.setdefault(bus, (bus, [], []))
+                msgs = entry[1]
+                msgs.append(msg)
+                entry[2].append(src.pos)
+                if len(msgs) >= MAX_FRAMES_PER_MESSAGE:
+                    b = _pending_flush(writer, entry[0], msgs, entry[2], text, rejected)
                     good += len(b)
                     if len(b):
-                        last_ns = int(b.timestamp_ns.max()) if last_ns is None else max(last_ns, int(b.timestamp_ns.max()))
-                    pending[bus] = ([], [])
-            for bus, (msgs, poss) in pending.items():
+                        t = int(b.timestamp_ns.max())
+                        last_ns = t if last_ns is None else max(last_ns, t)
+                    msgs.clear()
+                    entry[2].clear()
+            for bus, msgs, poss in pending.values():
                 if msgs:
                     b = _pending_flush(writer, bus, msgs, poss, text, rejected)
                     good += len(b)
                     if len(b):
-                        last_ns = int(b.timestamp_ns.max()) if last_ns is None else max(last_ns, int(b.timestamp_ns.max()))
+                        t = int(b.timestamp_ns.max())
+                        last_ns = t if last_ns is None else max(last_ns, t)
             rejected.sort()
             listed = [f"{src.where(pos)}: rejected: {why}" for pos, why in rejected[:MAX_LISTED]]
             if good == 0:
