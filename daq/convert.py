@@ -419,7 +419,7 @@ def _asc_reason(msg, line: str, reader) -> str | None:
         n = _count_bytes(toks[i + 4:i + 4 + dlen], pat)
         if n != dlen:
             return f"data length {dlen} but {n} data bytes" + (" (line cut off?)" if n < dlen else "")
-    except (IndexError, ValueError):
+    except Exception:  # noqa: BLE001 - any odd line: rejected, never a traceback
         return "not a complete ASC frame line"
     return None
 
@@ -449,24 +449,32 @@ def _trc_reason(msg, line: str, reader) -> str | None:
         n = _count_bytes(toks, _BYTE_HEX)
         if n != len(toks):
             return f"data byte {toks[n][:10]!r} is not two hex digits"
-    except (IndexError, ValueError, AttributeError):
+    except Exception:  # noqa: BLE001 - any odd line: rejected, never a traceback
         return "not a complete TRC frame line"
     return None
 
 
 class _ReadWatch:
     """Binary file wrapper for python-can's BLF reader: notes a short read
-    (the file ends inside an object), which the reader itself passes over."""
+    (the file ends inside an object), which the reader itself passes over, and
+    never asks for more than the file holds (an object size from a damaged
+    header would otherwise make ``read`` allocate up to 4 GiB)."""
 
-    def __init__(self, f):
+    def __init__(self, f, size: int):
         self._f = f
+        self.size = size
         self.short_at: int | None = None
         self.offset = 0
 
     def read(self, n: int = -1) -> bytes:
+        if n is None or n < 0 or n > self.size - self.offset:
+            want = n
+            n = max(self.size - self.offset, 0)
+        else:
+            want = n
         data = self._f.read(n)
         # a short read, except the reader's end-of-file probe for the next 16-byte object header
-        if n is not None and n > 0 and len(data) < n and not (len(data) == 0 and n == 16) \
+        if want is not None and want > 0 and len(data) < want and not (len(data) == 0 and want == 16) \
                 and self.short_at is None:
             self.short_at = self.offset + len(data)
         self.offset += len(data)
@@ -633,7 +641,7 @@ class LogSource:
         path = self.path
         with open(path, "rb") as raw:
             size = os.fstat(raw.fileno()).st_size
-            f = _ReadWatch(raw)
+            f = _ReadWatch(raw, size)
             try:
                 reader = self.cls(f)
             except Exception as exc:  # BLFParseError, struct.error on a short header
