@@ -251,3 +251,49 @@ def test_non_finite_timestamps_from_a_reader_are_rejected(tmp_path):
     assert bad.tolist() == [1, 2, 3, 4] and len(batch) == 2
     assert all("timestamp" in r for r in reasons)
     np.testing.assert_array_equal(batch.timestamp_ns, [1_700_000_000_000_000_000, 1_700_000_001_000_000_000])
+
+
+@pytest.mark.parametrize("suffix", [".log", ".asc", ".blf", ".trc"])
+def test_mutated_files_never_traceback_nor_store_an_invalid_frame(tmp_path, suffix):
+    """Seeded byte flips, truncations and junk lines: the import either keeps only valid frames
+    or refuses the file with a ValueError naming it; an existing output is never damaged."""
+    import random
+
+    from wheelsoil.daq.frames import FD_LENGTHS
+
+    msgs = random_messages(300, seed=5, channel=0, fd=suffix != ".trc", remote=suffix != ".trc")
+    full = tmp_path / f"full{suffix}"
+    with can.Logger(str(full)) as w:
+        for m in msgs:
+            w.on_message_received(m)
+    base = full.read_bytes()
+    keep = tmp_path / "keep.mcap"
+    _import(full, keep)
+    before = keep.read_bytes()
+    rng = random.Random(suffix)
+    for k in range(12):
+        d = bytearray(base)
+        kind = k % 3
+        if kind == 0:
+            d = d[:rng.randrange(len(d))]
+        elif kind == 1:
+            for _ in range(rng.randint(1, 6)):
+                d[rng.randrange(len(d))] ^= 1 << rng.randrange(8)
+        else:
+            i = rng.randrange(len(d))
+            d[i:i] = rng.choice([b"\n(nan) can0 123#00\n", b"\nxx yy\n", b"\x00\xff\n", b"\n 0.5 1 FFF Rx d 9 01\n"])
+        src = tmp_path / f"m{k}{suffix}"
+        src.write_bytes(bytes(d))
+        try:
+            _import(src, keep, overwrite=True) if k == 11 else _import(src, tmp_path / f"m{k}.mcap")
+        except ValueError as exc:
+            assert src.name in str(exc)
+            continue
+        out = keep if k == 11 else tmp_path / f"m{k}.mcap"
+        for b in read_frames(out).values():
+            ext, rem, err, fd = ((b.flags & bit) != 0 for bit in (1, 2, 4, 8))
+            assert (b.arbitration_id[~ext & ~err] <= 0x7FF).all() and (b.arbitration_id <= 0x1FFFFFFF).all()
+            assert (b.dlc[~fd & ~rem] <= 8).all() and np.isin(b.dlc[fd], FD_LENGTHS).all()
+            assert ((b.timestamp_ns >= 0) & (b.timestamp_ns < 9.2e18)).all()
+    if keep.read_bytes() != before:  # replaced only by a successful import of the last file
+        assert len(read_frames(keep)) > 0
