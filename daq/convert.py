@@ -241,10 +241,11 @@ def _candump_reason(line: str) -> str:
 
 class _Lines:
     """Line iterator for python-can's text readers: counts file lines, can
-    replay the header lines to a fresh reader after a bad line, and (``track``)
-    remembers the frame-like lines handed out since the last message."""
+    replay the header lines to a fresh reader after a bad line, and remembers
+    the lines handed out since the last message for which ``track(line)`` is
+    true (frame-like lines), so lines the reader skips silently can be named."""
 
-    def __init__(self, f, *, track: bool = False):
+    def __init__(self, f, *, track=None):
         self._f = f
         self.lineno = 0
         self.header: list[str] = []
@@ -252,7 +253,7 @@ class _Lines:
         self.replay: list[str] = []
         self.last = ""
         self.track = track
-        self.since: list[tuple[int, str]] = []
+        self.since: list[str] = []
 
     def first_message(self) -> None:
         """Called at the first frame: the header is what came before its line."""
@@ -278,10 +279,8 @@ class _Lines:
         if self.replay:
             return self.replay.pop(0)
         line = self._next_line()
-        if self.track:
-            s = line.strip()
-            if s and s[0] != ";":
-                self.since.append((self.lineno, s[:60]))
+        if self.track is not None:
+            self.since.append(line)
         return line
 
     def readline(self) -> str:
@@ -384,23 +383,48 @@ def _python_can_tables() -> dict:
         from can.util import dlc2len
 
         _PC.update(dlc2len=dlc2len, v2=(TRCFileVersion.V2_0, TRCFileVersion.V2_1),
-                   first_byte={TRCFileVersion.V1_1: 5, TRCFileVersion.V1_3: 7})
+                   first_byte={TRCFileVersion.V1_1: 5, TRCFileVersion.V1_3: 7},
+                   id_col={TRCFileVersion.V1_1: 3, TRCFileVersion.V1_3: 4})
     return _PC
 
 
+_ID_HEX = re.compile(r"[0-9A-Fa-f]{1,8}x?", re.IGNORECASE)
+_ID_DEC = re.compile(r"\d{1,10}x?", re.IGNORECASE)
+_TIME_MS = re.compile(r"\d+(?:\.\d*)?")
+
+
+#: An ASC line that looks like a CAN frame: time, channel number or CANFD, ..., Rx/Tx.
+_ASC_FRAMEISH = re.compile(r"\s*\d+\.\d+\s+(?:\d+|CANFD)\s+.*\b(?:Rx|Tx)\b", re.IGNORECASE).match
+
+
+def _asc_frameish(line: str) -> bool:
+    """True for an ASC line python-can should turn into a frame (others are events, comments)."""
+    return _ASC_FRAMEISH(line) is not None
+
+
+def _trc_frameish(line: str) -> bool:
+    """True for a TRC line that is not blank and not a comment."""
+    s = line.lstrip()
+    return bool(s) and s[0] != ";"
+
+
 def _asc_reason(msg, line: str, reader) -> str | None:
-    """What is wrong with an ASC data frame python-can parsed from ``line`` (None: fine).
+    """What is wrong with an ASC frame python-can parsed from ``line`` (None: fine).
 
     python-can takes the first DLC bytes and ignores the rest, accepts a DLC
-    above 8 for classic frames and a CAN FD DLC that does not match the data
-    length (only a log message)."""
-    if msg.is_error_frame or msg.is_remote_frame:
+    above 8 for classic frames, a CAN FD DLC that does not match the data
+    length (only a log message) and ids like ``+12``."""
+    if msg.is_error_frame:
         return None
     base = getattr(reader, "_converted_base", 16)
     pat = _BYTE_HEX if base == 16 else _BYTE_DEC
     toks = line.split()
     try:
         if not msg.is_fd:
+            if not (_ID_HEX if base == 16 else _ID_DEC).fullmatch(toks[2]):
+                return f"identifier {toks[2][:12]!r} is not a number"
+            if msg.is_remote_frame:
+                return None
             if toks[4] not in ("d", "D"):
                 return f"frame type {toks[4][:10]!r} is not 'd' (data) or 'r' (remote)"
             code = int(toks[5], base)
@@ -412,6 +436,10 @@ def _asc_reason(msg, line: str, reader) -> str | None:
                 return None
             n = _count_bytes(toks[6:], pat)
             return f"DLC {code} but {n} data bytes" + (" (line cut off?)" if n < code else "")
+        if not (_ID_HEX if base == 16 else _ID_DEC).fullmatch(toks[4]):
+            return f"identifier {toks[4][:12]!r} is not a number"
+        if msg.is_remote_frame:
+            return None
         i = 5 if toks[5].isdigit() else 6
         code, dlen = int(toks[i + 2], base), int(toks[i + 3])
         if code > 15 or _python_can_tables()["dlc2len"](code) != dlen:
@@ -424,26 +452,59 @@ def _asc_reason(msg, line: str, reader) -> str | None:
     return None
 
 
+#: TRC 2.x column -> pattern of its text ($COLUMNS letters, PEAK TRC file format 2.1).
+_TRC_COLUMN = {"N": r"\d+", "O": r"\d+(?:\.\d*)?", "T": r"[A-Za-z]{2}", "B": r"\d+", "I": r"[0-9A-Fa-f]{1,8}",
+               "d": r"[RT]x", "R": r"\S+", "L": r"\d+", "l": r"\d+"}
+
+
+def _trc_line_re(columns: dict):
+    """One regex for a whole TRC 2.x frame line with these columns (data last), or None."""
+    order = sorted(columns, key=columns.get)
+    if not order or order[-1] != "D" or any(c not in _TRC_COLUMN for c in order[:-1]):
+        return None
+    body = r"\s+".join(_TRC_COLUMN[c] for c in order[:-1])
+    return re.compile(r"\s*" + body + r"(?:\s+(?:[0-9A-Fa-f]{2}(?:\s+|$))*)?\s*").fullmatch
+
+
 def _trc_reason(msg, line: str, reader) -> str | None:
     """What is wrong with a TRC frame python-can parsed from ``line`` (None: fine).
 
-    Also turns the DLC code python-can keeps for TRC 2.x into the payload
-    length (``dlc`` means bytes in a :class:`FrameBatch`)."""
+    python-can's TRC reader takes ``nan``/``1e20`` times, ids like ``+12`` and
+    ignores data bytes past the DLC. Also turns the DLC code python-can keeps
+    for TRC 2.x into the payload length (``dlc`` means bytes in a :class:`FrameBatch`)."""
     pc = _PC or _python_can_tables()
     v = getattr(reader, "file_version", None)
     try:
         if v in pc["v2"]:
+            fast = getattr(reader, "_wheelsoil_line_re", False)
+            if fast is False:
+                fast = reader._wheelsoil_line_re = _trc_line_re(reader.columns)
+            if fast is not None and fast(line) is not None:
+                # time, id and data bytes well-formed; the byte count is checked against the DLC later
+                if 0 <= msg.dlc <= 15:
+                    msg.dlc = pc["dlc2len"](msg.dlc)
+                return None
+            cols = reader.columns
+            parts = line.split(maxsplit=reader._num_columns)
+            t_col, id_col = parts[cols["O"]], parts[cols["I"]]
+        else:
+            parts = line.split()
+            k = pc["first_byte"].get(v, 4)  # first data byte: 4 (1.0), 5 (1.1), 7 (1.3)
+            t_col, id_col = parts[1], parts[pc["id_col"].get(v, 2)]
+        if not _TIME_MS.fullmatch(t_col):
+            return f"time offset {t_col[:20]!r} is not a number of milliseconds"
+        if not _ID_HEX.fullmatch(id_col) or id_col[-1:] in ("x", "X"):
+            return f"identifier {id_col[:12]!r} is not hexadecimal"
+        if v in pc["v2"]:
             if 0 <= msg.dlc <= 15:
                 msg.dlc = pc["dlc2len"](msg.dlc)
-            cols = reader.columns
             if msg.is_remote_frame or "D" not in cols:
                 return None
-            parts = line.split(maxsplit=reader._num_columns)
             toks = parts[cols["D"]].split() if len(parts) > cols["D"] else []
         else:
             if msg.is_remote_frame:
                 return None
-            toks = line.split()[pc["first_byte"].get(v, 4):]
+            toks = parts[k:]
             if len(toks) != msg.dlc:
                 return f"DLC {msg.dlc} but {len(toks)} data bytes"
         n = _count_bytes(toks, _BYTE_HEX)
@@ -572,7 +633,7 @@ class LogSource:
         self._check_end()
         check = _asc_reason if suffix == ".asc" else _trc_reason
         with open(path, "r", encoding="utf-8", errors="replace", newline=None) as f:
-            lines = _Lines(f, track=suffix == ".trc")
+            lines = _Lines(f, track=_trc_frameish if suffix == ".trc" else _asc_frameish)
             last_fail = -1
             while True:
                 reader = cls(lines, **kwargs)
@@ -580,21 +641,25 @@ class LogSource:
                     for msg in reader:
                         lines.first_message()
                         pos = lines.lineno
-                        if lines.track:
-                            self._dropped(lines, pos)
+                        since = lines.since
+                        if len(since) > 1:
+                            self._dropped(lines, pos - len(since) + 1, since[:-1])
+                        since.clear()
                         why = check(msg, lines.last, reader)
                         if why is not None:
                             self.rejected.append((pos, why))
                             continue
                         self.pos = pos
                         yield msg
-                    if lines.track:
-                        self._dropped(lines, None)
+                    since = lines.since
+                    self._dropped(lines, lines.lineno - len(since) + 1, since)
+                    since.clear()
                     return
                 except Exception as exc:  # python-can raises ValueError/IndexError/... on a bad line
                     bad = lines.lineno
-                    if lines.track:
-                        self._dropped(lines, bad)
+                    since = lines.since
+                    self._dropped(lines, bad - len(since) + 1, since[:-1])
+                    since.clear()
                     if bad == last_fail:  # no progress: give up rather than loop
                         self.notes.append(f"{path}:{bad}: cannot continue after this line: {exc}")
                         self.truncated = True
@@ -628,13 +693,14 @@ class LogSource:
                     bad = nos.popleft()
                     self.rejected.append((bad, f"unparsable line ({type(exc).__name__}: {exc})"))
 
-    def _dropped(self, lines: _Lines, pos: int | None) -> None:
-        """TRC: frame-like lines python-can passed over without a message or an error."""
-        for no, text in lines.since:
-            if no != pos:
-                self.rejected.append((no, f"not read by python-can's TRC reader (cut off or unsupported "
-                                          f"record type): {text!r}"))
-        lines.since.clear()
+    def _dropped(self, lines: _Lines, first: int, texts: list[str]) -> None:
+        """Frame-like lines (``lines.track``) among ``texts`` (lines ``first``, ``first + 1``, ...)
+        that python-can passed over without a message or an error: rejected with their number."""
+        what = "cut off or unsupported record type" if self.suffix == ".trc" else "malformed frame line"
+        for j, text in enumerate(texts):
+            if lines.track(text):
+                self.rejected.append((first + j, f"not read by python-can's {self.suffix[1:].upper()} reader "
+                                                 f"({what}): {text.strip()[:60]!r}"))
 
     # -- BLF
     def _iter_blf(self):

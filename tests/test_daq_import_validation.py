@@ -297,3 +297,48 @@ def test_mutated_files_never_traceback_nor_store_an_invalid_frame(tmp_path, suff
             assert ((b.timestamp_ns >= 0) & (b.timestamp_ns < 9.2e18)).all()
     if keep.read_bytes() != before:  # replaced only by a successful import of the last file
         assert len(read_frames(keep)) > 0
+
+
+TRC_V11 = """\
+;$FILEVERSION=1.1
+;$STARTTIME=45244.92592593
+;
+     1)      1000.0  Rx         0120  2  01 02
+     2)      2000.0  Rx         0121  2  01 02 03
+     3)      3000.0  Rx         +122  1  05
+     4)       nan    Rx         0123  1  05
+     5)      5000.0  Rx     09567C22  8  00 00 00 00 00 00 00 00
+     6)      6000.0  Rx         0124  8  01 02
+"""
+TRC_V13 = """\
+;$FILEVERSION=1.3
+;$STARTTIME=45244.92592593
+;
+     1)      1000.0 1  Rx         0120 -  2  01 02
+     2)      2000.0 1  Rx         0FFF -  1  01
+     3)      3000.0 2  Rx     09567C22 -  8  00 00 00 00 00 00 00 00
+"""
+
+
+@pytest.mark.parametrize("text,bad,ids", [(TRC_V11, {5, 6, 7, 9}, {0x120, 0x9567C22}),
+                                          (TRC_V13, {5}, {0x120, 0x9567C22})])
+def test_trc_version1_lines_checked(tmp_path, text, bad, ids):
+    src = tmp_path / "v1.trc"
+    src.write_text(text)
+    res = _import(src, tmp_path / "a.mcap")
+    assert _rejected_lines(res, str(src)) == bad
+    assert {int(i) for b in read_frames(tmp_path / "a.mcap").values() for i in b.arbitration_id} == ids
+
+
+def test_asc_identifier_and_remote_lines_checked(tmp_path):
+    src = tmp_path / "r.asc"
+    src.write_text("date Tue Nov 14 22:13:20.000 2023\nbase hex  timestamps absolute\n"
+                   "internal events logged\nBegin Triggerblock Tue Nov 14 22:13:20.000 2023\n"
+                   " 0.001000 1  +12             Rx   d 1 01\n"
+                   " 0.002000 1  130             Rx   r\n"
+                   " 0.003000 1  131             Rx   d 1 02\n"
+                   "End TriggerBlock\n")
+    res = _import(src, tmp_path / "a.mcap")
+    assert _rejected_lines(res, str(src)) == {5}
+    f = read_frames(tmp_path / "a.mcap")["can0"]
+    assert f.arbitration_id.tolist() == [0x130, 0x131] and (f.flags & 2).tolist() == [2, 0]
