@@ -8,6 +8,15 @@ channel 1 is python-can channel 0), so channel ``c`` becomes bus ``can<c>``;
 a named channel (candump's ``can0``, ``vcan1``) keeps its name. Exporting
 writes the bus name as the channel; python-can's ASC/BLF/TRC writers turn
 ``can<c>`` into file channel ``c+1``. ``channel_map`` overrides both ways.
+
+Data safety (import and export): the output may not be an input, an existing
+output is kept unless ``overwrite=True``, and the file is written under a
+temporary name in the output's directory and renamed into place only when
+complete (:func:`check_output_path`). Import validates every line/frame
+(:class:`LogSource`, :func:`~wheelsoil.daq.frames.checked_batch_from_messages`),
+rejects and counts invalid ones with their line (BLF: object) numbers, reports
+truncated files, refuses an input without a valid frame, and records all of it
+in the ``wheelsoil.import`` metadata record next to an ``imported`` provenance.
 """
 
 from __future__ import annotations
