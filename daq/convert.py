@@ -21,9 +21,11 @@ in the ``wheelsoil.import`` metadata record next to an ``imported`` provenance.
 
 from __future__ import annotations
 
+import contextlib
 import heapq
 import itertools
 import json
+import logging
 import os
 import re
 import secrets
@@ -554,6 +556,18 @@ class _ReadWatch:
         pass
 
 
+@contextlib.contextmanager
+def _quiet_logger(name: str):
+    """Raise a python-can logger's level to ERROR for the duration (restored after)."""
+    log = logging.getLogger(name)
+    level = log.level
+    log.setLevel(logging.ERROR)
+    try:
+        yield
+    finally:
+        log.setLevel(level)
+
+
 class LogSource:
     """python-can messages of one log file, checked, with their place in the file.
 
@@ -641,7 +655,8 @@ class LogSource:
         kwargs = {"relative_timestamp": False} if suffix == ".asc" else {}
         self._check_end()
         check = _asc_reason if suffix == ".asc" else _trc_reason
-        with open(path, "r", encoding="utf-8", errors="replace", newline=None) as f:
+        with open(path, "r", encoding="utf-8", errors="replace", newline=None) as f, \
+                _quiet_logger(f"can.io.{suffix[1:]}"):  # its per-line messages are reported here, with numbers
             lines = _Lines(f, track=_trc_frameish if suffix == ".trc" else _asc_frameish)
             last_fail = -1
             while True:
