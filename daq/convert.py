@@ -974,9 +974,10 @@ def import_log(inputs, output, *, channel_map: Mapping[str, str] | None = None, 
         w.close()
         _commit(tmp, out, overwrite)
     except BaseException:
-        if state["w"] is not None:
-            try:
-                state["w"].close()
+        w = state["w"]
+        if w is not None:
+            try:  # a writer that can abort drops its file; else close it, the file is removed below
+                (getattr(w, "abort", None) or w.close)()
             except Exception:  # noqa: BLE001 - the original error matters
                 pass
         _discard(tmp)
