@@ -113,7 +113,7 @@ EFFECT_TITLES = {
 #: Null values of each hypothesis' own effect parameters (the nested model they reduce to).
 NULLS = {"vasilev": {"H": 0.0}, "lyasko": {"m1": 0.0, "m2": 0.0}, "ding": {"n1": 0.0},
          "vasilev+terrain": {"H": 0.0}, "ding+terrain": {"n1": 0.0}, "wong_reece": {"a1": 0.0, "a2": 0.0},
-         "drift_linear": {"g_lnk": 0.0, "g_phi": 0.0, "g_c": 0.0}}
+         "drift_linear": {"g_lnk": 0.0, "g_phi": 0.0, "g_c": 0.0}, "dp_resistance": {"R0": 0.0, "R1": 0.0}}
 #: The legacy default candidate list of the command line (pipeline); it means "all hypotheses".
 _LEGACY_DEFAULT = {"vasilev", "lyasko", "ding", "terrain_mismatch"}
 
@@ -627,7 +627,7 @@ def diagnose(
             names.append(get_hypothesis(m).name)
     names = list(dict.fromkeys(names))
     prior = lab_prior(terrain, wheel, widen=LIBRARY_PRIOR_WIDEN if fit_terrain else 1.0)
-    ctx = Context(terrain, wheel, sinkage, prior, fit_terrain)
+    ctx = Context(terrain, wheel, sinkage, prior, fit_terrain, float(np.median(data.load_n)))
     if fit_terrain:
         dup = [n for n in names if HYPOTHESES[n].terrain_block and n != "drift_linear"]
         if dup:
@@ -756,6 +756,9 @@ def diagnose(
         elif pe < P_NAME:
             effect = "unexplained"
             reasons.append(f"the probability of {EFFECT_TITLES[fits[best].effect]} is only {pe:.2f} (< {P_NAME:g})")
+        elif fits[best].effect == "unexplained":
+            effect = "unexplained"
+            reasons.append(f"the best explanation is {TITLES[best]}, which is not a listed cause")
         elif remain:
             effect = "unexplained"
             reasons.append(f"{TITLES[best]} lowers the drawbar pull error but leaves significant structure ("
