@@ -362,20 +362,64 @@ def binned_residuals(data: FitData, resid: np.ndarray, n_bins: int = 10, level: 
     return out
 
 
+def _level_test(gm: np.ndarray) -> dict:
+    """One-sample t-test of unit means ``gm`` (in noise sigmas) against zero."""
+    gm = gm[np.isfinite(gm)]
+    G = gm.size
+    out = {"p": float("nan"), "effect": float("nan"), "units": int(G)}
+    if G < 3:
+        return out
+    m, sd = float(np.mean(gm)), float(np.std(gm, ddof=1))
+    p = float(2 * stats.t.sf(abs(m) / (sd / math.sqrt(G)), G - 1)) if sd > 0 else (0.0 if m != 0 else 1.0)
+    out.update(p=p, effect=abs(m), mean=m)
+    return out
+
+
 def _structure_cells(data: FitData, pred: dict) -> dict:
-    """Structure tests of cell residuals of one model: ``{"<channel>": vs slip, "<channel>@load",
-    "<channel>@x"}`` (load and x for the drawbar pull; x only for time series)."""
+    """Structure tests of cell residuals of one model, in cell-noise sigmas:
+    ``{"<channel>": vs slip, "<channel>@load", "<channel>@x"}``.
+
+    Tables: every row is an independent unit (:func:`_structure_1d` on the rows).
+    Time series: the cells of one accelerate cycle share the cycle's soil and
+    speed, so the cycle is the independent unit for anything constant within it.
+    The level (mean error) is tested with a t-test over the cycle means; the
+    shape against slip and against load on the residuals centred within each
+    cycle; the dependence on distance/time (``@x``) on the cycle means against
+    the cycle's mean x.  The channel's ``p`` combines level and shape
+    (Bonferroni x2), its ``effect`` is the RMS of both parts.
+    """
     cells = data.cells
     out = {}
+    grp = cells.group
+    n_g = np.unique(grp).size
+    by_cycle = data.kind != "table" and n_g >= 3
     for c, y in cells.channels.items():
         e = (y - pred[c]) / cells.sigma[c]
         size = float(np.sqrt(np.nanmean(y**2))) if np.isfinite(y).any() else float("nan")
-        tests = {c: _structure_1d(cells.slip, e)}
-        if c == "drawbar_pull_n" or cells.x is not None:
-            if cells.x is not None:
-                tests[c + "@x"] = _structure_1d(cells.x, e)
+        tests = {}
+        if not by_cycle:
+            tests[c] = _structure_1d(cells.slip, e)
             if c == "drawbar_pull_n" and np.std(cells.load_n) > 0.01 * abs(np.mean(cells.load_n)):
                 tests[c + "@load"] = _structure_1d(cells.load_n, e, degree=1)
+        else:
+            ok = np.isfinite(e)
+            ug, inv = np.unique(grp[ok], return_inverse=True)
+            cnt = np.bincount(inv).astype(float)
+            gm = np.bincount(inv, weights=e[ok]) / cnt
+            ec = e[ok] - gm[inv]
+            lvl = _level_test(gm)
+            shp = _structure_1d(cells.slip[ok], ec)
+            p = min(1.0, 2 * min(lvl["p"], shp["p"])) if np.isfinite(lvl["p"]) and np.isfinite(shp["p"]) else shp["p"]
+            t = dict(shp)
+            t.update(p=p, p_level=lvl["p"], p_shape=shp["p"], level_sigma=lvl.get("mean", float("nan")),
+                     effect=float(math.sqrt(np.nan_to_num(lvl["effect"]) ** 2 + np.nan_to_num(shp["effect"]) ** 2)),
+                     units=int(ok.sum()), cycles=int(ug.size))
+            tests[c] = t
+            if cells.x is not None:
+                xg = np.bincount(inv, weights=cells.x[ok]) / cnt
+                tests[c + "@x"] = _structure_1d(xg, gm)
+            if c == "drawbar_pull_n" and np.std(cells.load_n) > 0.01 * abs(np.mean(cells.load_n)):
+                tests[c + "@load"] = _structure_1d(cells.load_n[ok], ec, degree=1)
         for k, t in tests.items():
             t["effect_abs"] = t["effect"] * cells.sigma[c]
             t["effect_rel"] = t["effect_abs"] / size if size > 0 else float("inf")
