@@ -27,8 +27,15 @@ decides with this rule (constants below; none was tuned on a benchmark):
    noise cannot outvote the others.
 3. **Supported.**  H can be named only when it converged, improves the
    drawbar pull (the quantity the paper judges), worsens no measured channel,
-   and its own effect parameters are non-null (Wald |value - null| > 2 se;
-   otherwise it is just the nested model it reduces to).
+   its own effect parameters are non-null (joint Wald test at the level of
+   |z| > 2; otherwise it is just the nested model it reduces to), and, when it
+   re-fits the terrain, the fitted terrain does not conflict with the lab
+   values (prior chi-square below its ``1 - PRIOR_CONFLICT_ALPHA`` quantile),
+   and a hypothesis that contains a smaller one (slip sinkage + terrain
+   contains the terrain re-fit and the slip-sinkage form; drift contains the
+   terrain re-fit, :data:`NESTED`) lowers the drawbar pull error below it out of
+   sample by the same paired test and worsens no channel (what the extra part
+   adds must pay off on data it was not fitted to).
 4. **Probabilities.**  Posterior probabilities of all hypotheses tried:
    Laplace evidence of each fit (lab priors as Gaussian priors, the
    unit-information prior for other parameters, one common overdispersion
@@ -87,6 +94,10 @@ P_NAME = 0.90  #: posterior probability of an effect needed to name it (else: al
 P_HIGH = 0.99  #: ... and for confidence "high"
 BF_ALTERNATIVE = 10.0  #: hypotheses within this Bayes factor of the best "explain the data equally well"
 #: (Kass & Raftery 1995: below 10 the evidence against them is not strong)
+PRIOR_CONFLICT_ALPHA = 0.001  #: a re-fitted terrain whose prior residuals exceed the chi-square quantile
+#: 1 - this (k = number of terrain parameters) is incompatible with the lab values and their stated
+#: uncertainty (prior-data conflict, Box 1980; Evans & Moshonov 2006): not a credible explanation.
+#: At the MAP the prior chi-square is shrunk below chi2_k, so this is conservative towards the lab.
 WALD_Z = 2.0  #: an effect parameter differs from its null value when |value - null| > WALD_Z se
 LOAD_RATIO_TOL = 1.25  #: model W / measured W outside [1/1.25, 1.25] in a slip bin: inconsistent
 #: (Eq. 10's own small-angle error reaches ~20 % on library soils, wheelsoil.model.wong)
@@ -97,7 +108,7 @@ COND_FLAG = 100.0  #: condition number of the column-normalised Jacobian above t
 THRESHOLDS = {
     "alpha": ALPHA, "worsen_alpha": WORSEN_ALPHA, "min_effect_sigma": MIN_EFFECT, "min_effect_rel": MIN_REL,
     "min_gain_noise_var": MIN_GAIN, "p_name": P_NAME, "p_high": P_HIGH, "bf_alternative": BF_ALTERNATIVE,
-    "wald_z": WALD_Z, "load_ratio_tol": LOAD_RATIO_TOL, "min_units_high": MIN_UNITS_HIGH,
+    "wald_z": WALD_Z, "prior_conflict_alpha": PRIOR_CONFLICT_ALPHA, "load_ratio_tol": LOAD_RATIO_TOL, "min_units_high": MIN_UNITS_HIGH,
     "corr_flag": CORR_FLAG, "cond_flag": COND_FLAG,
 }
 
@@ -114,6 +125,9 @@ EFFECT_TITLES = {
 NULLS = {"vasilev": {"H": 0.0}, "lyasko": {"m1": 0.0, "m2": 0.0}, "ding": {"n1": 0.0},
          "vasilev+terrain": {"H": 0.0}, "ding+terrain": {"n1": 0.0}, "wong_reece": {"a1": 0.0, "a2": 0.0},
          "drift_linear": {"g_lnk": 0.0, "g_phi": 0.0, "g_c": 0.0}, "dp_resistance": {"R0": 0.0, "R1": 0.0}}
+#: Hypotheses nested in a larger one: the larger one must beat each of them out of sample.
+NESTED = {"vasilev+terrain": ("terrain", "vasilev"), "ding+terrain": ("terrain", "ding"),
+          "drift_linear": ("terrain",)}
 #: The legacy default candidate list of the command line (pipeline); it means "all hypotheses".
 _LEGACY_DEFAULT = {"vasilev", "lyasko", "ding", "terrain_mismatch"}
 
@@ -763,6 +777,13 @@ def diagnose(
             why_not[k] = "worsens the " + ", ".join(CHANNEL_TITLES[c] for c in worse) + " out of sample"
         elif not _effective(f):
             why_not[k] = "its effect parameters are not distinguishable from zero (it reduces to a simpler model)"
+        elif _not_better_than_nested(data, fits, f):
+            why_not[k] = "does not predict better out of sample than " + _not_better_than_nested(data, fits, f) \
+                + ", which it contains"
+        elif _prior_conflict(f):
+            why_not[k] = (f"needs the terrain far beyond the lab values' uncertainty (prior chi-square "
+                          f"{f.chi2_prior:.3g} on {len(f.prior)} parameters; changed: "
+                          + (", ".join(_changed_terrain(f)) or "-") + ")")
         else:
             supported.append(k)
     reasons: list[str] = []
@@ -887,6 +908,25 @@ def diagnose(
     diag._sig_w = sig_w  # noqa: SLF001
     diag.summary = _summary(diag)
     return diag
+
+
+def _not_better_than_nested(data, fits, f: HypFit) -> str:
+    """The title of a nested hypothesis (:data:`NESTED`) that ``f`` does not beat out of sample
+    (the drawbar pull does not improve by the paired test, or a channel worsens), else ''."""
+    for n in NESTED.get(f.name, ()):
+        g = fits.get(n)
+        if g is None or not g.success or g.cv is None:
+            continue
+        pr = _paired(data, g, f)
+        if not pr["drawbar_pull_n"]["improves"] or any(r["worsens"] for r in pr.values()):
+            return TITLES[n]
+    return ""
+
+
+def _prior_conflict(f: HypFit) -> bool:
+    """True when the fitted terrain conflicts with the lab prior (``PRIOR_CONFLICT_ALPHA``)."""
+    k = len(f.prior)
+    return bool(k and f.chi2_prior > stats.chi2.ppf(1 - PRIOR_CONFLICT_ALPHA, k))
 
 
 def _changed_terrain(f: HypFit) -> list:
