@@ -51,7 +51,7 @@ from wheelsoil.sim.physics import bandlimited as _bandlimited
 from wheelsoil.sim.terra import soil_dict
 
 __all__ = ["EFFECTS", "IN_FAMILY", "OUT_OF_FAMILY", "ACCEPTABLE", "VERDICTS", "SimulatedRun", "simulate_run",
-           "write_simulation", "write_truth", "judge", "draw_case", "pack_signals", "vehicle_config_for",
+           "write_simulation", "write_truth", "write_vehicle_config", "judge", "draw_case", "pack_signals", "vehicle_config_for",
            "SIMULATOR"]
 
 #: Name and version of the simulator (in the provenance record and the truth).
@@ -717,6 +717,23 @@ def write_simulation(run: SimulatedRun, path, *, config=None) -> Path:
     return path
 
 
+def write_vehicle_config(run: SimulatedRun, path) -> Path:
+    """Write the vehicle configuration of the simulated wheel as a TOML file (DBC paths made absolute,
+    pointing at the shipped DBCs), e.g. for ``wheelsoil import run.log --vehicle FILE`` of a .log/.blf
+    output (those formats carry no configuration). Raises OSError when it cannot be written."""
+    from wheelsoil.daq.config import default_vehicle_path
+
+    cfg = run.config or vehicle_config_for(*run.wheel)
+    text = cfg.text
+    base = default_vehicle_path().parent
+    for bus_dbcs in cfg.buses.values():
+        for p in bus_dbcs:
+            text = text.replace(f'"{p.name}"', json.dumps(str(base / p.name)))
+    path = Path(path)
+    path.write_text(text, encoding="utf-8")
+    return path
+
+
 def write_truth(run: SimulatedRun, path) -> Path:
     """Write the hidden truth (contract F: ``effect``, ``family``, ``acceptable``, ``params``,
     ``seed``; plus terrain, wheel, loads, latency, clocks, ...) as JSON (schema wheelsoil.simtruth/2)."""
@@ -883,6 +900,9 @@ def register(subparsers) -> None:
                    help="what the FL/FR wheel-speed channels carry: the 4x4's driven front wheels (default, "
                    "physical) or an idealised undriven reference wheel (r omega = V)")
     p.add_argument("--truth", default=None, metavar="FILE", help="also write the hidden truth to this JSON file")
+    p.add_argument("--vehicle-out", default=None, metavar="TOML",
+                   help="also write the simulated wheel's vehicle configuration (for `wheelsoil import "
+                   "run.log --vehicle TOML`; an .mcap output carries it already)")
     p.add_argument("-o", "--output", required=True, help="output: .mcap, or .log/.asc/.blf/.trc (then `wheelsoil import`)")
     p.set_defaults(func=_cmd_simulate)
 
@@ -952,6 +972,9 @@ def _cmd_simulate(args) -> int:
     per_bus = ", ".join(f"{b}: {len(f['timestamp_ns'])}" for b, f in sorted(run.frames.items()))
     print(f"wrote {out}: {run.duration_s:.1f} s, {run.n_frames} frames ({per_bus}), "
           f"{out.stat().st_size / 1e6:.2f} MB; wheel {wheel[0]} x {wheel[1]} m, vehicle {run.info['vehicle']['mass_kg']:.0f} kg")
+    if args.vehicle_out:
+        write_vehicle_config(run, args.vehicle_out)
+        print(f"vehicle configuration -> {args.vehicle_out}")
     if args.truth:
         write_truth(run, args.truth)
         print(f"hidden truth -> {args.truth}")

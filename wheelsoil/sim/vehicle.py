@@ -196,13 +196,15 @@ def _smooth(x):
 def simulate_dynamics(table: ForceTable, veh: VehicleParams, rng: np.random.Generator, *,
                       added_load_n: float, radius_m: float, duration_s: float | None, n_cycles: int,
                       grade: float = 0.0, bumps_front=None, bumps_rear=None, dist_total_guess_m: float = 300.0,
-                      slip_noise=None, can_start: bool = True):
+                      slip_noise=None, can_start: bool = True, slip_best: float = 0.5):
     """Integrate the vehicle through accelerate-brake cycles.
 
     ``bumps_front/rear``: callables t -> load disturbance [N] (or None); ``slip_noise``:
     array of the slip controller's wobble per step (band-limited, or None); ``can_start``: False
     when the vehicle could not pull away from standstill (it then enters the test strip rolling
-    at 1 m/s and brakes only to a crawl). Returns a dict of
+    at 1 m/s and brakes only to a crawl); ``slip_best``: the slip of the largest net pull. Below
+    1 m/s the driver keeps the slip near ``slip_best`` (else a soil that digs in at high slip
+    would bog the vehicle down). Returns a dict of
     arrays on the ``DT_S`` grid: ``t_s, speed_mps, accel_mps2, omega_radps, slip (s of the
     wheels; nan at standstill), slip_cmd, load_front_n, load_rear_n, dp_front_n, dp_rear_n
     (per wheel, as used), resistance_n, distance_m, phase (object), cycle (int)``, and
@@ -252,7 +254,10 @@ def simulate_dynamics(table: ForceTable, veh: VehicleParams, rng: np.random.Gene
             if rw_cmd is not None:
                 om_cmd = max(rw_cmd, 0.0) / r
             else:
-                om_cmd = V / (r * (1.0 - min(s_cmd, 0.97)))
+                sc = min(s_cmd, 0.97)
+                if sc > slip_best and phase != "brake":  # slow: back off towards the best traction
+                    sc = slip_best + (sc - slip_best) * _smooth((V - 0.4) / 0.6)
+                om_cmd = max(V, 0.3) / (r * (1.0 - sc)) if phase != "brake" else V / (r * (1.0 - sc))
             om_cmd = min(om_cmd, veh.omega_max_radps)  # the wheel-speed sensor's range
             # driveline: first-order lag (0.12 s) with a rate limit of OMEGA_RATE_MAX
             d_om = (om_cmd - om_state[0]) * dt / 0.12
