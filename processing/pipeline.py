@@ -473,7 +473,7 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
         return _process_log(path, config=config, rate_hz=rate_hz, cutoff_hz=cutoff_hz, progress=progress,
                             wheel_radius_m=wheel_radius_m, inertia=inertia)
     cfg, cfg_where = _resolve_config(path, config, warns)
-    warns.extend(getattr(cfg, "notes", []) or [])
+    warns.extend(f"{cfg_where}: {n}" for n in (getattr(cfg, "notes", None) or []))
     cfg_r = float(cfg.wheel_radius_m)
     if wheel_radius_m is None:
         r = cfg_r
