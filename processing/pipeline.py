@@ -533,7 +533,8 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
         dec = decode_batches(batches(), decoder)
     # the reader's warnings (a truncated or damaged file) name the file
     warns += [str(c.message) for c in caught
-              if issubclass(c.category, RuntimeWarning) and str(path) in str(c.message)]
+              if issubclass(c.category, RuntimeWarning)
+              and (str(path) in str(c.message) or path.name in str(c.message))]
     if span[0] is None:
         raise ValueError(f"{path}: the recording holds no CAN frames" + "".join(f"; {w}" for w in warns))
 
