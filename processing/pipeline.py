@@ -310,6 +310,9 @@ def _clean_time_base(dec: dict, path: Path, warns: list[str]):
                          f"neighbours set aside, in {len(runs)} place(s); first at frame {r0['first']}: "
                          f"{_claim_text(r0)} (ProcessResult.excluded lists them)")
         ts_k = ts[keep]
+        if ts_k.size == 0:
+            warns.append(f"{path}: every frame of {name} ({m.bus}) has an outlier timestamp: {name} not used")
+            continue
         try:
             parts = split_joined_parts(ts_k)
         except ValueError as exc:
@@ -604,6 +607,10 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
         except ValueError as exc:
             ws = None
             warns.append(f"WFT counters unusable ({exc}): load, drawbar pull and torque not computed")
+            for name in streams:
+                lost_frames[name] = {"lost": None, "gaps": 0, "longest_gap_s": 0.0,
+                                     "received": int(streams[name][0].shape[0]),
+                                     "method": "counter unusable: loss unknown"}
         if ws is not None:
             wft_period = ws.period_s
             for name, rep in ws.reports.items():

@@ -163,7 +163,7 @@ def split_joined_parts(ts_ns: np.ndarray) -> list[tuple[int, int]]:
     n = ts.shape[0]
     if n < 2:
         return [(0, n)]
-    x = (ts - ts.min()).astype(np.float64) * 1e-9
+    x = (ts.astype(np.float64) - float(ts.min())) * 1e-9  # float: no int64 overflow
     thr = max(BACKWARD_MIN_S, 10.0 * _typical_spacing(x))
     back = np.flatnonzero(np.diff(x) < -thr) + 1
     if back.size == 0:
