@@ -78,7 +78,7 @@ class ProcessResult:
     None; ``lost_frames`` message -> dict(lost, gaps, longest_gap_s, received,
     method); ``warnings`` list of sentences; ``cycle`` int64 (N,)
     accelerate-cycle id (-1 outside); plus ``t0_ns`` (host time of the first
-    frame), ``rate_hz``, ``cutoff_hz``, ``wheel_radius_m`` (the radius slip was
+    frame processed, outliers set aside), ``rate_hz``, ``cutoff_hz``, ``wheel_radius_m`` (the radius slip was
     computed with: the ``wheel_radius_m`` argument, else the vehicle
     configuration's) and ``wheel_radius_source``, ``wheel_width_m``,
     ``latency_reference``.
@@ -448,12 +448,17 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
     frames read.
 
     Returns :class:`ProcessResult` (columns :data:`COLUMNS`, one row per grid
-    point from the first frame of the recording to the last). Slip is Eq. (6)
-    of the seed paper with r = ``wheel_radius_m`` or ``config.wheel_radius_m``.
+    point from the first to the last frame of the messages processing reads,
+    once frames with outlier timestamps are set aside and parts of logs joined
+    out of order are sorted: :mod:`.timebase`; both reported in ``excluded``,
+    ``quality`` and ``warnings``). Slip is Eq. (6) of the seed paper with
+    r = ``wheel_radius_m`` or ``config.wheel_radius_m``.
 
     Raises: ``OSError`` unreadable file; ``ValueError`` not an MCAP
     recording, bad options (an implausible ``wheel_radius_m``), or a recording
-    holding none of the configured messages (names what was looked for). Missing parts (no GNSS, no wheel
+    holding none of the configured messages (names what was looked for), parts
+    of joined logs that overlap in time (names the message, bus and frames), or
+    a run longer than :data:`~.timebase.MAX_GRID_ROWS` grid rows (memory bound). Missing parts (no GNSS, no wheel
     speed, no WFT, lost frames) are reported in ``warnings`` instead.
     """
     from wheelsoil.daq import iter_frame_batches

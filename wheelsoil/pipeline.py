@@ -87,7 +87,8 @@ def load_inputs(inputs, *, progress: bool = False, wheel_radius_m: float | None 
         elif suffix in TABLE_SUFFIXES:
             df = _read_table(path)
             kinds.append("table")
-            tr = df["wheel_radius_m"].dropna().unique() if "wheel_radius_m" in df.columns else []
+            tr = (pd.to_numeric(df["wheel_radius_m"], errors="coerce").dropna().unique()
+                  if "wheel_radius_m" in df.columns else [])
             if len(tr) > 1 or (len(tr) == 1 and wheel_radius_m is not None
                                and abs(float(tr[0]) - wheel_radius_m) > 1e-6 * wheel_radius_m):
                 notes.append(f"WHEEL RADIUS CONFLICT: {path.name} states wheel_radius_m = "
