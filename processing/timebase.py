@@ -177,8 +177,8 @@ def split_joined_parts(ts_ns: np.ndarray) -> list[tuple[int, int]]:
             raise ValueError(
                 f"time runs backwards and the parts overlap: frames {a1}-{b1 - 1} cover "
                 f"{lo1:.3f}-{hi1:.3f} s and frames {a2}-{b2 - 1} cover {lo2:.3f}-{hi2:.3f} s "
-                "(relative to the earliest frame); two logs of the same time joined? Split them and process "
-                "each on its own")
+                "(relative to the earliest frame); two logs of the same time joined (split them and process "
+                "each on its own), or the host clock stepped back while logging")
         if hi2 > hi1:
             lo1, hi1, a1, b1 = lo2, hi2, a2, b2
     return parts
