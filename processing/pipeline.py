@@ -237,6 +237,46 @@ def _front_wheel_refs(config) -> list:
             for s in msg.signals if s.name.upper().endswith(("FL", "FR")) and s.name != ws.signal]
 
 
+# --------------------------------------------------------------------------- latency helpers
+#: |front r*omega / measured r*omega - 1| below this for 99 % of the moving samples, while the
+#: measured wheel is driven hard: the front wheels are coupled to it (not free rolling).
+COUPLED_MAX_DEV = 0.02
+
+
+def _fronts_coupled(t_front_ns: np.ndarray, v_front: np.ndarray, t_rear_ns: np.ndarray,
+                    v_rear: np.ndarray) -> bool:
+    """True when the front wheels' r*omega (n,) follows the measured wheel's r*omega (m,)
+    within :data:`COUPLED_MAX_DEV` wherever it exceeds 1 m/s (at least 100 samples): all
+    wheels turn together (locked differentials), so the fronts slip as much as the measured
+    wheel and cannot serve as the latency reference. (A run without any slip also looks like
+    this; the caller then checks against :func:`_force_latency`.)"""
+    rear = np.interp(t_front_ns.astype(np.float64), t_rear_ns.astype(np.float64), v_rear)
+    mv = np.isfinite(rear) & np.isfinite(v_front) & (rear > 1.0)
+    if np.count_nonzero(mv) < 100:
+        return False
+    return bool(np.percentile(np.abs(v_front[mv] / rear[mv] - 1.0), 99) < COUPLED_MAX_DEV)
+
+
+def _force_latency(g_rel: np.ndarray, g_v: np.ndarray, g_period: float, t_grid: np.ndarray,
+                   fx: np.ndarray, cutoff_hz: float) -> LatencyEstimate | None:
+    """GNSS latency from vehicle dynamics: the vehicle's acceleration follows the soil's
+    longitudinal forces, ``m dV/dt ~ a Fx + b`` (the measured wheel's Fx standing for the sum
+    over the wheels, hence a free gain ``a``), so the GNSS dV/dt (g_rel (n,) s, g_v (n,) m/s,
+    derivative of the filtered V) lags the measured Fx (fx (N,) N on ``t_grid``) by the
+    latency. Both sides low-passed with the same zero-phase filter at ``cutoff_hz``; the fit is
+    :func:`.timesync.estimate_latency`. None when it cannot be estimated."""
+    ok = np.isfinite(fx)
+    if np.count_nonzero(ok) < 100 or not g_period > 0:
+        return None
+    dv = filter_to_grid(g_rel, g_v, g_period, g_rel, cutoff_hz, derivative=True)[1]
+    dt = float(t_grid[1] - t_grid[0]) if t_grid.size > 1 else 0.01
+    fxs = filter_to_grid(t_grid[ok], fx[ok], dt, t_grid, cutoff_hz)
+    try:
+        return estimate_latency(g_rel, dv, t_grid, fxs, usable_ref=np.isfinite(fxs), min_speed_mps=-np.inf)
+    except ValueError:
+        return None
+
+
 # --------------------------------------------------------------------------- resampling
 def _time_gaps(name: str, ts_ns: np.ndarray, nominal_s: float | None = None, nominal_src: str = "",
                *, parts: list | None = None) -> tuple[dict, float]:
@@ -772,12 +812,38 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
             dv = np.gradient(np.nan_to_num(ref_f), ref_t)
             use = dv > -LATENCY_MAX_DECEL_MPS2
             usable = use if usable is None else (usable & use)
+            lat_err = ""
             try:
                 latency = estimate_latency(g_rel, g_v, ref_t, ref_f, usable_ref=usable)
-                if latency.note:
-                    warns.append(f"GNSS latency: {latency.note}")
             except ValueError as exc:
-                warns.append(f"GNSS latency not estimated ({exc}); GNSS timestamps used as received")
+                lat_err = str(exc)
+            # front wheels that turn exactly with the measured wheel while it is driven (a 4x4
+            # with locked differentials) are no free-rolling reference: check against physics
+            coupled = f_series and wss_t is not None and _fronts_coupled(ft, fv, wss_t, got[1] * r)
+            if coupled or (latency is not None and latency.note) or lat_err:
+                alt = _force_latency(g_rel, g_v, g_period, t_grid, fx_f, min(cutoff, 0.4 / g_period))
+                disagree = (latency is not None and alt is not None and abs(alt.latency_s - latency.latency_s)
+                            > 3.0 * math.hypot(alt.stderr_s, latency.stderr_s))
+                if alt is not None and not alt.note and (latency is None or latency.note or disagree):
+                    why = ("the front wheels turn with the measured wheel (all wheels driven?), so they are no "
+                           "free-rolling reference" if coupled else
+                           f"the wheel-speed reference gave {'no estimate' if latency is None else latency.note}")
+                    warns.append(f"GNSS latency from the GNSS acceleration against the measured drawbar pull "
+                                 f"(m dV/dt follows Fx): {why}"
+                                 + (f"; the wheel-speed reference said {latency.latency_s * 1e3:.1f} ms"
+                                    if latency is not None else ""))
+                    latency, lat_err = alt, ""
+                    lat_ref = "GNSS dV/dt against the measured Fx (vehicle dynamics)"
+                elif coupled and latency is not None:
+                    warns.append("GNSS latency: the front wheels turn with the measured wheel (all wheels driven?); "
+                                 "the estimate from them agrees with the one from the GNSS acceleration against "
+                                 "the measured drawbar pull" if alt is not None else
+                                 "GNSS latency: the front wheels turn with the measured wheel (all wheels "
+                                 "driven?) and may not roll freely; no independent check was possible")
+            if latency is not None and latency.note:
+                warns.append(f"GNSS latency: {latency.note}")
+            if latency is None:
+                warns.append(f"GNSS latency not estimated ({lat_err}); GNSS timestamps used as received")
         else:
             warns.append("GNSS latency not estimated: no free-rolling wheel speed to compare with; "
                          "GNSS timestamps used as received")

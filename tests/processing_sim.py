@@ -84,13 +84,49 @@ def truth_profile(n_cycles: int = 3, dt: float = 0.002, *, standstill_s: float =
     return Truth(t, speed, slip, omega, load, dp, torque, np.concatenate(ph), radius_m)
 
 
+def truth_dynamic(n_cycles: int = 3, dt: float = 0.002, *, mass_kg: float = 8000.0,
+                  radius_m: float = R) -> Truth:
+    """A run whose vehicle speed follows the soil forces (all wheels alike, as in a 4x4 with
+    locked differentials): ``dV/dt = (4 Dp - 600 N) / mass_kg``; accelerate 6 s (slip sweep
+    0.05 -> 0.5 -> 0.05), brake at slip -0.05 until V < 1.2 m/s, roll 1 s; from V = 1 m/s."""
+    load0 = 11000.0
+    v, t = 1.0, 0.0
+    ts, vs, ss, ph = [], [], [], []
+
+    def dp_of(s, load):
+        return load * (0.45 * (1 - np.exp(-s / 0.15)) - 0.08)
+
+    def step(s, phase):
+        nonlocal v, t
+        load = load0 + 400.0 * np.sin(2 * np.pi * 0.3 * t)
+        ts.append(t), vs.append(v), ss.append(s), ph.append(phase)
+        v = max(v + dt * (4 * dp_of(s, load) - 600.0) / mass_kg, 0.05)
+        t += dt
+
+    for _ in range(n_cycles):
+        for u in np.arange(0, 1, dt / 6.0):
+            step(0.05 + 0.45 * np.sin(np.pi * u) ** 2, "accel")
+        k = 0
+        while v > 1.2 or k < 250:
+            step(-0.05 * min(k / 250, 1.0), "brake")
+            k += 1
+        for _ in range(500):
+            step(0.02, "other")
+    t_s, speed, slip = np.array(ts), np.array(vs), np.array(ss)
+    load = load0 + 400.0 * np.sin(2 * np.pi * 0.3 * t_s)
+    dp = dp_of(slip, load)
+    omega = speed / (radius_m * (1 - slip))
+    torque = radius_m * (dp + 0.1 * load)
+    return Truth(t_s, speed, slip, omega, load, dp, torque, np.array(ph, dtype=object), radius_m)
+
+
 def write_recording(path, truth: Truth, *, latency_s: float = 0.1, seed: int = 0,
                     gps_offset_s: float = 1234.5678, no_gnss: bool = False, no_wheel_speed: bool = False,
                     drop_wft_bursts: int = 0, counter_jumps: int = 0,
                     wheel_speed_zero: tuple[float, float] | None = None,
                     wheel_mass_kg: float = WHEEL_MASS_KG, wheel_inertia_kgm2: float = WHEEL_INERTIA_KGM2,
                     config=None, ts_edit=None, drop_wft_runs=(), drop_frames: dict | None = None,
-                    burst_s: float = 0.0) -> dict:
+                    burst_s: float = 0.0, fronts_coupled: bool = False) -> dict:
     """Encode ``truth`` as frames and write an MCAP recording.
 
     ``drop_wft_bursts``: that many runs of 1..12 lost WFT samples;
@@ -109,7 +145,9 @@ def write_recording(path, truth: Truth, *, latency_s: float = 0.1, seed: int = 0
     messages); ``drop_frames`` ``{message name: fraction}`` drops that share
     of a message's frames at random (no counter tells); ``burst_s`` > 0
     delivers each bus's frames in bursts: receive times rounded up to the
-    next multiple of ``burst_s`` (as USB/UDP adapters do).
+    next multiple of ``burst_s`` (as USB/UDP adapters do); ``fronts_coupled``:
+    the front wheels turn with the measured one (all wheels driven, locked
+    differentials) instead of rolling freely.
 
     Returns ``{"path", "lost_samples", "start_ns", "dropped_frames"}``
     (``dropped_frames``: message -> frames removed by ``drop_frames``).
@@ -170,6 +208,8 @@ def write_recording(path, truth: Truth, *, latency_s: float = 0.1, seed: int = 0
         for tw in np.arange(0.003, t[-1], 0.01):
             v = np.interp(tw, t, truth.speed_mps)
             om = np.interp(tw, t, truth.omega_radps)
+            if fronts_coupled:
+                v = om * truth.radius_m
             if wheel_speed_zero and wheel_speed_zero[0] <= tw < wheel_speed_zero[1]:
                 om = 0.0
             rpm = lambda w: float(np.clip(abs(w * (1 + rng.normal(0, 0.002))) * 60 / (2 * np.pi), 0, 655))
