@@ -9,8 +9,10 @@ Steps (each in its own module):
    lost runs of at most ``MAX_FILL_SAMPLES`` samples are interpolated,
    longer ones split the data into segments;
 3. clocks: host->GPS time mapping, GNSS latency from the free-rolling front
-   wheels (or the measured wheel when it is nearly unloaded), removed from
-   the GNSS timestamps (:mod:`.timesync`);
+   wheels (or the measured wheel when it is nearly unloaded; or, when the
+   front wheels turn with the measured one (all wheels driven) or that
+   reference fails, from the vehicle dynamics: GNSS dV/dt against the
+   measured Fx), removed from the GNSS timestamps (:mod:`.timesync`);
 4. per source and per contiguous segment: uniform resampling at the source's
    own rate, zero-phase Butterworth low-pass (:mod:`.filters`), linear
    interpolation onto the output grid (``rate_hz``, from the first frame);
