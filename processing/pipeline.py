@@ -95,7 +95,9 @@ class ProcessResult:
     ``max_abs_force_n`` / ``max_abs_torque_nm`` (largest correction applied, None
     if not applied), ``method``, ``source``.
     ``excluded`` list of dicts ``{t0_s, t1_s, reason}`` (+ details): spans of
-    data set aside (outlier timestamps, long gaps, the gap between joined parts).
+    data set aside (outlier timestamps, long gaps, the gap between joined parts,
+    damaged parts of the file as the reader reports them; ``t0_s``/``t1_s`` None
+    when the time is unknown).
     ``quality`` dict: frames with outlier timestamps, non-monotonic parts, lost
     frames per message (None = unknown), grid size.
     """
@@ -171,7 +173,9 @@ class ProcessResult:
         if self.excluded:
             lines.append(f"excluded spans: {len(self.excluded)}")
             for e in self.excluded[:10]:
-                lines.append(f"  {e['t0_s']:.3f}-{e['t1_s']:.3f} s: {e['reason']}")
+                span = ("time unknown" if e["t0_s"] is None or e["t1_s"] is None
+                        else f"{e['t0_s']:.3f}-{e['t1_s']:.3f} s")
+                lines.append(f"  {span}: {e['reason']}")
             if len(self.excluded) > 10:
                 lines.append(f"  ... {len(self.excluded) - 10} more")
         for w in self.warnings:
@@ -555,8 +559,18 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
     n_frames = [0]
     buses_seen: dict[str, int] = {}
 
+    # the reader's damage report (byte offset, frames lost, time span), where the daq
+    # reader offers one (wheelsoil.daq.recording.ReadReport)
+    read_report = None
+    try:
+        from wheelsoil.daq.recording import ReadReport
+
+        read_report = ReadReport()
+    except ImportError:
+        pass
+
     def batches():
-        it = iter_frame_batches(path)
+        it = iter_frame_batches(path) if read_report is None else iter_frame_batches(path, report=read_report)
         bar = None
         if progress:
             from tqdm import tqdm
@@ -620,6 +634,18 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
     t_grid = np.arange(n_grid) / rate_hz
     excluded: list[dict] = _time_base_excluded(tb_runs, tb_parts, dec, t0_ns)
     quality: dict = {"timestamps": {**tb_quality, "grid_rows": n_grid, "span_s": span_s}}
+    damage = list(getattr(read_report, "damage", None) or [])
+    if damage:
+        quality["damage"] = damage
+        for d in damage:
+            a, b = d.get("t0_ns"), d.get("t1_ns")
+            lost = d.get("frames_lost")
+            excluded.append({
+                "t0_s": (a - t0_ns) * 1e-9 if a is not None else None,
+                "t1_s": (b - t0_ns) * 1e-9 if b is not None else None,
+                "reason": f"damaged recording ({d.get('kind')}) at byte {d.get('offset')}: "
+                          f"{'unknown number of' if lost is None else lost} frames lost",
+                "offset": d.get("offset")})
 
     def rel_s(ts_ns: np.ndarray) -> np.ndarray:
         return (ts_ns - t0_ns) * 1e-9
