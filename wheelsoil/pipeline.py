@@ -210,6 +210,10 @@ def run_fit(
         raise ValueError("no input given")
     if not 0.0 <= slip_min < 1.0:
         raise ValueError(f"--slip-min must be in [0, 1), got {slip_min}")
+    if wheel_radius is not None:  # the same plausibility check as the slip radius of processing
+        from wheelsoil.processing.pipeline import check_wheel_radius
+
+        wheel_radius = check_wheel_radius(wheel_radius, "--wheel-radius")
     ter = terrain if isinstance(terrain, Terrain) else load_terrain(terrain)
     models = list(models) if models else ["vasilev", "lyasko", "ding", "terrain_mismatch"]
     for m in models:
