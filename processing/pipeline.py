@@ -919,6 +919,10 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
         warns.append(f"slip undefined (NaN) for {np.count_nonzero(undefined) / rate_hz:.1f} s where "
                      f"r*omega < {MIN_WHEEL_SPEED_MPS} m/s (longest run {longest:.1f} s){why}; "
                      "load, drawbar pull, torque and speed still computed there")
+    for name, m in dec.items():  # every other message read (GNSS time/speed...): against its cycle time
+        if name not in lost_frames and len(m):
+            lost_frames[name] = _time_gaps(name, m.timestamp_ns, *cfg.cycle_time_s(m.bus, name),
+                                           parts=tb_parts.get(name))[0]
     unknown = sorted(k for k, d in lost_frames.items() if d["lost"] is None)
     quality["lost_frames"] = {k: d["lost"] for k, d in lost_frames.items()}
     quality["lost_frames_known_total"] = int(sum(d["lost"] for d in lost_frames.values() if d["lost"] is not None))
