@@ -45,14 +45,16 @@ def load_inputs(inputs, *, progress: bool = False, wheel_radius_m: float | None 
     with (Eq. 6; ``process_recording(wheel_radius_m=...)``), so the fit's radius
     is the slip radius; radius conflicts (recordings whose configurations
     disagree, a table's ``wheel_radius_m`` column, or a table's slip of unknown
-    radius) are loud notes.
+    radius) are loud notes. ``processing`` lists per recording what processing
+    did (``wheel_radius_m``/``_source``, ``inertia``, ``excluded``, ``quality``
+    of ``ProcessResult``) for the report.
 
     Raises ValueError (naming the file) for a missing file, an unknown suffix,
     an unreadable table, or a recording processing cannot read.
     """
     import pandas as pd
 
-    frames, kinds, sync, notes = [], [], [], []
+    frames, kinds, sync, notes, processing = [], [], [], [], []
     radius = width = None
     for i, raw in enumerate(inputs):
         path = Path(raw)
@@ -73,6 +75,9 @@ def load_inputs(inputs, *, progress: bool = False, wheel_radius_m: float | None 
                 "gps_time_mapping": res.gps_time_mapping,
             })
             notes.extend(f"{path.name}: {w}" for w in res.warnings)
+            processing.append({"input": str(path), "wheel_radius_m": res.wheel_radius_m,
+                               "wheel_radius_source": res.wheel_radius_source, "inertia": res.inertia,
+                               "excluded": res.excluded, "quality": res.quality})
             if radius is None:  # the first recording's vehicle configuration
                 radius, width = res.wheel_radius_m, res.wheel_width_m
             elif abs(res.wheel_radius_m - radius) > 1e-6 * radius:
@@ -82,7 +87,8 @@ def load_inputs(inputs, *, progress: bool = False, wheel_radius_m: float | None 
         elif suffix in TABLE_SUFFIXES:
             df = _read_table(path)
             kinds.append("table")
-            tr = df["wheel_radius_m"].dropna().unique() if "wheel_radius_m" in df.columns else []
+            tr = (pd.to_numeric(df["wheel_radius_m"], errors="coerce").dropna().unique()
+                  if "wheel_radius_m" in df.columns else [])
             if len(tr) > 1 or (len(tr) == 1 and wheel_radius_m is not None
                                and abs(float(tr[0]) - wheel_radius_m) > 1e-6 * wheel_radius_m):
                 notes.append(f"WHEEL RADIUS CONFLICT: {path.name} states wheel_radius_m = "
@@ -108,7 +114,8 @@ def load_inputs(inputs, *, progress: bool = False, wheel_radius_m: float | None 
     df = pd.concat(frames, ignore_index=True, sort=False)
     if "t_s" in df.columns and df["t_s"].isna().any():  # tables mixed with recordings
         df["t_s"] = df["t_s"].fillna(df.groupby("run").cumcount().astype(float))
-    return df, {"kinds": kinds, "time_sync": sync, "wheel_radius_m": radius, "wheel_width_m": width, "notes": notes}
+    return df, {"kinds": kinds, "time_sync": sync, "wheel_radius_m": radius, "wheel_width_m": width, "notes": notes,
+                "processing": processing}
 
 
 def _time_sync_summary(sync: list) -> dict:
@@ -203,6 +210,10 @@ def run_fit(
         raise ValueError("no input given")
     if not 0.0 <= slip_min < 1.0:
         raise ValueError(f"--slip-min must be in [0, 1), got {slip_min}")
+    if wheel_radius is not None:  # the same plausibility check as the slip radius of processing
+        from wheelsoil.processing.pipeline import check_wheel_radius
+
+        wheel_radius = check_wheel_radius(wheel_radius, "--wheel-radius")
     ter = terrain if isinstance(terrain, Terrain) else load_terrain(terrain)
     models = list(models) if models else ["vasilev", "lyasko", "ding", "terrain_mismatch"]
     for m in models:
