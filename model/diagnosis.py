@@ -40,7 +40,10 @@ decides with this rule (constants below; none was tuned on a benchmark):
    Laplace evidence of each fit (lab priors as Gaussian priors, the
    unit-information prior for other parameters, one common overdispersion
    c_hat from the best fit; :mod:`wheelsoil.model.crossval`) times equal
-   prior mass per effect, split among its forms.
+   prior mass per effect, split among its forms.  An effect's probability
+   sums its hypotheses; a hypothesis whose effect parameters are null counts
+   for the smaller model it then is (slip sinkage + terrain with a null slip
+   sinkage is a terrain re-fit).
 5. **Verdict.**  The supported hypothesis with the highest posterior is the
    candidate.  Its effect is named only if the effect's posterior probability
    is at least ``P_NAME``; otherwise the causes that explain the data about
@@ -526,6 +529,25 @@ def _effective(f: HypFit) -> bool:
     return bool(w2 > stats.chi2.ppf(level, len(names)))
 
 
+def _effect_of(f: HypFit) -> str:
+    """The effect a fit stands for: its own, or, when its effect parameters are null (not
+    :func:`_effective`), the effect of the smaller model it then is (slip sinkage + terrain and
+    drift with null slopes are a terrain re-fit; a null slip-sinkage form is Wong)."""
+    if f.name == "wong" or _effective(f):
+        return f.effect
+    return "terrain_mismatch" if f.name in NESTED and f.name != "terrain" and _effective_terrain(f) else "none"
+
+
+def _effective_terrain(f: HypFit) -> bool:
+    """True when the terrain part of ``f`` moved from the lab values (Wald, as :func:`_effective`)."""
+    if not f.prior:
+        return False
+    tmp = HypFit.__new__(HypFit)
+    tmp.__dict__.update(f.__dict__)
+    tmp.name = "terrain"
+    return _effective(tmp)
+
+
 def _on_prior_scale(p, v):
     return math.log(v) if p in ("k_eq", "K") and v > 0 else v
 
@@ -751,7 +773,8 @@ def diagnose(
     probs = {k: math.exp(v - mx) / z for k, v in lp.items()}
     eprobs: dict[str, float] = {}
     for k, p in probs.items():
-        eprobs[fits[k].effect] = eprobs.get(fits[k].effect, 0.0) + p
+        e = _effect_of(fits[k])
+        eprobs[e] = eprobs.get(e, 0.0) + p
     # structure of Wong's residuals
     tests_w = _structure_cells(data, wong.cell_pred)
     n_tests = len(tests_w)
