@@ -8,9 +8,13 @@ decides with this rule (constants below; none was tuned on a benchmark):
 
 1. **Structure.**  Wong's residuals on the cells, each divided by the
    channel's model-free cell noise, are tested against slip (quadratic and
-   binned-means F-tests), and the drawbar pull's also against load and
-   against distance/time (linear + quadratic F-test).  Bonferroni over all
-   tests at family level ``ALPHA``; a structure must also be *relevant*: its
+   binned-means F-tests), the drawbar pull's also against load, and every
+   channel's against distance/time (linear + quadratic F-test).  In a time
+   series the accelerate cycle is the independent unit for whatever is
+   constant within it: the mean error is tested over the cycle means, the
+   shape against slip and load within the cycles, the dependence on distance
+   over the cycles (:func:`_structure_cells`).  Bonferroni over all tests at
+   family level ``ALPHA``; a structure must also be *relevant*: its
    RMS at least ``MIN_EFFECT`` cell-noise sigma (smaller than the scatter of
    one independent unit, nobody predicting a new cycle could tell it from
    unit-to-unit variation) and ``MIN_REL`` of the channel's magnitude.
@@ -49,7 +53,10 @@ decides with this rule (constants below; none was tuned on a benchmark):
    is at least ``P_NAME``; otherwise the causes that explain the data about
    equally well are listed (``alternatives``) with the measurement that
    would separate them, and the verdict is ``unexplained`` (different effects
-   are never merged into one named cause).  If the candidate leaves relevant
+   are never merged into one named cause).  The same holds when the best
+   explanation is ``dp_resistance``, the generic "something acts on the
+   drawbar pull alone" that stands for causes on no list, or when an
+   unsupported hypothesis of another effect has more evidence than the candidate.  If the candidate leaves relevant
    significant structure (step 1 on its own residuals) -> ``unexplained``
    with what was tried.  No supported hypothesis -> ``unexplained``.
 6. **Confidence** follows the effect's posterior probability (``high`` >=
