@@ -1039,7 +1039,7 @@ def _summary(d: Diagnosis) -> str:
     """The plain-English paragraph, generated from the same facts as the verdict."""
     data, wong = d.data, d.fits["wong"]
     parts = []
-    units_word = "rows" if data.kind == "table" else "independent cycle x slip cells"
+    units_word = "independent rows" if data.kind == "table" else "independent cycle x slip cells"
     chans = ", ".join(CHANNEL_TITLES[c] for c in data.channels)
     parts.append(f"{data.n} samples with {data.slip_min:g} < s < 1 ({data.n_units} {units_word}, "
                  f"{len(np.unique(data.cells.group))} cross-validation folds: {data.group_kind}) were fitted against {chans}.")
