@@ -674,7 +674,7 @@ def diagnose(
     fit_terrain: bool = False,
     sinkage: str = "eq10",
     progress: bool = False,
-    max_iter: int = 60,
+    max_iter: int = 200,
 ) -> Diagnosis:
     """Diagnose what Wong's model gets wrong on measured data (rule in the module doc).
 
@@ -691,7 +691,7 @@ def diagnose(
         ``terrain`` and the ``+terrain`` combinations are then not separate hypotheses.
     sinkage : ``eq10`` | ``balance`` (model core).
     progress : tqdm progress bar.
-    max_iter : Gauss-Newton iteration limit per fit (a fit that does not converge is
+    max_iter : Gauss-Newton iteration limit per fit (default 200; a fit that does not converge is
         reported in ``failures`` and left out of the verdict).
 
     Returns :class:`Diagnosis`.  Raises ValueError for bad data or an unknown hypothesis.
