@@ -30,6 +30,9 @@ The hypotheses (paper numbering for Eqs.; Wong = *Theory of Ground Vehicles*, 4t
   acts on the drawbar pull alone" (bulldozing, a tyre's rolling resistance, an
   Fx offset): effect ``unexplained``.  A listed cause that this explains as well
   is not named.
+* ``radius``: not a listed cause either: the soil sees another wheel radius than
+  the one slip was computed with (a deflecting tyre, a radius error): effect
+  ``unexplained``.
 * ``drift_linear``: terrain drift.  The terrain changes along the run:
   repeated passes compact the soil (k_eq, c and phi grow with the number of
   passes, Wong ch. 2 on repetitive loading), or the wheel reaches another patch
@@ -408,11 +411,36 @@ class DrawbarResistance(Hypothesis):
                            drawbar_pull_n=f.drawbar_pull_n - r, torque_nm=f.torque_nm)
 
 
+class WheelRadius(Hypothesis):
+    """The soil sees a wheel of radius r (1 + rho), while slip was computed with r (Eq. 6).
+
+    Not a cause on our list: it stands for a deflecting tyre (Wong's equivalent rigid wheel
+    is larger than the tyre's radius) or a wrong radius in the configuration.  The forces are
+    Wong's for the radius r_e = r (1 + rho) at the slip the soil sees,
+    s_e = 1 - (1 - s) / (1 + rho) (the same V and omega, Eq. 6 with r_e), clipped at 0.
+    Effect ``unexplained``: a listed cause it explains as well is not named.
+    """
+
+    name, effect, title = "radius", "unexplained", "a wheel radius other than the slip radius (no listed cause)"
+    source = "generic alternative: tyre deflection (Wong 2008 ch. 2 equivalent rigid wheel) or a radius error"
+
+    def own_params(self, ctx):
+        return (HParam("rho", 0.0, -0.3, 0.5, "-", "relative change of the radius the soil sees"),)
+
+    def forces(self, ctx, terrain, load_n, slip, x, p):
+        from .terrain import Wheel
+
+        rho = p["rho"]
+        wheel = Wheel(ctx.wheel.radius * (1.0 + rho), ctx.wheel.width)
+        s_e = np.clip(1.0 - (1.0 - np.asarray(slip, float)) / (1.0 + rho), 0.0, 0.999)
+        return wong_forces(terrain, wheel, load_n, s_e, sinkage=ctx.sinkage)
+
+
 #: The registry: name -> hypothesis.  Add a cause: one class above and one entry here.
 HYPOTHESES: dict[str, Hypothesis] = {
     h.name: h
     for h in (Wong(), Vasilev(), Lyasko(), Ding(), TerrainMismatch(), VasilevTerrain(), DingTerrain(),
-              WongReece(), DriftLinear(), DrawbarResistance())
+              WongReece(), DriftLinear(), DrawbarResistance(), WheelRadius())
 }
 
 
