@@ -29,7 +29,10 @@ decides with this rule (constants below; none was tuned on a benchmark):
    cause is the worst outcome) and the loss exceeds ``MIN_GAIN``.  Each
    channel counts on its own noise scale, so the channel with the smallest
    noise cannot outvote the others.
-3. **Supported.**  H can be named only when it converged, improves the
+3. **Supported.**  A cause is named only when Wong's drawbar pull itself
+   shows relevant structure (an error in torque or sinkage alone is reported
+   per channel, overall ``unexplained``: no listed cause changes those without
+   the drawbar pull, a transducer error does).  H can be named only when it converged, improves the
    drawbar pull (the quantity the paper judges), worsens no measured channel,
    its own effect parameters are non-null (joint Wald test at the level of
    |z| > 2; otherwise it is just the nested model it reduces to), and, when it
@@ -135,7 +138,7 @@ EFFECT_TITLES = {
 NULLS = {"vasilev": {"H": 0.0}, "lyasko": {"m1": 0.0, "m2": 0.0}, "ding": {"n1": 0.0},
          "vasilev+terrain": {"H": 0.0}, "ding+terrain": {"n1": 0.0}, "wong_reece": {"a1": 0.0, "a2": 0.0},
          "drift_linear": {"g_lnk": 0.0, "g_phi": 0.0, "g_c": 0.0}, "dp_resistance": {"R0": 0.0, "R1": 0.0},
-         "radius": {"rho": 0.0}}
+         "radius": {"rho": 0.0}, "sensor_gain": {"g_dp": 0.0, "g_t": 0.0}}
 #: Hypotheses nested in a larger one: the larger one must beat each of them out of sample.
 NESTED = {"vasilev+terrain": ("terrain", "vasilev"), "ding+terrain": ("terrain", "ding"),
           "drift_linear": ("terrain",)}
@@ -824,6 +827,11 @@ def diagnose(
     remain = {}
     if not structured:
         effect, model = "none", "wong"
+    elif not any(tests_w[k]["channel"] == "drawbar_pull_n" for k in sig_w):
+        effect = "unexplained"
+        reasons.append("Wong's drawbar pull shows no relevant systematic error; the error is in the "
+                       + ", ".join(sorted({CHANNEL_TITLES[tests_w[k]['channel']] for k in sig_w}))
+                       + " only, which no listed cause produces alone (a transducer error would)")
     elif not supported:
         effect = "unexplained"
         reasons.append("no hypothesis lowers the drawbar pull error out of sample without worsening another "

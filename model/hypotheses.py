@@ -33,6 +33,8 @@ The hypotheses (paper numbering for Eqs.; Wong = *Theory of Ground Vehicles*, 4t
 * ``radius``: not a listed cause either: the soil sees another wheel radius than
   the one slip was computed with (a deflecting tyre, a radius error): effect
   ``unexplained``.
+* ``sensor_gain``: not a listed cause: the transducer's Fx and My read with a
+  gain error: effect ``unexplained``.
 * ``drift_linear``: terrain drift.  The terrain changes along the run:
   repeated passes compact the soil (k_eq, c and phi grow with the number of
   passes, Wong ch. 2 on repetitive loading), or the wheel reaches another patch
@@ -436,11 +438,31 @@ class WheelRadius(Hypothesis):
         return wong_forces(terrain, wheel, load_n, s_e, sinkage=ctx.sinkage)
 
 
+class SensorGain(Hypothesis):
+    """The transducer's drawbar pull and torque read (1 + g_dp) and (1 + g_t) times Wong's values.
+
+    Not a cause on our list: a calibration error of the wheel force transducer (Fx or My gain).
+    Effect ``unexplained``: a listed cause it explains as well is not named.
+    """
+
+    name, effect, title = "sensor_gain", "unexplained", "a gain error of the force transducer (no listed cause)"
+    source = "generic alternative: transducer calibration (Fx, My gains)"
+
+    def own_params(self, ctx):
+        return (HParam("g_dp", 0.0, -0.5, 0.5, "-", "relative gain error of the drawbar pull (Fx)"),
+                HParam("g_t", 0.0, -0.5, 0.5, "-", "relative gain error of the torque (My)"))
+
+    def forces(self, ctx, terrain, load_n, slip, x, p):
+        f = wong_forces(terrain, ctx.wheel, load_n, slip, sinkage=ctx.sinkage)
+        return WheelForces(sinkage_m=f.sinkage_m, theta1_rad=f.theta1_rad, load_model_n=f.load_model_n,
+                           drawbar_pull_n=f.drawbar_pull_n * (1.0 + p["g_dp"]), torque_nm=f.torque_nm * (1.0 + p["g_t"]))
+
+
 #: The registry: name -> hypothesis.  Add a cause: one class above and one entry here.
 HYPOTHESES: dict[str, Hypothesis] = {
     h.name: h
     for h in (Wong(), Vasilev(), Lyasko(), Ding(), TerrainMismatch(), VasilevTerrain(), DingTerrain(),
-              WongReece(), DriftLinear(), DrawbarResistance(), WheelRadius())
+              WongReece(), DriftLinear(), DrawbarResistance(), WheelRadius(), SensorGain())
 }
 
 
