@@ -510,6 +510,8 @@ def _effective(f: HypFit) -> bool:
     test ``d^T Sigma^-1 d`` against the chi-square quantile of the same level as |z| > WALD_Z
     (correlated forms such as Lyasko's m1, m2 are judged jointly).  For ``terrain`` the
     null is the lab prior's centre."""
+    if f.k == 0:  # a parameter-free alternative (balance): it either predicts better or it does not
+        return f.name != "wong"
     if f.name == "terrain":
         names = list(f.prior)
         d = np.array([_on_prior_scale(p, f.params[p]) - f.prior[p][0] for p in names])

@@ -35,6 +35,8 @@ The hypotheses (paper numbering for Eqs.; Wong = *Theory of Ground Vehicles*, 4t
   ``unexplained``.
 * ``sensor_gain``: not a listed cause: the transducer's Fx and My read with a
   gain error: effect ``unexplained``.
+* ``balance``: not a listed cause: the static sinkage from the vertical balance
+  Eq. (7) instead of Eq. (10) (no parameters): effect ``unexplained``.
 * ``drift_linear``: terrain drift.  The terrain changes along the run:
   repeated passes compact the soil (k_eq, c and phi grow with the number of
   passes, Wong ch. 2 on repetitive loading), or the wheel reaches another patch
@@ -458,11 +460,32 @@ class SensorGain(Hypothesis):
                            drawbar_pull_n=f.drawbar_pull_n * (1.0 + p["g_dp"]), torque_nm=f.torque_nm * (1.0 + p["g_t"]))
 
 
+class VerticalBalance(Hypothesis):
+    """Wong's model with the static sinkage from the vertical balance Eq. (7) = W instead of
+    Eq. (10)'s small-angle formula (kernel ``sinkage="balance"``); no parameters.
+
+    Not a cause on our list (a model-form alternative): when it explains the data as well as
+    a listed cause, that cause is not named.  Not tried when the fit already uses ``balance``.
+    """
+
+    name, effect, title = "balance", "unexplained", "static sinkage from the vertical balance (no listed cause)"
+    source = "paper Eq. (7) solved for z0 (wheelsoil.model.wong, sinkage='balance')"
+
+    def available(self, ctx, has_x):
+        if ctx.sinkage == "balance":
+            return "the fit already takes the static sinkage from the vertical balance"
+        return super().available(ctx, has_x)
+
+    def forces(self, ctx, terrain, load_n, slip, x, p):
+        return wong_forces(terrain, ctx.wheel, load_n, slip, sinkage="balance")
+
+
 #: The registry: name -> hypothesis.  Add a cause: one class above and one entry here.
 HYPOTHESES: dict[str, Hypothesis] = {
     h.name: h
     for h in (Wong(), Vasilev(), Lyasko(), Ding(), TerrainMismatch(), VasilevTerrain(), DingTerrain(),
-              WongReece(), DriftLinear(), DrawbarResistance(), WheelRadius(), SensorGain())
+              WongReece(), DriftLinear(), DrawbarResistance(), WheelRadius(), SensorGain(),
+              VerticalBalance())
 }
 
 
