@@ -98,7 +98,8 @@ class VehicleConfig:
         wheel_mass_kg: mass m_w of the wheel assembly outboard of the WFT (rim + tyre) [kg].
         wheel_inertia_kgm2: its polar moment of inertia I_w about the axle [kg m^2]
             (hardware.md: the WFT measures ``Fx = Dp - m_w dV/dt``, ``My = T + I_w domega/dt``).
-        notes: sentences about defaults used (e.g. a key the TOML omits).
+        notes: sentences about defaults used (e.g. a key the TOML omits); without the
+            file name, which the consumer prefixes (a recording's embedded TOML has no path).
     """
 
     buses: dict[str, list[Path]]
@@ -257,7 +258,7 @@ def vehicle_config_from_dict(doc: Mapping, *, source: Path | None = None, text: 
                          ("wheel_inertia_kgm2", DEFAULT_WHEEL_INERTIA_KGM2)):
         if key not in veh:
             if key in ("wheel_mass_kg", "wheel_inertia_kgm2"):
-                notes.append(f"{where}: [vehicle] has no {key}; the hardware.md default {default:g} is used "
+                notes.append(f"[vehicle] has no {key}; the hardware.md default {default:g} is used "
                              "for the inertia compensation")
             nums[key] = default
             continue

@@ -214,7 +214,7 @@ def _inv(A):
         return np.full(A.shape, np.nan)
 
 
-def fit_hypothesis(hyp: Hypothesis, ctx: Context, cells: Cells, *, max_iter: int = 60, eps: float = 1e-6,
+def fit_hypothesis(hyp: Hypothesis, ctx: Context, cells: Cells, *, max_iter: int = 200, eps: float = 1e-6,
                    terrain_uncertainty: bool = True) -> HypFit:
     """Fit ``hyp`` to ``cells`` (module doc).  Returns :class:`HypFit`.
 

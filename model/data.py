@@ -281,6 +281,16 @@ def prepare_data(df, *, slip_min: float = 0.1, source: str = "data", n_blocks: i
     if noload.any():
         notes.append(f"{int(noload.sum())} row(s) with load_n <= 0 excluded.")
     keep &= (s > slip_min) & (s < 1.0) & (w > 0)
+    if "cycle" in df.columns and keep.any():
+        # a time series with accelerate cycles: the steady-state model is fitted to the accelerate
+        # phases processing identified; driving samples outside them (wheel spin-up, transitions,
+        # braking with the slip still positive) are transients the model does not describe
+        cyc_all = pd.to_numeric(df["cycle"], errors="coerce").to_numpy(float)
+        in_cycle = np.isfinite(cyc_all) & (cyc_all >= 0)
+        if np.unique(cyc_all[keep & in_cycle]).size >= 2 and (keep & ~in_cycle).any():
+            notes.append(f"{int((keep & ~in_cycle).sum())} driving sample(s) outside the accelerate cycles excluded "
+                         "(transients: the model is a steady-state one).")
+            keep &= in_cycle
     n = int(keep.sum())
     if n == 0:
         raise ValueError(

@@ -8,9 +8,13 @@ decides with this rule (constants below; none was tuned on a benchmark):
 
 1. **Structure.**  Wong's residuals on the cells, each divided by the
    channel's model-free cell noise, are tested against slip (quadratic and
-   binned-means F-tests), and the drawbar pull's also against load and
-   against distance/time (linear + quadratic F-test).  Bonferroni over all
-   tests at family level ``ALPHA``; a structure must also be *relevant*: its
+   binned-means F-tests), the drawbar pull's also against load, and every
+   channel's against distance/time (linear + quadratic F-test).  In a time
+   series the accelerate cycle is the independent unit for whatever is
+   constant within it: the mean error is tested over the cycle means, the
+   shape against slip and load within the cycles, the dependence on distance
+   over the cycles (:func:`_structure_cells`).  Bonferroni over all tests at
+   family level ``ALPHA``; a structure must also be *relevant*: its
    RMS at least ``MIN_EFFECT`` cell-noise sigma (smaller than the scatter of
    one independent unit, nobody predicting a new cycle could tell it from
    unit-to-unit variation) and ``MIN_REL`` of the channel's magnitude.
@@ -25,21 +29,37 @@ decides with this rule (constants below; none was tuned on a benchmark):
    cause is the worst outcome) and the loss exceeds ``MIN_GAIN``.  Each
    channel counts on its own noise scale, so the channel with the smallest
    noise cannot outvote the others.
-3. **Supported.**  H can be named only when it converged, improves the
+3. **Supported.**  A cause is named only when Wong's drawbar pull itself
+   shows relevant structure (an error in torque or sinkage alone is reported
+   per channel, overall ``unexplained``: no listed cause changes those without
+   the drawbar pull, a transducer error does).  H can be named only when it converged, improves the
    drawbar pull (the quantity the paper judges), worsens no measured channel,
-   and its own effect parameters are non-null (Wald |value - null| > 2 se;
-   otherwise it is just the nested model it reduces to).
+   its own effect parameters are non-null (joint Wald test at the level of
+   |z| > 2; otherwise it is just the nested model it reduces to), and, when it
+   re-fits the terrain, the fitted terrain does not conflict with the lab
+   values (prior chi-square below its ``1 - PRIOR_CONFLICT_ALPHA`` quantile),
+   and a hypothesis that contains a smaller one (slip sinkage + terrain
+   contains the terrain re-fit and the slip-sinkage form; drift contains the
+   terrain re-fit, :data:`NESTED`) lowers the drawbar pull error below it out of
+   sample by the same paired test and worsens no channel (what the extra part
+   adds must pay off on data it was not fitted to).
 4. **Probabilities.**  Posterior probabilities of all hypotheses tried:
    Laplace evidence of each fit (lab priors as Gaussian priors, the
    unit-information prior for other parameters, one common overdispersion
    c_hat from the best fit; :mod:`wheelsoil.model.crossval`) times equal
-   prior mass per effect, split among its forms.
+   prior mass per effect, split among its forms.  An effect's probability
+   sums its hypotheses; a hypothesis whose effect parameters are null counts
+   for the smaller model it then is (slip sinkage + terrain with a null slip
+   sinkage is a terrain re-fit).
 5. **Verdict.**  The supported hypothesis with the highest posterior is the
    candidate.  Its effect is named only if the effect's posterior probability
    is at least ``P_NAME``; otherwise the causes that explain the data about
    equally well are listed (``alternatives``) with the measurement that
    would separate them, and the verdict is ``unexplained`` (different effects
-   are never merged into one named cause).  If the candidate leaves relevant
+   are never merged into one named cause).  The same holds when the best
+   explanation is ``dp_resistance``, the generic "something acts on the
+   drawbar pull alone" that stands for causes on no list, or when an
+   unsupported hypothesis of another effect has more evidence than the candidate.  If the candidate leaves relevant
    significant structure (step 1 on its own residuals) -> ``unexplained``
    with what was tried.  No supported hypothesis -> ``unexplained``.
 6. **Confidence** follows the effect's posterior probability (``high`` >=
@@ -87,6 +107,10 @@ P_NAME = 0.90  #: posterior probability of an effect needed to name it (else: al
 P_HIGH = 0.99  #: ... and for confidence "high"
 BF_ALTERNATIVE = 10.0  #: hypotheses within this Bayes factor of the best "explain the data equally well"
 #: (Kass & Raftery 1995: below 10 the evidence against them is not strong)
+PRIOR_CONFLICT_ALPHA = 0.001  #: a re-fitted terrain whose prior residuals exceed the chi-square quantile
+#: 1 - this (k = number of terrain parameters) is incompatible with the lab values and their stated
+#: uncertainty (prior-data conflict, Box 1980; Evans & Moshonov 2006): not a credible explanation.
+#: At the MAP the prior chi-square is shrunk below chi2_k, so this is conservative towards the lab.
 WALD_Z = 2.0  #: an effect parameter differs from its null value when |value - null| > WALD_Z se
 LOAD_RATIO_TOL = 1.25  #: model W / measured W outside [1/1.25, 1.25] in a slip bin: inconsistent
 #: (Eq. 10's own small-angle error reaches ~20 % on library soils, wheelsoil.model.wong)
@@ -97,7 +121,7 @@ COND_FLAG = 100.0  #: condition number of the column-normalised Jacobian above t
 THRESHOLDS = {
     "alpha": ALPHA, "worsen_alpha": WORSEN_ALPHA, "min_effect_sigma": MIN_EFFECT, "min_effect_rel": MIN_REL,
     "min_gain_noise_var": MIN_GAIN, "p_name": P_NAME, "p_high": P_HIGH, "bf_alternative": BF_ALTERNATIVE,
-    "wald_z": WALD_Z, "load_ratio_tol": LOAD_RATIO_TOL, "min_units_high": MIN_UNITS_HIGH,
+    "wald_z": WALD_Z, "prior_conflict_alpha": PRIOR_CONFLICT_ALPHA, "load_ratio_tol": LOAD_RATIO_TOL, "min_units_high": MIN_UNITS_HIGH,
     "corr_flag": CORR_FLAG, "cond_flag": COND_FLAG,
 }
 
@@ -113,7 +137,11 @@ EFFECT_TITLES = {
 #: Null values of each hypothesis' own effect parameters (the nested model they reduce to).
 NULLS = {"vasilev": {"H": 0.0}, "lyasko": {"m1": 0.0, "m2": 0.0}, "ding": {"n1": 0.0},
          "vasilev+terrain": {"H": 0.0}, "ding+terrain": {"n1": 0.0}, "wong_reece": {"a1": 0.0, "a2": 0.0},
-         "drift_linear": {"g_lnk": 0.0, "g_phi": 0.0, "g_c": 0.0}}
+         "drift_linear": {"g_lnk": 0.0, "g_phi": 0.0, "g_c": 0.0}, "dp_resistance": {"R0": 0.0, "R1": 0.0},
+         "radius": {"rho": 0.0}, "sensor_gain": {"g_dp": 0.0, "g_t": 0.0}}
+#: Hypotheses nested in a larger one: the larger one must beat each of them out of sample.
+NESTED = {"vasilev+terrain": ("terrain", "vasilev"), "ding+terrain": ("terrain", "ding"),
+          "drift_linear": ("terrain",)}
 #: The legacy default candidate list of the command line (pipeline); it means "all hypotheses".
 _LEGACY_DEFAULT = {"vasilev", "lyasko", "ding", "terrain_mismatch"}
 
@@ -362,20 +390,64 @@ def binned_residuals(data: FitData, resid: np.ndarray, n_bins: int = 10, level: 
     return out
 
 
+def _level_test(gm: np.ndarray) -> dict:
+    """One-sample t-test of unit means ``gm`` (in noise sigmas) against zero."""
+    gm = gm[np.isfinite(gm)]
+    G = gm.size
+    out = {"p": float("nan"), "effect": float("nan"), "units": int(G)}
+    if G < 3:
+        return out
+    m, sd = float(np.mean(gm)), float(np.std(gm, ddof=1))
+    p = float(2 * stats.t.sf(abs(m) / (sd / math.sqrt(G)), G - 1)) if sd > 0 else (0.0 if m != 0 else 1.0)
+    out.update(p=p, effect=abs(m), mean=m)
+    return out
+
+
 def _structure_cells(data: FitData, pred: dict) -> dict:
-    """Structure tests of cell residuals of one model: ``{"<channel>": vs slip, "<channel>@load",
-    "<channel>@x"}`` (load and x for the drawbar pull; x only for time series)."""
+    """Structure tests of cell residuals of one model, in cell-noise sigmas:
+    ``{"<channel>": vs slip, "<channel>@load", "<channel>@x"}``.
+
+    Tables: every row is an independent unit (:func:`_structure_1d` on the rows).
+    Time series: the cells of one accelerate cycle share the cycle's soil and
+    speed, so the cycle is the independent unit for anything constant within it.
+    The level (mean error) is tested with a t-test over the cycle means; the
+    shape against slip and against load on the residuals centred within each
+    cycle; the dependence on distance/time (``@x``) on the cycle means against
+    the cycle's mean x.  The channel's ``p`` combines level and shape
+    (Bonferroni x2), its ``effect`` is the RMS of both parts.
+    """
     cells = data.cells
     out = {}
+    grp = cells.group
+    n_g = np.unique(grp).size
+    by_cycle = data.kind != "table" and n_g >= 3
     for c, y in cells.channels.items():
         e = (y - pred[c]) / cells.sigma[c]
         size = float(np.sqrt(np.nanmean(y**2))) if np.isfinite(y).any() else float("nan")
-        tests = {c: _structure_1d(cells.slip, e)}
-        if c == "drawbar_pull_n" or cells.x is not None:
-            if cells.x is not None:
-                tests[c + "@x"] = _structure_1d(cells.x, e)
+        tests = {}
+        if not by_cycle:
+            tests[c] = _structure_1d(cells.slip, e)
             if c == "drawbar_pull_n" and np.std(cells.load_n) > 0.01 * abs(np.mean(cells.load_n)):
                 tests[c + "@load"] = _structure_1d(cells.load_n, e, degree=1)
+        else:
+            ok = np.isfinite(e)
+            ug, inv = np.unique(grp[ok], return_inverse=True)
+            cnt = np.bincount(inv).astype(float)
+            gm = np.bincount(inv, weights=e[ok]) / cnt
+            ec = e[ok] - gm[inv]
+            lvl = _level_test(gm)
+            shp = _structure_1d(cells.slip[ok], ec)
+            p = min(1.0, 2 * min(lvl["p"], shp["p"])) if np.isfinite(lvl["p"]) and np.isfinite(shp["p"]) else shp["p"]
+            t = dict(shp)
+            t.update(p=p, p_level=lvl["p"], p_shape=shp["p"], level_sigma=lvl.get("mean", float("nan")),
+                     effect=float(math.sqrt(np.nan_to_num(lvl["effect"]) ** 2 + np.nan_to_num(shp["effect"]) ** 2)),
+                     units=int(ok.sum()), cycles=int(ug.size))
+            tests[c] = t
+            if cells.x is not None:
+                xg = np.bincount(inv, weights=cells.x[ok]) / cnt
+                tests[c + "@x"] = _structure_1d(xg, gm)
+            if c == "drawbar_pull_n" and np.std(cells.load_n) > 0.01 * abs(np.mean(cells.load_n)):
+                tests[c + "@load"] = _structure_1d(cells.load_n[ok], ec, degree=1)
         for k, t in tests.items():
             t["effect_abs"] = t["effect"] * cells.sigma[c]
             t["effect_rel"] = t["effect_abs"] / size if size > 0 else float("inf")
@@ -438,6 +510,8 @@ def _effective(f: HypFit) -> bool:
     test ``d^T Sigma^-1 d`` against the chi-square quantile of the same level as |z| > WALD_Z
     (correlated forms such as Lyasko's m1, m2 are judged jointly).  For ``terrain`` the
     null is the lab prior's centre."""
+    if f.k == 0:  # a parameter-free alternative (balance): it either predicts better or it does not
+        return f.name != "wong"
     if f.name == "terrain":
         names = list(f.prior)
         d = np.array([_on_prior_scale(p, f.params[p]) - f.prior[p][0] for p in names])
@@ -466,6 +540,25 @@ def _effective(f: HypFit) -> bool:
     w2 = float(d @ np.linalg.pinv(cov) @ d)
     level = 1 - 2 * stats.norm.sf(WALD_Z)
     return bool(w2 > stats.chi2.ppf(level, len(names)))
+
+
+def _effect_of(f: HypFit) -> str:
+    """The effect a fit stands for: its own, or, when its effect parameters are null (not
+    :func:`_effective`), the effect of the smaller model it then is (slip sinkage + terrain and
+    drift with null slopes are a terrain re-fit; a null slip-sinkage form is Wong)."""
+    if f.name == "wong" or _effective(f):
+        return f.effect
+    return "terrain_mismatch" if f.name in NESTED and f.name != "terrain" and _effective_terrain(f) else "none"
+
+
+def _effective_terrain(f: HypFit) -> bool:
+    """True when the terrain part of ``f`` moved from the lab values (Wald, as :func:`_effective`)."""
+    if not f.prior:
+        return False
+    tmp = HypFit.__new__(HypFit)
+    tmp.__dict__.update(f.__dict__)
+    tmp.name = "terrain"
+    return _effective(tmp)
 
 
 def _on_prior_scale(p, v):
@@ -587,7 +680,7 @@ def diagnose(
     fit_terrain: bool = False,
     sinkage: str = "eq10",
     progress: bool = False,
-    max_iter: int = 60,
+    max_iter: int = 200,
 ) -> Diagnosis:
     """Diagnose what Wong's model gets wrong on measured data (rule in the module doc).
 
@@ -604,7 +697,7 @@ def diagnose(
         ``terrain`` and the ``+terrain`` combinations are then not separate hypotheses.
     sinkage : ``eq10`` | ``balance`` (model core).
     progress : tqdm progress bar.
-    max_iter : Gauss-Newton iteration limit per fit (a fit that does not converge is
+    max_iter : Gauss-Newton iteration limit per fit (default 200; a fit that does not converge is
         reported in ``failures`` and left out of the verdict).
 
     Returns :class:`Diagnosis`.  Raises ValueError for bad data or an unknown hypothesis.
@@ -627,7 +720,7 @@ def diagnose(
             names.append(get_hypothesis(m).name)
     names = list(dict.fromkeys(names))
     prior = lab_prior(terrain, wheel, widen=LIBRARY_PRIOR_WIDEN if fit_terrain else 1.0)
-    ctx = Context(terrain, wheel, sinkage, prior, fit_terrain)
+    ctx = Context(terrain, wheel, sinkage, prior, fit_terrain, float(np.median(data.load_n)))
     if fit_terrain:
         dup = [n for n in names if HYPOTHESES[n].terrain_block and n != "drift_linear"]
         if dup:
@@ -693,7 +786,8 @@ def diagnose(
     probs = {k: math.exp(v - mx) / z for k, v in lp.items()}
     eprobs: dict[str, float] = {}
     for k, p in probs.items():
-        eprobs[fits[k].effect] = eprobs.get(fits[k].effect, 0.0) + p
+        e = _effect_of(fits[k])
+        eprobs[e] = eprobs.get(e, 0.0) + p
     # structure of Wong's residuals
     tests_w = _structure_cells(data, wong.cell_pred)
     n_tests = len(tests_w)
@@ -719,6 +813,13 @@ def diagnose(
             why_not[k] = "worsens the " + ", ".join(CHANNEL_TITLES[c] for c in worse) + " out of sample"
         elif not _effective(f):
             why_not[k] = "its effect parameters are not distinguishable from zero (it reduces to a simpler model)"
+        elif _not_better_than_nested(data, fits, f):
+            why_not[k] = "does not predict better out of sample than " + _not_better_than_nested(data, fits, f) \
+                + ", which it contains"
+        elif _prior_conflict(f):
+            why_not[k] = (f"needs the terrain far beyond the lab values' uncertainty (prior chi-square "
+                          f"{f.chi2_prior:.3g} on {len(f.prior)} parameters; changed: "
+                          + (", ".join(_changed_terrain(f)) or "-") + ")")
         else:
             supported.append(k)
     reasons: list[str] = []
@@ -728,6 +829,11 @@ def diagnose(
     remain = {}
     if not structured:
         effect, model = "none", "wong"
+    elif not any(tests_w[k]["channel"] == "drawbar_pull_n" for k in sig_w):
+        effect = "unexplained"
+        reasons.append("Wong's drawbar pull shows no relevant systematic error; the error is in the "
+                       + ", ".join(sorted({CHANNEL_TITLES[tests_w[k]['channel']] for k in sig_w}))
+                       + " only, which no listed cause produces alone (a transducer error would)")
     elif not supported:
         effect = "unexplained"
         reasons.append("no hypothesis lowers the drawbar pull error out of sample without worsening another "
@@ -756,6 +862,9 @@ def diagnose(
         elif pe < P_NAME:
             effect = "unexplained"
             reasons.append(f"the probability of {EFFECT_TITLES[fits[best].effect]} is only {pe:.2f} (< {P_NAME:g})")
+        elif fits[best].effect == "unexplained":
+            effect = "unexplained"
+            reasons.append(f"the best explanation is {TITLES[best]}, which is not a listed cause")
         elif remain:
             effect = "unexplained"
             reasons.append(f"{TITLES[best]} lowers the drawbar pull error but leaves significant structure ("
@@ -842,6 +951,25 @@ def diagnose(
     return diag
 
 
+def _not_better_than_nested(data, fits, f: HypFit) -> str:
+    """The title of a nested hypothesis (:data:`NESTED`) that ``f`` does not beat out of sample
+    (the drawbar pull does not improve by the paired test, or a channel worsens), else ''."""
+    for n in NESTED.get(f.name, ()):
+        g = fits.get(n)
+        if g is None or not g.success or g.cv is None:
+            continue
+        pr = _paired(data, g, f)
+        if not pr["drawbar_pull_n"]["improves"] or any(r["worsens"] for r in pr.values()):
+            return TITLES[n]
+    return ""
+
+
+def _prior_conflict(f: HypFit) -> bool:
+    """True when the fitted terrain conflicts with the lab prior (``PRIOR_CONFLICT_ALPHA``)."""
+    k = len(f.prior)
+    return bool(k and f.chi2_prior > stats.chi2.ppf(1 - PRIOR_CONFLICT_ALPHA, k))
+
+
 def _changed_terrain(f: HypFit) -> list:
     """Terrain parameters whose fitted value differs from the lab value by more than WALD_Z
     standard errors (posterior, on the prior's scale)."""
@@ -922,7 +1050,7 @@ def _summary(d: Diagnosis) -> str:
     """The plain-English paragraph, generated from the same facts as the verdict."""
     data, wong = d.data, d.fits["wong"]
     parts = []
-    units_word = "rows" if data.kind == "table" else "independent cycle x slip cells"
+    units_word = "independent rows" if data.kind == "table" else "independent cycle x slip cells"
     chans = ", ".join(CHANNEL_TITLES[c] for c in data.channels)
     parts.append(f"{data.n} samples with {data.slip_min:g} < s < 1 ({data.n_units} {units_word}, "
                  f"{len(np.unique(data.cells.group))} cross-validation folds: {data.group_kind}) were fitted against {chans}.")

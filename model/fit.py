@@ -60,7 +60,7 @@ def _metrics(measured, predicted) -> dict:
 
 
 def fit_model(data, terrain, wheel, model: str = "lyasko", *, slip_min: float = 0.1,
-              terrain_params: Sequence[str] = (), sinkage: str = "eq10", max_iter: int = 60,
+              terrain_params: Sequence[str] = (), sinkage: str = "eq10", max_iter: int = 200,
               cv: bool = True) -> HypFit:
     """Fit one hypothesis by name to measured data (cell means, penalised Gauss–Newton).
 

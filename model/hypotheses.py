@@ -26,6 +26,17 @@ The hypotheses (paper numbering for Eqs.; Wong = *Theory of Ground Vehicles*, 4t
 * ``wong_reece``: stress distribution.  Wong & Reece (1967): the normal stress
   peaks at theta_m = (a1 + a2 s) theta1 with a rear region behind it (kernel
   ``wong_forces(..., stress=(a1, a2))``); a1 = a2 = 0 is the paper's model.
+* ``dp_resistance``: not a listed cause but the generic alternative "something
+  acts on the drawbar pull alone" (bulldozing, a tyre's rolling resistance, an
+  Fx offset): effect ``unexplained``.  A listed cause that this explains as well
+  is not named.
+* ``radius``: not a listed cause either: the soil sees another wheel radius than
+  the one slip was computed with (a deflecting tyre, a radius error): effect
+  ``unexplained``.
+* ``sensor_gain``: not a listed cause: the transducer's Fx and My read with a
+  gain error: effect ``unexplained``.
+* ``balance``: not a listed cause: the static sinkage from the vertical balance
+  Eq. (7) instead of Eq. (10) (no parameters): effect ``unexplained``.
 * ``drift_linear``: terrain drift.  The terrain changes along the run:
   repeated passes compact the soil (k_eq, c and phi grow with the number of
   passes, Wong ch. 2 on repetitive loading), or the wheel reaches another patch
@@ -103,14 +114,15 @@ class HParam:
 class Context:
     """What every prediction needs: the lab (or library) ``terrain``, the ``wheel``,
     the ``sinkage`` mode (``eq10`` | ``balance``), the terrain ``prior``
-    (name -> (mean, sd, log)) and ``fit_terrain`` (the terrain is fitted in every
-    hypothesis, as a nuisance)."""
+    (name -> (mean, sd, log)), ``fit_terrain`` (the terrain is fitted in every
+    hypothesis, as a nuisance) and ``w_ref`` a reference load of the data [N]."""
 
     terrain: object
     wheel: object
     sinkage: str = "eq10"
     prior: Mapping | None = None
     fit_terrain: bool = False
+    w_ref: float | None = None
 
 
 def lab_prior(terrain, wheel, *, widen: float = 1.0) -> dict:
@@ -376,11 +388,104 @@ class DriftLinear(Hypothesis):
                            torque_nm=mix("torque_nm"))
 
 
+class DrawbarResistance(Hypothesis):
+    """An extra resistance on the drawbar pull only (torque and sinkage as Wong's): Dp - (R0 + R1 (W/W_ref - 1)).
+
+    Not a cause on our list: it stands for every error that acts on Dp alone, without the
+    torque and sinkage a soil change would bring (soil pushed ahead of the wheel, rolling
+    resistance of a deflecting tyre, an offset in the transducer's Fx).  Its effect is
+    ``unexplained``: when it explains the data as well as a listed cause, that cause is not named.
+    W_ref is the data's median load (fixed from the data, so R0 is the resistance at a typical load).
+    """
+
+    name, effect, title = "dp_resistance", "unexplained", "an extra Dp-only resistance (no listed cause)"
+    source = "generic alternative: Bekker (1969) bulldozing / any Fx-only error; not a listed cause"
+
+    def own_params(self, ctx):
+        return (
+            HParam("R0", 0.0, -1e6, 1e6, "N", "extra resistance at the median load (negative: extra pull)"),
+            HParam("R1", 0.0, -1e6, 1e6, "N", "its change per unit relative load, R1 (W/W_ref - 1)"),
+        )
+
+    def forces(self, ctx, terrain, load_n, slip, x, p):
+        f = wong_forces(terrain, ctx.wheel, load_n, slip, sinkage=ctx.sinkage)
+        w_ref = float(np.median(load_n)) if ctx.w_ref is None else ctx.w_ref
+        r = p["R0"] + p["R1"] * (np.asarray(load_n, float) / w_ref - 1.0)
+        return WheelForces(sinkage_m=f.sinkage_m, theta1_rad=f.theta1_rad, load_model_n=f.load_model_n,
+                           drawbar_pull_n=f.drawbar_pull_n - r, torque_nm=f.torque_nm)
+
+
+class WheelRadius(Hypothesis):
+    """The soil sees a wheel of radius r (1 + rho), while slip was computed with r (Eq. 6).
+
+    Not a cause on our list: it stands for a deflecting tyre (Wong's equivalent rigid wheel
+    is larger than the tyre's radius) or a wrong radius in the configuration.  The forces are
+    Wong's for the radius r_e = r (1 + rho) at the slip the soil sees,
+    s_e = 1 - (1 - s) / (1 + rho) (the same V and omega, Eq. 6 with r_e), clipped at 0.
+    Effect ``unexplained``: a listed cause it explains as well is not named.
+    """
+
+    name, effect, title = "radius", "unexplained", "a wheel radius other than the slip radius (no listed cause)"
+    source = "generic alternative: tyre deflection (Wong 2008 ch. 2 equivalent rigid wheel) or a radius error"
+
+    def own_params(self, ctx):
+        return (HParam("rho", 0.0, -0.3, 0.5, "-", "relative change of the radius the soil sees"),)
+
+    def forces(self, ctx, terrain, load_n, slip, x, p):
+        from .terrain import Wheel
+
+        rho = p["rho"]
+        wheel = Wheel(ctx.wheel.radius * (1.0 + rho), ctx.wheel.width)
+        s_e = np.clip(1.0 - (1.0 - np.asarray(slip, float)) / (1.0 + rho), 0.0, 0.999)
+        return wong_forces(terrain, wheel, load_n, s_e, sinkage=ctx.sinkage)
+
+
+class SensorGain(Hypothesis):
+    """The transducer's drawbar pull and torque read (1 + g_dp) and (1 + g_t) times Wong's values.
+
+    Not a cause on our list: a calibration error of the wheel force transducer (Fx or My gain).
+    Effect ``unexplained``: a listed cause it explains as well is not named.
+    """
+
+    name, effect, title = "sensor_gain", "unexplained", "a gain error of the force transducer (no listed cause)"
+    source = "generic alternative: transducer calibration (Fx, My gains)"
+
+    def own_params(self, ctx):
+        return (HParam("g_dp", 0.0, -0.5, 0.5, "-", "relative gain error of the drawbar pull (Fx)"),
+                HParam("g_t", 0.0, -0.5, 0.5, "-", "relative gain error of the torque (My)"))
+
+    def forces(self, ctx, terrain, load_n, slip, x, p):
+        f = wong_forces(terrain, ctx.wheel, load_n, slip, sinkage=ctx.sinkage)
+        return WheelForces(sinkage_m=f.sinkage_m, theta1_rad=f.theta1_rad, load_model_n=f.load_model_n,
+                           drawbar_pull_n=f.drawbar_pull_n * (1.0 + p["g_dp"]), torque_nm=f.torque_nm * (1.0 + p["g_t"]))
+
+
+class VerticalBalance(Hypothesis):
+    """Wong's model with the static sinkage from the vertical balance Eq. (7) = W instead of
+    Eq. (10)'s small-angle formula (kernel ``sinkage="balance"``); no parameters.
+
+    Not a cause on our list (a model-form alternative): when it explains the data as well as
+    a listed cause, that cause is not named.  Not tried when the fit already uses ``balance``.
+    """
+
+    name, effect, title = "balance", "unexplained", "static sinkage from the vertical balance (no listed cause)"
+    source = "paper Eq. (7) solved for z0 (wheelsoil.model.wong, sinkage='balance')"
+
+    def available(self, ctx, has_x):
+        if ctx.sinkage == "balance":
+            return "the fit already takes the static sinkage from the vertical balance"
+        return super().available(ctx, has_x)
+
+    def forces(self, ctx, terrain, load_n, slip, x, p):
+        return wong_forces(terrain, ctx.wheel, load_n, slip, sinkage="balance")
+
+
 #: The registry: name -> hypothesis.  Add a cause: one class above and one entry here.
 HYPOTHESES: dict[str, Hypothesis] = {
     h.name: h
     for h in (Wong(), Vasilev(), Lyasko(), Ding(), TerrainMismatch(), VasilevTerrain(), DingTerrain(),
-              WongReece(), DriftLinear())
+              WongReece(), DriftLinear(), DrawbarResistance(), WheelRadius(), SensorGain(),
+              VerticalBalance())
 }
 
 

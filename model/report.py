@@ -1096,6 +1096,9 @@ def _quality_rows(q: dict) -> list:
         rows.append(["rows read", num(q.get("rows"), 6)])
         return rows
     rows.append(["duration", fmt(q.get("duration_s"), "time")])
+    if q.get("wheel_radius_m") is not None:
+        rows.append(["slip radius r (Eq. 6)", fmt(q["wheel_radius_m"], "length_mm")
+                     + (f" ({q['wheel_radius_source']})" if q.get("wheel_radius_source") else "")])
     rows.append(["valid share (processing)", f"{num(100 * q['valid_share'], 3)} %" if q.get("valid_share") is not None
                  else "n/a"])
     if q.get("used_in_fit") is not None:

@@ -33,7 +33,11 @@ Filtering: zero-phase Butterworth low-pass (order 4, run forward and backward),
 per contiguous segment (never across lost-frame gaps longer than 3 samples),
 cutoff 5 Hz unless --cutoff; capped at 0.4 x --rate (anti-alias).
 The GNSS velocity latency is estimated against the free-rolling front wheels'
-r*omega and removed; the host->GPS time mapping is fitted from RT_SB_GPS_Time.
+r*omega (or, when the fronts turn with the measured wheel, from the GNSS
+acceleration against the measured drawbar pull) and removed; the host->GPS
+time mapping is fitted from RT_SB_GPS_Time. Frames with timestamps far outside
+their neighbours are set aside and listed; logs joined out of order are sorted
+(refused when their parts overlap in time).
 """
 
 

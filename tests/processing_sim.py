@@ -84,15 +84,50 @@ def truth_profile(n_cycles: int = 3, dt: float = 0.002, *, standstill_s: float =
     return Truth(t, speed, slip, omega, load, dp, torque, np.concatenate(ph), radius_m)
 
 
+def truth_dynamic(n_cycles: int = 3, dt: float = 0.002, *, mass_kg: float = 8000.0,
+                  radius_m: float = R) -> Truth:
+    """A run whose vehicle speed follows the soil forces (all wheels alike, as in a 4x4 with
+    locked differentials): ``dV/dt = (4 Dp - 600 N) / mass_kg``; accelerate 6 s (slip sweep
+    0.05 -> 0.5 -> 0.05), brake at slip -0.05 until V < 1.2 m/s, roll 1 s; from V = 1 m/s."""
+    load0 = 11000.0
+    v, t = 1.0, 0.0
+    ts, vs, ss, ph = [], [], [], []
+
+    def dp_of(s, load):
+        return load * (0.45 * (1 - np.exp(-s / 0.15)) - 0.08)
+
+    def step(s, phase):
+        nonlocal v, t
+        load = load0 + 400.0 * np.sin(2 * np.pi * 0.3 * t)
+        ts.append(t), vs.append(v), ss.append(s), ph.append(phase)
+        v = max(v + dt * (4 * dp_of(s, load) - 600.0) / mass_kg, 0.05)
+        t += dt
+
+    for _ in range(n_cycles):
+        for u in np.arange(0, 1, dt / 6.0):
+            step(0.05 + 0.45 * np.sin(np.pi * u) ** 2, "accel")
+        k = 0
+        while v > 1.2 or k < 250:
+            step(-0.05 * min(k / 250, 1.0), "brake")
+            k += 1
+        for _ in range(500):
+            step(0.02, "other")
+    t_s, speed, slip = np.array(ts), np.array(vs), np.array(ss)
+    load = load0 + 400.0 * np.sin(2 * np.pi * 0.3 * t_s)
+    dp = dp_of(slip, load)
+    omega = speed / (radius_m * (1 - slip))
+    torque = radius_m * (dp + 0.1 * load)
+    return Truth(t_s, speed, slip, omega, load, dp, torque, np.array(ph, dtype=object), radius_m)
+
+
 def write_recording(path, truth: Truth, *, latency_s: float = 0.1, seed: int = 0,
                     gps_offset_s: float = 1234.5678, no_gnss: bool = False, no_wheel_speed: bool = False,
                     drop_wft_bursts: int = 0, counter_jumps: int = 0,
                     wheel_speed_zero: tuple[float, float] | None = None,
                     wheel_mass_kg: float = WHEEL_MASS_KG, wheel_inertia_kgm2: float = WHEEL_INERTIA_KGM2,
-                    config=None, ts_edit=None) -> dict:
+                    config=None, ts_edit=None, drop_wft_runs=(), drop_frames: dict | None = None,
+                    burst_s: float = 0.0, fronts_coupled: bool = False) -> dict:
     """Encode ``truth`` as frames and write an MCAP recording.
-
-    Returns ``{"path", "lost_samples", "start_ns"}`` (WFT samples dropped).
 
     ``drop_wft_bursts``: that many runs of 1..12 lost WFT samples;
     ``counter_jumps``: that many random jumps of the WFT counter (all three
@@ -104,7 +139,18 @@ def write_recording(path, truth: Truth, *, latency_s: float = 0.1, seed: int = 0
     ``wheel_inertia_kgm2`` (0 for none); ``truth`` holds the soil's Dp and T.
     ``config`` the VehicleConfig attached (default: the shipped one);
     ``ts_edit(bus, ts_ns) -> ts_ns`` edits a bus's int64 timestamps (in
-    file order) before writing, for time-base tests.
+    file order) before writing, for time-base tests (or returns ``(ts_ns,
+    perm)`` to also reorder the frames: ``perm`` indexes the sorted frames); ``drop_wft_runs``
+    ``[(t_s, n_samples), ...]`` removes runs of WFT samples (all three
+    messages); ``drop_frames`` ``{message name: fraction}`` drops that share
+    of a message's frames at random (no counter tells); ``burst_s`` > 0
+    delivers each bus's frames in bursts: receive times rounded up to the
+    next multiple of ``burst_s`` (as USB/UDP adapters do); ``fronts_coupled``:
+    the front wheels turn with the measured one (all wheels driven, locked
+    differentials) instead of rolling freely.
+
+    Returns ``{"path", "lost_samples", "start_ns", "dropped_frames"}``
+    (``dropped_frames``: message -> frames removed by ``drop_frames``).
     """
     rng = np.random.default_rng(seed)
     wft = cantools.database.load_file(str(DBC / "wft.dbc"))
@@ -131,6 +177,9 @@ def write_recording(path, truth: Truth, *, latency_s: float = 0.1, seed: int = 0
     keep = np.ones(n, bool)
     for j in rng.integers(100, n - 100, drop_wft_bursts):
         keep[j:j + rng.integers(1, 13)] = False
+    for t_drop, k in drop_wft_runs:
+        j = int(np.searchsorted(t, t_drop))
+        keep[j:j + int(k)] = False
     m_f, m_m, m_a = (wft.get_message_by_name(x) for x in ("WFT_RL_Force", "WFT_RL_Moment", "WFT_RL_Angle"))
     can0 = []
     for i in np.flatnonzero(keep):
@@ -159,6 +208,8 @@ def write_recording(path, truth: Truth, *, latency_s: float = 0.1, seed: int = 0
         for tw in np.arange(0.003, t[-1], 0.01):
             v = np.interp(tw, t, truth.speed_mps)
             om = np.interp(tw, t, truth.omega_radps)
+            if fronts_coupled:
+                v = om * truth.radius_m
             if wheel_speed_zero and wheel_speed_zero[0] <= tw < wheel_speed_zero[1]:
                 om = 0.0
             rpm = lambda w: float(np.clip(abs(w * (1 + rng.normal(0, 0.002))) * 60 / (2 * np.pi), 0, 655))
@@ -187,6 +238,7 @@ def write_recording(path, truth: Truth, *, latency_s: float = 0.1, seed: int = 0
             can1.append((rx + 4e-4, m_t, m_t.encode({"GPS_Week": week, "GPS_Time": round(gfix - week * 604800, 3),
                                                       "Accuracy_GPS_Time": 3, "Validity_GPS_Week": 1,
                                                       "Validity_GPS_Time": 1})))
+    dropped: dict = {}
     cfg = load_vehicle_config() if config is None else config
     path = Path(path)
     with RecordingWriter(path, config=cfg, metadata={"source": "tests/processing_sim.py"}) as w:
@@ -194,8 +246,19 @@ def write_recording(path, truth: Truth, *, latency_s: float = 0.1, seed: int = 0
             if not frames:
                 continue
             frames.sort(key=lambda f: f[0])
+            if drop_frames:
+                before: dict = {}
+                for f in frames:
+                    before[f[1].name] = before.get(f[1].name, 0) + 1
+                frames = [f for f in frames if rng.random() >= drop_frames.get(f[1].name, 0.0)]
+                for f in frames:
+                    before[f[1].name] -= 1
+                dropped.update({k: v for k, v in before.items() if k in drop_frames})
             ts = np.array([f[0] for f in frames]) + jitter(len(frames))
             ts = np.sort(ts)
+            if burst_s > 0:
+                ts = np.ceil(ts / burst_s) * burst_s + np.arange(ts.size) % 50 * 2e-6
+                ts = np.sort(ts)
             ids = np.array([f[1].frame_id for f in frames], np.uint32)
             ext = np.array([f[1].is_extended_frame for f in frames], np.uint8)
             dlc = np.array([len(f[2]) for f in frames], np.uint8)
@@ -204,8 +267,12 @@ def write_recording(path, truth: Truth, *, latency_s: float = 0.1, seed: int = 0
                 data[i, :len(f[2])] = np.frombuffer(f[2], np.uint8)
             ts_ns = start_ns + np.round(ts * 1e9).astype(np.int64)
             if ts_edit is not None:
-                ts_ns = np.asarray(ts_edit(bus, ts_ns.copy()), dtype=np.int64)
+                edited = ts_edit(bus, ts_ns.copy())
+                if isinstance(edited, tuple):  # (timestamps, permutation of the frames in file order)
+                    edited, perm = edited
+                    ids, ext, dlc, data = ids[perm], ext[perm], dlc[perm], data[perm]
+                ts_ns = np.asarray(edited, dtype=np.int64)
             for a in range(0, len(frames), 2000):
                 w.write_batch(FrameBatch.from_columns(bus, ts_ns[a:a + 2000], ids[a:a + 2000], ext[a:a + 2000],
                                                       dlc[a:a + 2000], data[a:a + 2000]))
-    return {"path": path, "lost_samples": int(n - keep.sum()), "start_ns": start_ns}
+    return {"path": path, "lost_samples": int(n - keep.sum()), "start_ns": start_ns, "dropped_frames": dropped}

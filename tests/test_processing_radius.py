@@ -77,3 +77,14 @@ def test_fit_passes_its_radius_to_processing(small_wheel, tmp_path):
     assert any("WHEEL RADIUS CONFLICT" in n and "t.csv" in n for n in info["notes"])
     _, info = load_inputs([tab])
     assert info["wheel_radius_m"] == 0.47
+
+
+def test_fit_refuses_a_radius_in_mm(tmp_path):
+    import pandas as pd
+
+    from wheelsoil.pipeline import run_fit
+
+    tab = tmp_path / "t.csv"
+    pd.DataFrame({"slip": [0.2, 0.3], "load_n": [1e4, 1e4], "drawbar_pull_n": [1e3, 2e3]}).to_csv(tab, index=False)
+    with pytest.raises(ValueError, match=r"--wheel-radius = 470.*did you give mm"):
+        run_fit([tab], "clay", tmp_path / "out", wheel_radius=470)

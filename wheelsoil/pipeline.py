@@ -49,16 +49,19 @@ def load_inputs(inputs, *, progress: bool = False, rate_hz: float = 100.0, cutof
     ``rate_hz``, ``cutoff_hz``, ``wheel_radius_m`` (slip radius, Eq. 6) and
     ``inertia`` are passed to ``process_recording`` for recordings.
     ``wheel_radius_m`` [m], when given, is the radius recordings compute slip
-    with (Eq. 6), so the fit's radius is the slip radius; radius conflicts
-    (recordings whose configurations disagree, a table's ``wheel_radius_m``
-    column, or a table's slip of unknown radius) are loud notes.
+    with (Eq. 6; ``process_recording(wheel_radius_m=...)``), so the fit's radius
+    is the slip radius; radius conflicts (recordings whose configurations
+    disagree, a table's ``wheel_radius_m`` column, or a table's slip of unknown
+    radius) are loud notes. ``processing`` lists per recording what processing
+    did (``wheel_radius_m``/``_source``, ``inertia``, ``excluded``, ``quality``
+    of ``ProcessResult``) for the report.
 
     Raises ValueError (naming the file) for a missing file, an unknown suffix,
     an unreadable table, or a recording processing cannot read.
     """
     import pandas as pd
 
-    frames, kinds, sync, notes, results, tables = [], [], [], [], [], []
+    frames, kinds, sync, notes, processing, results, tables = [], [], [], [], [], [], []
     radius = width = None
     for i, raw in enumerate(inputs):
         path = Path(raw)
@@ -83,6 +86,9 @@ def load_inputs(inputs, *, progress: bool = False, rate_hz: float = 100.0, cutof
             })
             res.warnings[:] = [_attachment_name(w, path) for w in res.warnings]
             notes.extend(f"{path.name}: {w}" for w in res.warnings)
+            processing.append({"input": str(path), "wheel_radius_m": res.wheel_radius_m,
+                               "wheel_radius_source": res.wheel_radius_source, "inertia": res.inertia,
+                               "excluded": res.excluded, "quality": res.quality})
             if radius is None:  # the first recording's vehicle configuration
                 radius, width = res.wheel_radius_m, res.wheel_width_m
             elif abs(res.wheel_radius_m - radius) > 1e-6 * radius:
@@ -94,7 +100,8 @@ def load_inputs(inputs, *, progress: bool = False, rate_hz: float = 100.0, cutof
             kinds.append("table")
             results.append(None)
             tables.append(df)
-            tr = df["wheel_radius_m"].dropna().unique() if "wheel_radius_m" in df.columns else []
+            tr = (pd.to_numeric(df["wheel_radius_m"], errors="coerce").dropna().unique()
+                  if "wheel_radius_m" in df.columns else [])
             if len(tr) > 1 or (len(tr) == 1 and wheel_radius_m is not None
                                and abs(float(tr[0]) - wheel_radius_m) > 1e-6 * wheel_radius_m):
                 notes.append(f"WHEEL RADIUS CONFLICT: {path.name} states wheel_radius_m = "
@@ -122,7 +129,7 @@ def load_inputs(inputs, *, progress: bool = False, rate_hz: float = 100.0, cutof
     if "t_s" in df.columns and df["t_s"].isna().any():  # tables mixed with recordings
         df["t_s"] = df["t_s"].fillna(df.groupby("run").cumcount().astype(float))
     return df, {"kinds": kinds, "time_sync": sync, "wheel_radius_m": radius, "wheel_width_m": width,
-                "notes": notes, "results": results, "tables": tables}
+                "notes": notes, "processing": processing, "results": results, "tables": tables}
 
 
 def _attachment_name(warning: str, path: Path) -> str:
@@ -294,6 +301,8 @@ def _input_record(path: Path, kind: str, res, table) -> tuple[dict, dict]:
         "duration_s": float(len(sig) / res.rate_hz) if res.rate_hz else None,
         "rate_hz": res.rate_hz,
         "cutoff_hz": res.cutoff_hz,
+        "wheel_radius_m": res.wheel_radius_m,
+        "wheel_radius_source": getattr(res, "wheel_radius_source", None),
         "valid_share": float(sig["valid"].mean()) if len(sig) else None,
         "lost_frames": {k: dict(v) for k, v in sorted((res.lost_frames or {}).items())},
         "imported": entry["provenance"].get("kind") in ("imported", "log file") or imp is not None,
@@ -533,6 +542,10 @@ def run_fit(
         raise ValueError("no input given")
     if not 0.0 <= slip_min < 1.0:
         raise ValueError(f"--slip-min must be in [0, 1), got {slip_min}")
+    if wheel_radius is not None:  # the same plausibility check as the slip radius of processing
+        from wheelsoil.processing.pipeline import check_wheel_radius
+
+        wheel_radius = check_wheel_radius(wheel_radius, "--wheel-radius")
     ter = terrain if isinstance(terrain, Terrain) else load_terrain(terrain)
     models = list(models) if models else list(DEFAULT_MODELS)
     for m in models:

@@ -51,7 +51,7 @@ from wheelsoil.sim.physics import bandlimited as _bandlimited
 from wheelsoil.sim.terra import soil_dict
 
 __all__ = ["EFFECTS", "IN_FAMILY", "OUT_OF_FAMILY", "ACCEPTABLE", "VERDICTS", "SimulatedRun", "simulate_run",
-           "write_simulation", "write_truth", "judge", "draw_case", "pack_signals", "vehicle_config_for",
+           "write_simulation", "write_truth", "write_vehicle_config", "judge", "draw_case", "pack_signals", "vehicle_config_for",
            "SIMULATOR"]
 
 #: Name and version of the simulator (in the provenance record and the truth).
@@ -251,6 +251,7 @@ def simulate_run(
     n_cycles: int = 6,
     soil_variability: float = 0.02,
     usb_batching_s: float = 0.0,
+    front_wheels: str = "driven",
 ) -> SimulatedRun:
     """Simulate one physical field run of the instrumented left-rear wheel (paper section 2.2).
 
@@ -269,6 +270,9 @@ def simulate_run(
     duration_s : run length [s] (>= 30); default ``n_cycles`` accelerate-brake cycles.
     soil_variability : relative sd of c, kc, kphi along the track (random field, 3 m correlation), 0 .. 0.2.
     usb_batching_s : 0 (per-frame host stamps) or a USB adapter's poll period (0 .. 0.02 s).
+    front_wheels : ``"driven"`` (the 4x4's front wheels on the FL/FR wheel-speed channels: they
+        slip like the rear ones) or ``"reference"`` (an idealised undriven reference wheel there,
+        r omega = V: what processing's GNSS-latency estimate assumes; the dynamics stay 4x4).
 
     Returns
     -------
@@ -300,6 +304,8 @@ def simulate_run(
         raise ValueError(f"soil_variability={soil_variability} outside 0..0.2")
     if added_load_n < 0 or added_load_n > 15000:
         raise ValueError(f"added_load_n={added_load_n} outside 0..15000 N")
+    if front_wheels not in ("driven", "reference"):
+        raise ValueError(f"front_wheels must be 'driven' or 'reference', got {front_wheels!r}")
     r, b = _wheel_dims(wheel)
     if not (0.05 <= r <= 2.0 and 0.02 <= b <= 2.0):
         raise ValueError(f"wheel {r} x {b} m: radius must be in 0.05..2 m and width in 0.02..2 m")
@@ -336,7 +342,7 @@ def simulate_run(
     frames_wft = _wft_frames(dbs["wft"], rng, t_rel, w_meas, fx, my, angle_rad, angle_deg, drop_rate,
                              angle_err_deg=angle_err_deg)
     frames_veh = _vehicle_bus_frames(dbs, rng, t_rel, speed, omega, slip, r, gnss_latency_s,
-                                     start_s, gps_offset_s, gps_drift)
+                                     start_s, gps_offset_s, gps_drift, front_wheels=front_wheels)
     start_ns = int(round(start_s * 1e9))
     frames = {}
     for bus, parts in ((BUS_WFT, frames_wft), (BUS_VEH, frames_veh)):
@@ -400,7 +406,8 @@ def simulate_run(
         "added_load_n": float(added_load_n),
         "vehicle": {"mass_kg": float(phys["mass_kg"]), "grade_rad": phys["grade"], "drive": "4x4, locked differentials",
                     "max_net_force_n": phys["can_move"]["max_net_force_n"],
-                    "accel_max_mps2": phys["can_move"]["accel_max_mps2"]},
+                    "accel_max_mps2": phys["can_move"]["accel_max_mps2"],
+                    "can_start": bool(phys["can_move"]["can_start"])},
         "force_table_max_error_n": phys["table_max_error_n"],
         "gnss_latency_s": float(gnss_latency_s),
         "gps_clock_offset_s": gps_offset_s,
@@ -409,6 +416,7 @@ def simulate_run(
         "drop_rate": float(drop_rate),
         "soil_variability": float(soil_variability),
         "usb_batching_s": float(usb_batching_s),
+        "front_wheels": front_wheels,
         "lost_wft_samples": lost,
         "duration_s": float(n * dt),
         "n_cycles": int(w["cycle"].max() + 1) if n else 0,
@@ -510,6 +518,7 @@ def _wft_frames(db, rng, t_rel, load, fx, my_true, angle_rad, angle_deg, drop_ra
         idx = np.flatnonzero(starts)
         for i, b in zip(idx, burst[idx]):
             keep[i:i + b] = False
+        keep[0] = keep[-1] = True  # losses show as counter gaps (the logger cannot see lost ends)
     t_tx = t_rel + 100e-6  # sample -> transmission
     parts = []
     for k, (msg, data) in enumerate(((m_force, f_data), (m_moment, m_data), (m_angle, a_data))):
@@ -537,12 +546,15 @@ def _wft_frames(db, rng, t_rel, load, fx, my_true, angle_rad, angle_deg, drop_ra
     return parts
 
 
-def _vehicle_bus_frames(dbs, rng, t_rel, speed, omega, slip, r, latency_s, start_s, gps_offset_s, gps_drift):
+def _vehicle_bus_frames(dbs, rng, t_rel, speed, omega, slip, r, latency_s, start_s, gps_offset_s, gps_drift,
+                        front_wheels="driven"):
     """can1: wheel speeds (100 Hz), WSS status (10 Hz), GNSS speed/velocity/time (20 Hz), GPS status (1 Hz).
 
     All four wheels are driven through locked differentials: they turn at the
     instrumented wheel's omega (each tyre's rolling radius within +-0.3 %, so
-    the wheel speeds differ by that); GNSS velocities are of the fix epoch
+    the wheel speeds differ by that). ``front_wheels="reference"`` puts an
+    idealised undriven reference wheel (r omega = V, rolling slip -0.8 %) on the
+    FL/FR channels instead (the dynamics stay 4x4); GNSS velocities are of the fix epoch
     and arrive ``latency_s`` later; ``RT_SB_GPS_Time`` carries the fix's GPS
     week and time of week on the GPS clock (host clock + offset + drift).
     """
@@ -559,6 +571,10 @@ def _vehicle_bus_frames(dbs, rng, t_rel, speed, omega, slip, r, latency_s, start
     tol = 1.0 + rng.uniform(-0.003, 0.003, 3)  # other tyres' rolling radii relative to the left rear
     om_f = om_rl / tol[0]
     om_fr = om_rl / tol[1]
+    if front_wheels == "reference":  # an undriven reference wheel on the FL/FR channels: V/r, rolling slip
+        v_w = np.interp(t_w, t_rel, speed)
+        om_f = v_w / (r * 1.008) / tol[0]
+        om_fr = v_w / (r * 1.008) / tol[1]
     om_rr = om_rl / tol[2]
 
     def rpm(om):
@@ -698,6 +714,23 @@ def write_simulation(run: SimulatedRun, path, *, config=None) -> Path:
                 channel=channel,
                 is_rx=True,
             ))
+    return path
+
+
+def write_vehicle_config(run: SimulatedRun, path) -> Path:
+    """Write the vehicle configuration of the simulated wheel as a TOML file (DBC paths made absolute,
+    pointing at the shipped DBCs), e.g. for ``wheelsoil import run.log --vehicle FILE`` of a .log/.blf
+    output (those formats carry no configuration). Raises OSError when it cannot be written."""
+    from wheelsoil.daq.config import default_vehicle_path
+
+    cfg = run.config or vehicle_config_for(*run.wheel)
+    text = cfg.text
+    base = default_vehicle_path().parent
+    for bus_dbcs in cfg.buses.values():
+        for p in bus_dbcs:
+            text = text.replace(f'"{p.name}"', json.dumps(str(base / p.name)))
+    path = Path(path)
+    path.write_text(text, encoding="utf-8")
     return path
 
 
@@ -863,7 +896,13 @@ def register(subparsers) -> None:
                    help="wheel radius [m] (default 0.47); the recording's vehicle configuration carries it, "
                    "so `wheelsoil fit` uses it without options")
     p.add_argument("--wheel-width", type=float, default=None, metavar="M", help="wheel width [m] (default 0.32)")
+    p.add_argument("--front-wheels", choices=("driven", "reference"), default="driven",
+                   help="what the FL/FR wheel-speed channels carry: the 4x4's driven front wheels (default, "
+                   "physical) or an idealised undriven reference wheel (r omega = V)")
     p.add_argument("--truth", default=None, metavar="FILE", help="also write the hidden truth to this JSON file")
+    p.add_argument("--vehicle-out", default=None, metavar="TOML",
+                   help="also write the simulated wheel's vehicle configuration (for `wheelsoil import "
+                   "run.log --vehicle TOML`; an .mcap output carries it already)")
     p.add_argument("-o", "--output", required=True, help="output: .mcap, or .log/.asc/.blf/.trc (then `wheelsoil import`)")
     p.set_defaults(func=_cmd_simulate)
 
@@ -927,12 +966,15 @@ def _cmd_simulate(args) -> int:
         terrain, effect=args.effect, params=_cli_params(args.effect, _parse_params(args.param)), size=args.size,
         wheel=wheel, added_load_n=added, gnss_latency_s=args.gnss_latency, drop_rate=args.drop_rate,
         seed=args.seed, duration_s=args.duration, n_cycles=args.cycles, soil_variability=args.soil_variability,
-        usb_batching_s=args.usb_batching,
+        usb_batching_s=args.usb_batching, front_wheels=args.front_wheels,
     )
     out = write_simulation(run, args.output)
     per_bus = ", ".join(f"{b}: {len(f['timestamp_ns'])}" for b, f in sorted(run.frames.items()))
     print(f"wrote {out}: {run.duration_s:.1f} s, {run.n_frames} frames ({per_bus}), "
           f"{out.stat().st_size / 1e6:.2f} MB; wheel {wheel[0]} x {wheel[1]} m, vehicle {run.info['vehicle']['mass_kg']:.0f} kg")
+    if args.vehicle_out:
+        write_vehicle_config(run, args.vehicle_out)
+        print(f"vehicle configuration -> {args.vehicle_out}")
     if args.truth:
         write_truth(run, args.truth)
         print(f"hidden truth -> {args.truth}")

@@ -97,6 +97,16 @@ _MISMATCH = {  # name: (kind, small, large)
 }
 
 
+#: Parameter names each effect takes (``size`` always allowed).
+PARAM_NAMES: dict[str, tuple[str, ...]] = {
+    "none": (), "vasilev": ("H",), "lyasko": ("m1", "m2"), "ding": ("n1",),
+    "terrain_mismatch": ("changes",), "terrain_drift": ("changes", "mode", "change_at"),
+    "stress_distribution": ("a1", "a2"), "fx_gain": ("gain",), "my_gain": ("gain",), "load_gain": ("gain",),
+    "angle_offset": ("offset_deg",), "tyre_deflection": ("kappa",), "bulldozing": ("factor",),
+    "load_dependent": ("beta",), "vertical_balance": (),
+}
+
+
 def family_of(effect: str) -> str:
     """``"in"`` or ``"out"``; ValueError for an unknown effect."""
     if effect in IN_FAMILY:
@@ -121,13 +131,21 @@ def draw_effect(effect: str, rng: np.random.Generator, *, size: float | None = N
     """
     family_of(effect)
     given = dict(given or {})
+    bad = set(given) - set(PARAM_NAMES[effect]) - {"size"}
+    if bad:
+        raise ValueError(f"effect {effect!r} has no parameter(s) {sorted(bad)}; known: "
+                         f"{', '.join(PARAM_NAMES[effect]) or 'none'}")
+    for name, ch in (given.get("changes") or {}).items():
+        if name not in _MISMATCH or not isinstance(ch, Mapping) or ch.get("kind") not in ("factor", "delta", "delta_deg"):
+            raise ValueError(f"{effect}: change {name!r}: {ch!r}; expected one of {', '.join(_MISMATCH)} with "
+                             "{'kind': factor|delta|delta_deg, 'value': ...}")
     u = float(rng.uniform(0.0, 1.0)) if size is None else float(size)
     if not 0.0 <= u <= 1.0:
         raise ValueError(f"effect size {u} outside [0, 1]")
     sign = 1.0 if rng.random() < 0.5 else -1.0
     p: dict[str, Any] = {}
     if effect == "none":
-        return {**given}
+        return {**given, "size": 0.0}
     if effect == "vasilev":
         p = {"H": _mag(u, 0.01, 0.10, log=True)}
     elif effect == "lyasko":
@@ -228,6 +246,7 @@ class TruthModel:
     effect: str = "none"
     params: dict = field(default_factory=dict)
     static_load_n: float = 11000.0
+    epsrel: float = 1e-8  # quadrature tolerance of the truth (the sensor noise is ~1e-3 of the forces)
 
     def soil_at(self, frac=0.5, variability=None) -> dict:
         """The true soil at distance fraction ``frac`` (0..1, (N,) or scalar) of the run, with the
@@ -279,7 +298,7 @@ class TruthModel:
             soil = dict(soil)
             soil["kc"] = soil["kc"] * f
             soil["kphi"] = soil["kphi"] * f
-        out = wheel_forces(soil, r, self.width_m, w, s, **kw)
+        out = wheel_forces(soil, r, self.width_m, w, s, epsrel=self.epsrel, **kw)
         if e == "bulldozing":
             out["drawbar_pull_n"] = out["drawbar_pull_n"] - p["factor"] * _bulldozing_resistance(
                 soil, self.width_m, out["sinkage_m"])

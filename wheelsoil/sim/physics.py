@@ -96,7 +96,8 @@ def simulate_physics(truth: TruthModel, rng: np.random.Generator, *, added_load_
         sub = np.random.default_rng(driver_seed)  # the same driver choices on each pass
         dyn = simulate_dynamics(table, veh, sub, added_load_n=added_load_n, radius_m=r, duration_s=duration_s,
                                 n_cycles=n_cycles, grade=grade, bumps_front=bump(bf), bumps_rear=bump(br),
-                                dist_total_guess_m=dist_guess, slip_noise=slip_noise)
+                                dist_total_guess_m=dist_guess, slip_noise=slip_noise,
+                                can_start=can_move["can_start"], slip_best=can_move["slip_at_max"])
         total = max(float(dyn["distance_m"][-1]), 1.0)
         if abs(total - dist_guess) < 0.5:
             break

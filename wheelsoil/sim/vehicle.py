@@ -159,8 +159,10 @@ def check_can_move(table: ForceTable, veh: VehicleParams, added_load_n: float, g
 
     The summed drawbar pull of the four wheels at their static loads, maximised over slip
     0.05..0.95 and over the tabulated distance fractions' worst case, must give at least
-    0.15 m/s^2 against the grade. Returns ``{max_net_force_n, slip_at_max, accel_max_mps2}``;
-    raises ValueError otherwise, with the numbers and what to change.
+    0.15 m/s^2 against the grade. Returns ``{max_net_force_n, slip_at_max, accel_max_mps2,
+    net_force_full_slip_n, can_start}``: ``can_start`` False when the wheels dig in at s -> 1
+    (from standstill every wheel speed is s = 1), then the runs start rolling and brake only to a
+    crawl. Raises ValueError otherwise, with the numbers and what to change.
     """
     m, wf, wr = veh.loads(added_load_n)
     s = np.linspace(0.05, 0.95, 91)
@@ -171,6 +173,8 @@ def check_can_move(table: ForceTable, veh: VehicleParams, added_load_n: float, g
         i = int(np.argmax(net))
         if worst is None or net[i] < worst[0]:
             worst = (float(net[i]), float(s[i]))
+    full = min(float(2 * table.dp(wf, 0.97, f) + 2 * table.dp(wr, 0.97, f)) - float(resistance_n(veh, m, 0.0, grade))
+               for f in table.fracs)
     a = worst[0] / m
     if a < 0.15:
         raise ValueError(
@@ -179,7 +183,9 @@ def check_can_move(table: ForceTable, veh: VehicleParams, added_load_n: float, g
             f"(front {wf:.0f} N, rear {wr:.0f} N per wheel; Wong's Dp < 0 means the compaction resistance "
             "exceeds the thrust). Choose a larger or wider wheel (--wheel-radius/--wheel-width), a smaller "
             "--added-load, or a firmer terrain.")
-    return {"max_net_force_n": worst[0], "slip_at_max": worst[1], "accel_max_mps2": a}
+    # from standstill any wheel speed means s = 1: the vehicle can start only if Dp(s -> 1) pulls
+    return {"max_net_force_n": worst[0], "slip_at_max": worst[1], "accel_max_mps2": a,
+            "net_force_full_slip_n": full, "can_start": full / m > 0.1}
 
 
 def _smooth(x):
@@ -190,11 +196,15 @@ def _smooth(x):
 def simulate_dynamics(table: ForceTable, veh: VehicleParams, rng: np.random.Generator, *,
                       added_load_n: float, radius_m: float, duration_s: float | None, n_cycles: int,
                       grade: float = 0.0, bumps_front=None, bumps_rear=None, dist_total_guess_m: float = 300.0,
-                      slip_noise=None):
+                      slip_noise=None, can_start: bool = True, slip_best: float = 0.5):
     """Integrate the vehicle through accelerate-brake cycles.
 
     ``bumps_front/rear``: callables t -> load disturbance [N] (or None); ``slip_noise``:
-    array of the slip controller's wobble per step (band-limited, or None). Returns a dict of
+    array of the slip controller's wobble per step (band-limited, or None); ``can_start``: False
+    when the vehicle could not pull away from standstill (it then enters the test strip rolling
+    at 1 m/s and brakes only to a crawl); ``slip_best``: the slip of the largest net pull. Below
+    1 m/s the driver keeps the slip near ``slip_best`` (else a soil that digs in at high slip
+    would bog the vehicle down). Returns a dict of
     arrays on the ``DT_S`` grid: ``t_s, speed_mps, accel_mps2, omega_radps, slip (s of the
     wheels; nan at standstill), slip_cmd, load_front_n, load_rear_n, dp_front_n, dp_rear_n
     (per wheel, as used), resistance_n, distance_m, phase (object), cycle (int)``, and
@@ -211,14 +221,14 @@ def simulate_dynamics(table: ForceTable, veh: VehicleParams, rng: np.random.Gene
     out = {k: [] for k in ("t_s", "speed_mps", "accel_mps2", "omega_radps", "slip", "slip_cmd",
                            "load_front_n", "load_rear_n", "dp_front_n", "dp_rear_n", "resistance_n",
                            "distance_m", "phase", "cycle")}
-    V = 0.0
+    V = 0.0 if can_start else 1.0
     x = 0.0
     lt, lt_dot = 0.0, 0.0  # pitch load transfer state [N]
-    om_state = [0.0]  # the wheels' angular speed [rad/s] (rate-limited follower of the command)
+    om_state = [0.0 if can_start else V / (r * 0.96)]  # wheels' angular speed [rad/s] (rate-limited follower)
     a_prev = 0.0
     t = 0.0
     cycle = 0
-    stop_next = True
+    stop_next = can_start
     nstep = [0]
 
     def wobble():
@@ -244,7 +254,10 @@ def simulate_dynamics(table: ForceTable, veh: VehicleParams, rng: np.random.Gene
             if rw_cmd is not None:
                 om_cmd = max(rw_cmd, 0.0) / r
             else:
-                om_cmd = V / (r * (1.0 - min(s_cmd, 0.97)))
+                sc = min(s_cmd, 0.97)
+                if sc > slip_best and phase != "brake":  # slow: back off towards the best traction
+                    sc = slip_best + (sc - slip_best) * _smooth((V - 0.4) / 0.6)
+                om_cmd = max(V, 0.3) / (r * (1.0 - sc)) if phase != "brake" else V / (r * (1.0 - sc))
             om_cmd = min(om_cmd, veh.omega_max_radps)  # the wheel-speed sensor's range
             # driveline: first-order lag (0.12 s) with a rate limit of OMEGA_RATE_MAX
             d_om = (om_cmd - om_state[0]) * dt / 0.12
@@ -319,7 +332,7 @@ def simulate_dynamics(table: ForceTable, veh: VehicleParams, rng: np.random.Gene
         # braking (skid) to a crawl or to a stop
         cycles_done += 1
         last = cycles_done >= want
-        stop_next = last or rng.random() < 0.5
+        stop_next = can_start and (last or rng.random() < 0.5)
         v_stop = 0.0 if stop_next else rng.uniform(0.8, 1.4)
         s_br = rng.uniform(0.08, 0.25)
         t0 = t
@@ -331,7 +344,7 @@ def simulate_dynamics(table: ForceTable, veh: VehicleParams, rng: np.random.Gene
             if tb > 30.0:
                 break
             step("brake", -1, s_cmd=s_b)
-    if duration_s is None:
+    if duration_s is None and can_start:
         t0 = t
         while t - t0 < 2.0:
             step("standstill", -1)
