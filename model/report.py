@@ -35,6 +35,7 @@ import base64
 import html
 import json
 import math
+import textwrap
 from pathlib import Path
 
 import numpy as np
@@ -90,6 +91,21 @@ def _title(name) -> str:
 
 def _color(name, i=0) -> str:
     return COLORS.get(name, _PALETTE[i % len(_PALETTE)])
+
+
+def _distinct_colors(names) -> list:
+    """One colour per name, its own where it has one, never the same twice (up to 20 names)."""
+    import matplotlib
+
+    spare = [matplotlib.colors.to_hex(c) for c in matplotlib.colormaps["tab20"].colors]
+    out, used = [], set()
+    for n in names:
+        c = COLORS.get(n)
+        if c is None or c in used:
+            c = next((x for x in spare if x not in used), "#000000")
+        used.add(c)
+        out.append(c)
+    return out
 
 
 # ============================================================================ display convention
@@ -677,7 +693,7 @@ def findings(rep) -> list:
 # ============================================================================ figures
 
 
-def exclusion_masks(signals, slip_min: float, excluded_spans=None) -> tuple:
+def exclusion_masks(signals, slip_min: float, excluded_spans=None, used=None) -> tuple:
     """Why each sample of a processed recording is or is not used by the fit.
 
     ``signals``: DataFrame of :func:`wheelsoil.processing.process_recording`
@@ -702,8 +718,12 @@ def exclusion_masks(signals, slip_min: float, excluded_spans=None) -> tuple:
     valid = signals["valid"].fillna(False).astype(bool).to_numpy() if "valid" in signals else np.ones(t.size, bool)
     phase = signals["phase"].astype(str).to_numpy() if "phase" in signals else np.full(t.size, "")
     fin = np.isfinite(s) & np.isfinite(w) & np.isfinite(dp)
+    cyc = signals["cycle"].to_numpy(float) if "cycle" in signals else np.zeros(t.size)
     with np.errstate(invalid="ignore"):
-        used = valid & fin & (s > slip_min) & (s < 1.0) & (w > 0)
+        driving = valid & fin & (s > slip_min) & (s < 1.0) & (w > 0)
+        outside = driving & ~(cyc >= 0) if (cyc >= 0).any() else np.zeros(t.size, bool)
+        given = used is not None
+        used = np.asarray(used, bool) if given else driving & ~outside
         reasons = {
             "marked invalid by processing": ~valid,
             "standstill": phase == "standstill",
@@ -712,6 +732,7 @@ def exclusion_masks(signals, slip_min: float, excluded_spans=None) -> tuple:
             "s ~ 0": valid & fin & (np.abs(s) <= _ZERO_SLIP),
             f"0 < s <= slip_min = {slip_min:g}": valid & fin & (s > _ZERO_SLIP) & (s <= slip_min),
             "s >= 1 or W <= 0": valid & fin & ((s >= 1.0) | (w <= 0)),
+            "outside the accelerate cycles (transients)": outside,
         }
     for e in excluded_spans or []:
         try:
@@ -721,7 +742,12 @@ def exclusion_masks(signals, slip_min: float, excluded_spans=None) -> tuple:
         key = f"processing: {e.get('reason', 'excluded')}"
         m = (t >= t0) & (t <= t1)
         reasons[key] = reasons.get(key, np.zeros(t.size, bool)) | m
-        used &= ~m
+        if not given:
+            used &= ~m
+    listed = np.zeros(t.size, bool)
+    for v in reasons.values():
+        listed |= v
+    reasons["other (the fit's own selection)"] = ~used & ~listed
     return used, {k: v for k, v in reasons.items() if v.any()}
 
 
@@ -737,14 +763,14 @@ _PHASE_COLORS = {"accel": ("#2ca02c", "shaded: accelerate phase"), "brake": ("#d
 
 
 def overview_figure(signals, wheel_radius_m: float, slip_min: float, excluded_spans, path: Path, title: str,
-                    plt) -> dict:
+                    plt, used=None) -> dict:
     """The run at a glance: V and r*omega, slip, W, Dp, T against time, phases shaded, and a strip of
     the spans excluded from the fit with their reasons.  Writes ``path``; returns
     ``{"used": n, "samples": N, "excluded": {reason: n}}``."""
     from matplotlib.patches import Patch
 
     t = signals["t_s"].to_numpy(float)
-    used, reasons = exclusion_masks(signals, slip_min, excluded_spans)
+    used, reasons = exclusion_masks(signals, slip_min, excluded_spans, used)
     phase = signals["phase"].astype(str).to_numpy() if "phase" in signals else np.full(t.size, "")
     fig, axes = plt.subplots(6, 1, figsize=(12, 15), sharex=True, layout="constrained",
                              gridspec_kw={"height_ratios": [1, 1, 1, 1, 1, 0.25 + 0.14 * max(len(reasons), 1)]})
@@ -928,26 +954,30 @@ def _figures(diag, wheel, out_dir: Path, plt) -> tuple:
     files.append(_save(fig, out_dir / "residuals.png", plt))
 
     # 3. sinkage vs slip per model; overlapping curves drawn once
-    fig, ax = plt.subplots(figsize=(9, 5.8))
+    fig, ax = plt.subplots(figsize=(10, 6.0 + 0.22 * (len(names) + 2)), layout="constrained")
     if "sinkage_m" in data.channels:
         ax.scatter(s, data.channels["sinkage_m"] * 1e3, label="measured z", **meas)
     zc = {k: curves[k].sinkage_m * 1e3 for k in names if k in curves}
     groups = overlapping_groups(zc)
     ov = []
+    colors = _distinct_colors([g[0] for g in groups])
     for i, g in enumerate(groups):
         lab = " = ".join(_title(k) for k in g)
         if len(g) > 1:
             lab += " (curves overlap)"
             ov.append(f"sinkage curves of {', '.join(_title(k) for k in g)} overlap (within 0.5 % of the plotted "
                       "range): drawn as one line")
-        ax.plot(grid, zc[g[0]], "-", color=_color(g[0], i), lw=2.4 if len(g) > 1 else 2.0, label=lab)
+        ax.plot(grid, zc[g[0]], "-", color=colors[i], lw=2.4 if len(g) > 1 else 2.0,
+                label=textwrap.fill(lab, 90, subsequent_indent="   "))
     ax.set_xlabel("slip s [-]")
     ax.set_ylabel("sinkage z [mm]")
     ax.set_title(f"sinkage vs slip: model curves at W = {fmt(load, 'force')}"
                  + ("" if "sinkage_m" in data.channels else " (sinkage not measured)"), fontsize=10)
     ax.grid(alpha=0.3)
-    _legend(ax, fontsize=8)
-    fig.tight_layout()
+    h, lab = ax.get_legend_handles_labels()
+    leg = fig.legend(h, lab, loc="outside lower center", ncol=1, fontsize=8, markerscale=2.0)
+    for x in getattr(leg, "legend_handles", []):
+        x.set_alpha(1.0)
     files.append(_save(fig, out_dir / "sinkage_vs_slip.png", plt))
     if ov:
         notes["sinkage_vs_slip.png"] = ov
@@ -1400,6 +1430,15 @@ def _html(rep: dict, figs: list, overviews: list) -> str:
 # ============================================================================ entry point
 
 
+def _fit_rows(data, signals, run: int):
+    """(N,) bool: the samples of input ``run`` that the fit used (matched by time), or None when
+    the fit data carry no times."""
+    t_fit = getattr(data, "t_s", None)
+    if t_fit is None or "t_s" not in signals:
+        return None
+    return np.isin(signals["t_s"].to_numpy(float), np.asarray(t_fit)[np.asarray(data.run) == run])
+
+
 def write_report(diag, out_dir, *, terrain, wheel, inputs, time_sync: dict | None = None,
                  extra_notes: list | None = None, progress: bool = False, provenance: dict | None = None,
                  input_details: list | None = None) -> dict:
@@ -1448,7 +1487,7 @@ def write_report(diag, out_dir, *, terrain, wheel, inputs, time_sync: dict | Non
                 stats = overview_figure(det["signals"], float(det.get("wheel_radius_m") or wheel.radius),
                                         diag.data.slip_min, det.get("excluded") or [], out / name,
                                         f"{Path(str(det.get('path'))).name}: the run, what was fitted and what was not",
-                                        plt)
+                                        plt, used=_fit_rows(diag.data, det["signals"], i))
                 q["samples"] = stats["samples"]
                 q["used_in_fit"] = stats["used"]
                 q["excluded_samples"] = stats["excluded"]
