@@ -601,7 +601,7 @@ def run_fit(
     for path, res, q in zip(inputs, info["results"], quality):
         d = {"path": path, "quality": q}
         if res is not None:
-            d.update(signals=res.signals, wheel_radius_m=res.wheel_radius_m,
+            d.update(signals=res.signals.assign(cycle=res.cycle), wheel_radius_m=res.wheel_radius_m,
                      excluded=list(getattr(res, "excluded", []) or []))  # interface C (proc)
         details.append(d)
     return write_report(diag, out, terrain=ter, wheel=wheel, inputs=inputs, time_sync=ts,
