@@ -894,9 +894,10 @@ def _figures(diag, wheel, out_dir: Path, plt) -> tuple:
     nrow = int(math.ceil(len(names) / ncol))
     fig, axes = plt.subplots(nrow, ncol, figsize=(5.6 * ncol, 4.6 * nrow), squeeze=False, sharey=True)
     order = np.argsort(s, kind="stable")
+    palette = _distinct_colors(names)
     for i, (ax, k) in enumerate(zip(axes.flat, names)):
         f = _fit_of(diag, k)
-        col = _color(k, i)
+        col = palette[i]
         ax.plot(s[order], f.predictions["drawbar_pull_n"][order], "x", ms=2.5 if big else 5, mew=0.8, color=col,
                 alpha=0.15 if big else 1.0, label="model at each sample's measured W", zorder=2)
         ax.scatter(s, dp, label="measured Dp", zorder=3, **meas)
