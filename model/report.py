@@ -56,6 +56,7 @@ REQUIRED_KEYS = ("schema", "input", "provenance", "terrain", "wheel", "samples_u
                  "models", "diagnosis", "gain", "flags", "data_quality", "findings", "metric_definitions")
 #: terrain parameters a fit can identify (k_eq = kc/b + kphi: one wheel width cannot separate kc and kphi)
 TERRAIN_KEYS = ("k_eq", "n", "c", "phi", "K")
+MAX_POINTS = 4000  #: samples drawn per scatter panel (every k-th; file size, readability)
 CORRELATION_LIMIT = 0.95  #: |correlation| of two fitted parameters above this is flagged
 CONDITION_LIMIT = 100.0  #: condition number of the scaled Jacobian above this is flagged (derived flags)
 _PALETTE = ("#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b", "#e377c2", "#17becf", "#bcbd22")
@@ -97,7 +98,8 @@ def _distinct_colors(names) -> list:
     """One colour per name, its own where it has one, never the same twice (up to 20 names)."""
     import matplotlib
 
-    spare = [matplotlib.colors.to_hex(c) for c in matplotlib.colormaps["tab20"].colors]
+    tab = [matplotlib.colors.to_hex(c) for c in matplotlib.colormaps["tab20"].colors]
+    spare = tab[::2] + ["#000000", "#7f0000", "#004c6d", "#5a3e00"] + tab[1::2]  # strong colours first
     out, used = [], set()
     for n in names:
         c = COLORS.get(n)
@@ -882,6 +884,9 @@ def _figures(diag, wheel, out_dir: Path, plt) -> tuple:
     data = diag.data
     s, dp = data.slip, data.channels["drawbar_pull_n"]
     big = data.n > 500
+    # every k-th sample is drawn (at most MAX_POINTS per panel; the numbers use all of them)
+    step = max(1, int(math.ceil(data.n / MAX_POINTS)))
+    sub = np.arange(0, data.n, step)
     meas = dict(s=5 if big else 28, alpha=0.3 if big else 0.9, color="#9a9a9a", lw=0, marker="o")
     load = float(np.median(data.load_n))
     grid = np.linspace(max(data.slip_min, 1e-3), min(float(s.max()) + 0.02, 0.98), 120)
@@ -893,14 +898,14 @@ def _figures(diag, wheel, out_dir: Path, plt) -> tuple:
     ncol = 3 if len(names) > 2 else len(names)
     nrow = int(math.ceil(len(names) / ncol))
     fig, axes = plt.subplots(nrow, ncol, figsize=(5.6 * ncol, 4.6 * nrow), squeeze=False, sharey=True)
-    order = np.argsort(s, kind="stable")
+    order = sub[np.argsort(s[sub], kind="stable")]
     palette = _distinct_colors(names)
     for i, (ax, k) in enumerate(zip(axes.flat, names)):
         f = _fit_of(diag, k)
         col = palette[i]
-        ax.plot(s[order], f.predictions["drawbar_pull_n"][order], "x", ms=2.5 if big else 5, mew=0.8, color=col,
-                alpha=0.15 if big else 1.0, label="model at each sample's measured W", zorder=2)
-        ax.scatter(s, dp, label="measured Dp", zorder=3, **meas)
+        ax.plot(s[order[::3]], f.predictions["drawbar_pull_n"][order[::3]], "x", ms=2.5 if big else 5, mew=0.8, color=col,
+                alpha=0.4 if big else 1.0, label="model at each sample's measured W", zorder=2)
+        ax.scatter(s[sub], dp[sub], label="measured Dp", zorder=3, **meas)
         if k in curves:
             ax.plot(grid, curves[k].drawbar_pull_n, "-", color=col, lw=2.2, label=f"model curve at W = {fmt(load, 'force')}")
         m = f.metrics
@@ -927,7 +932,7 @@ def _figures(diag, wheel, out_dir: Path, plt) -> tuple:
         e = (data.channels[c] - wong.predictions[c]) * k
         b = diag.binned[c]
         ax = axes[i, 0]
-        ax.scatter(s, e, label="measured - Wong, per sample", **meas)
+        ax.scatter(s[sub], e[sub], label="measured - Wong, per sample", **meas)
         if b["mean"]:
             mean = np.array(b["mean"], float)
             ax.errorbar(b["slip"], mean * k,
@@ -939,11 +944,11 @@ def _figures(diag, wheel, out_dir: Path, plt) -> tuple:
         ax.set_xlabel("slip s [-]")
         ax.set_ylabel(f"measured - Wong [{unit}]")
         _legend(ax, fontsize=8)
-        axes[i, 1].scatter(data.load_n, e, label="measured - Wong, per sample", **meas)
+        axes[i, 1].scatter(data.load_n[sub], e[sub], label="measured - Wong, per sample", **meas)
         axes[i, 1].axhline(0, color="k", lw=0.8, label="zero error")
         axes[i, 1].set_xlabel("vertical load W [N]")
         axes[i, 1].set_title(f"vs load", fontsize=10)
-        axes[i, 2].scatter(t, e, label="measured - Wong, per sample", **meas)
+        axes[i, 2].scatter(t[sub], e[sub], label="measured - Wong, per sample", **meas)
         axes[i, 2].axhline(0, color="k", lw=0.8, label="zero error")
         axes[i, 2].set_xlabel("time t [s]" if data.t_s is not None else "table row")
         axes[i, 2].set_title("vs time" if data.t_s is not None else "vs row order", fontsize=10)
@@ -957,7 +962,7 @@ def _figures(diag, wheel, out_dir: Path, plt) -> tuple:
     # 3. sinkage vs slip per model; overlapping curves drawn once
     fig, ax = plt.subplots(figsize=(10, 6.0 + 0.22 * (len(names) + 2)), layout="constrained")
     if "sinkage_m" in data.channels:
-        ax.scatter(s, data.channels["sinkage_m"] * 1e3, label="measured z", **meas)
+        ax.scatter(s[sub], data.channels["sinkage_m"][sub] * 1e3, label="measured z", **meas)
     zc = {k: curves[k].sinkage_m * 1e3 for k in names if k in curves}
     groups = overlapping_groups(zc)
     ov = []
@@ -982,6 +987,12 @@ def _figures(diag, wheel, out_dir: Path, plt) -> tuple:
     files.append(_save(fig, out_dir / "sinkage_vs_slip.png", plt))
     if ov:
         notes["sinkage_vs_slip.png"] = ov
+    if step > 1:
+        for f in ("dp_vs_slip.png", "residuals.png"):
+            notes.setdefault(f, []).append(f"every {step}th of the {data.n} samples is drawn (all are used in the "
+                                           "numbers)")
+    if "sinkage_m" in data.channels and step > 1:
+        notes.setdefault("sinkage_vs_slip.png", []).append(f"every {step}th sample is drawn")
     return files, notes
 
 
