@@ -989,11 +989,15 @@ def _figures(diag, wheel, out_dir: Path, plt) -> tuple:
         notes["sinkage_vs_slip.png"] = ov
     if step > 1:
         for f in ("dp_vs_slip.png", "residuals.png"):
-            notes.setdefault(f, []).append(f"every {step}th of the {data.n} samples is drawn (all are used in the "
+            notes.setdefault(f, []).append(f"every {_ordinal(step)} of the {data.n} samples is drawn (all are used in the "
                                            "numbers)")
     if "sinkage_m" in data.channels and step > 1:
-        notes.setdefault("sinkage_vs_slip.png", []).append(f"every {step}th sample is drawn")
+        notes.setdefault("sinkage_vs_slip.png", []).append(f"every {_ordinal(step)} sample is drawn")
     return files, notes
+
+
+def _ordinal(k: int) -> str:
+    return f"{k}{'th' if 10 <= k % 100 <= 20 else {1: 'st', 2: 'nd', 3: 'rd'}.get(k % 10, 'th')}"
 
 
 def _legend(ax, **kw):
