@@ -1152,15 +1152,24 @@ def _quality_rows(q: dict) -> list:
     lf = q.get("lost_frames") or {}
     for msg in sorted(lf):
         v = lf[msg]
-        rows.append([f"lost frames {msg}", f"{v.get('lost')} of {v.get('received', 0) + (v.get('lost') or 0)} "
-                     f"({v.get('method', '')})"])
+        if v.get("lost") is None:
+            rows.append([f"lost frames {msg}", f"unknown ({v.get('method', '')}); {v.get('received')} received"])
+        else:
+            rows.append([f"lost frames {msg}", f"{v.get('lost')} of {(v.get('received') or 0) + v.get('lost')} "
+                         f"({v.get('method', '')})"])
     if not lf:
         rows.append(["lost frames", "none counted"])
     rej = q.get("rejected_frames")
     rows.append(["rejected frames (import)", _plain(rej) if rej is not None else
                  ("none reported by the import" if q.get("imported") else "n/a (not imported)")])
     dmg = q.get("damaged_chunks") or []
-    rows.append(["damaged chunks", "none" if not dmg else f"{len(dmg)}: " + " | ".join(dmg)])
+    pdmg = (q.get("processing_quality") or {}).get("damage") or []
+    if pdmg:
+        lost = sum(int(d.get("frames_lost") or 0) for d in pdmg if isinstance(d, dict))
+        rows.append(["damaged chunks", f"{len(pdmg)} skipped, {lost} frames lost"
+                     + (": " + " | ".join(dmg) if dmg else "")])
+    else:
+        rows.append(["damaged chunks", "none" if not dmg else f"{len(dmg)}: " + " | ".join(dmg)])
     rows.append(["recording complete", {True: "yes", False: "no (truncated)", None: "n/a"}[q.get("complete")]])
     rx = q.get("kernel_rx_dropped")
     if rx:
