@@ -238,3 +238,18 @@ def test_flags_are_derived_from_the_fit_when_the_diagnosis_gives_none():
     assert kinds == [("lyasko", "at_bound", "m2"), ("lyasko", "correlation", "m1,m2"),
                      ("lyasko", "ill_conditioned", None)]
     assert "-0.99995" in flags[1]["detail"] and "401" in flags[2]["detail"]
+
+
+def test_data_quality_rows_say_unknown_and_damaged():
+    from wheelsoil.model.report import _quality_rows
+
+    q = {"kind": "recording", "duration_s": 240.0, "valid_share": 0.9, "imported": True, "rejected_frames": 3,
+         "lost_frames": {"GPS": {"lost": None, "received": 10, "method": "no cycle time"},
+                         "WFT": {"lost": 5, "received": 995, "method": "counter"}},
+         "damaged_chunks": ["x.mcap: chunk at byte 4096 of 9000 fails its CRC check"],
+         "processing_quality": {"damage": [{"frames_lost": 869}]}, "complete": True,
+         "gnss_latency_s": 0.1, "gnss_latency_stderr_s": 0.001, "inertia": {"applied": True}}
+    rows = dict(_quality_rows(q))
+    assert rows["lost frames GPS"].startswith("unknown") and rows["lost frames WFT"].startswith("5 of 1000")
+    assert rows["damaged chunks"].startswith("1 skipped, 869 frames lost") and "CRC" in rows["damaged chunks"]
+    assert rows["rejected frames (import)"] == "3" and rows["GNSS latency found and removed"].startswith("100 ms")
