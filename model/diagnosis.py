@@ -140,7 +140,7 @@ EFFECT_TITLES = {
 #: Null values of each hypothesis' own effect parameters (the nested model they reduce to).
 NULLS = {"vasilev": {"H": 0.0}, "lyasko": {"m1": 0.0, "m2": 0.0}, "ding": {"n1": 0.0},
          "vasilev+terrain": {"H": 0.0}, "ding+terrain": {"n1": 0.0}, "wong_reece": {"a1": 0.0, "a2": 0.0},
-         "drift_linear": {"g_lnk": 0.0, "g_phi": 0.0, "g_c": 0.0}, "dp_resistance": {"R0": 0.0, "R1": 0.0},
+         "drift_linear": {"g_lnk": 0.0, "g_phi": 0.0, "g_c": 0.0, "g_lnK": 0.0}, "dp_resistance": {"R0": 0.0, "R1": 0.0},
          "radius": {"rho": 0.0}, "sensor_gain": {"g_dp": 0.0, "g_t": 0.0}}
 #: Hypotheses nested in a larger one: the larger one must beat each of them out of sample.
 NESTED = {"vasilev+terrain": ("terrain", "vasilev"), "ding+terrain": ("terrain", "ding"),
