@@ -16,7 +16,11 @@ half the effect size (at most 3 times; noted).
     python benchmarks/bench_diagnosis.py                 # 60 seeds (0..59), 2 processes
     python benchmarks/bench_diagnosis.py --quick         # 6 seeds
     python benchmarks/bench_diagnosis.py --seed 17       # one row again
-    python benchmarks/bench_diagnosis.py --front-wheels reference   # idealised speed reference
+    python benchmarks/bench_diagnosis.py --front-wheels driven      # the 4x4's front wheels on FL/FR
+
+The FL/FR wheel-speed channels carry an idealised undriven reference wheel by default:
+processing estimates the GNSS latency against them as free-rolling wheels, which the 4x4's
+driven front wheels are not in a slip sweep (``--front-wheels driven`` shows what that does).
 
 Prints the confusion table (rows: true effect, in then out of family; columns: verdicts),
 the calibration table (share right per confidence), the summary criteria of issue 11
@@ -175,9 +179,10 @@ def main(argv=None) -> int:
     ap.add_argument("--quick", action="store_true", help="6 seeds (a smoke run)")
     ap.add_argument("--jobs", type=int, default=2, help="worker processes, at most 2 (default 2)")
     ap.add_argument("--duration", type=float, default=180.0, help="simulated run length [s] (default 180)")
-    ap.add_argument("--front-wheels", choices=("driven", "reference"), default="driven",
-                    help="FL/FR wheel-speed channels: the 4x4's driven wheels (default, physical) or an "
-                    "idealised undriven reference wheel (what processing's latency estimate assumes)")
+    ap.add_argument("--front-wheels", choices=("driven", "reference"), default="reference",
+                    help="FL/FR wheel-speed channels: an idealised undriven reference wheel (default: what "
+                    "processing's GNSS-latency estimate assumes, so the bench scores the diagnosis) or the "
+                    "4x4's driven wheels (physical; scores processing's latency estimate too)")
     ap.add_argument("--json", default=None, metavar="FILE", help="also write the rows as JSON")
     ap.add_argument("--keep", default=None, metavar="DIR", help="keep recordings, truths and reports here")
     args = ap.parse_args(argv)

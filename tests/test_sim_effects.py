@@ -111,7 +111,6 @@ def base_run():
 @pytest.mark.parametrize("effect,params", [("fx_gain", {"gain": 1.1}), ("my_gain", {"gain": 0.9}),
                                            ("load_gain", {"gain": 1.05}), ("angle_offset", {"offset_deg": 1.0})])
 def test_sensor_effects_change_only_what_the_transducer_reports(base_run, effect, params):
-    from wheelsoil.daq import read_frames
     from wheelsoil.processing.decode import decode_batches
     from wheelsoil.daq import load_vehicle_config
 

@@ -558,7 +558,6 @@ def _vehicle_bus_frames(dbs, rng, t_rel, speed, omega, slip, r, latency_s, start
     and arrive ``latency_s`` later; ``RT_SB_GPS_Time`` carries the fix's GPS
     week and time of week on the GPS clock (host clock + offset + drift).
     """
-    dt = t_rel[1] - t_rel[0]
     duration = t_rel[-1]
     wss, gps = dbs["wheel_speed"], dbs["gps_rt_speedbox"]
     parts = []

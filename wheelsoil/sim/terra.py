@@ -44,7 +44,6 @@ secant/bisection in log z (:func:`balance_sinkage`).
 
 from __future__ import annotations
 
-import math
 from typing import Any, Mapping
 
 import numpy as np
@@ -103,7 +102,6 @@ def _integrals(soil, r, b, z, s, n, theta_m_frac, epsrel):
     tau_max = c + sig_max * tanphi
     s_sig = np.maximum(sig_max * th1, 1e-300)
     s_tau = np.maximum(tau_max * th1, 1e-300)
-    sin1, cos1 = np.sin(th1), np.cos(th1)
 
     def integrand(u):
         if u <= 1.0:  # front region: theta1 - theta = (theta1 - theta_m) u^2
