@@ -140,6 +140,18 @@ def test_cli_simulate_writes_recording_and_truth_only_when_asked(tmp_path):
     assert doc["gnss_latency_s"] == 0.1 and doc["seed"] == 2
     assert doc["wheel"]["radius_m"] == 0.55 and doc["wheel"]["width_m"] == 0.4
     assert doc["terrain_named"]["phi_deg"] == pytest.approx(14.0)
+    # an .mcap from the CLI records the command, with the effect's options redacted
+    from wheelsoil.daq import read_recording_info
+
+    mc = tmp_path / "run.mcap"
+    res = subprocess.run(cmd[:-1] + [str(mc), "--truth", str(tmp_path / "t2.json")], capture_output=True, text=True)
+    assert res.returncode == 0, res.stderr
+    prov = read_recording_info(mc).provenance
+    assert prov["command"][:2] == ["wheelsoil", "simulate"] and "--wheel-radius" in prov["command"]
+    flat = json.dumps(prov)
+    for word in ("vasilev", "H=0.05", "t2.json"):
+        assert word not in flat, word
+    assert prov["command"].count("<hidden>") == 3
     bad = subprocess.run(cmd[:-2] + ["--param", "m1=2", "-o", str(tmp_path / "x.log")], capture_output=True, text=True)
     assert bad.returncode == 2 and "m1" in bad.stderr
     bad = subprocess.run(cmd[:-2] + ["-o", str(tmp_path / "x.txt")], capture_output=True, text=True)

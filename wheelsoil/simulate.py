@@ -632,6 +632,36 @@ def _vehicle_bus_frames(dbs, rng, t_rel, speed, omega, slip, r, latency_s, start
 
 
 # ------------------------------------------------------------------------ output
+#: Options whose values would give the hidden effect away: redacted in the recorded command.
+_HIDDEN_OPTIONS = ("--effect", "--param", "--size", "--truth")
+
+
+def _redacted_command() -> list[str] | None:
+    """The ``wheelsoil`` command line that is running (as provenance records it), with the values of
+    :data:`_HIDDEN_OPTIONS` replaced by ``<hidden>``; None when not run from the wheelsoil CLI."""
+    import sys
+
+    argv = list(sys.argv)
+    if not argv:
+        return None
+    exe = Path(argv[0])
+    if not (exe.name.startswith("wheelsoil") or (exe.name == "__main__.py" and exe.parent.name == "wheelsoil")):
+        return None
+    out, hide_next = ["wheelsoil"], False
+    for a in argv[1:]:
+        if hide_next:
+            out.append("<hidden>")
+            hide_next = False
+        elif a in _HIDDEN_OPTIONS:
+            out.append(a)
+            hide_next = True
+        elif a.split("=", 1)[0] in _HIDDEN_OPTIONS and "=" in a:
+            out.append(a.split("=", 1)[0] + "=<hidden>")
+        else:
+            out.append(a)
+    return out
+
+
 def _write_mcap(run: SimulatedRun, path: Path, config=None) -> None:
     """Write ``run`` as an MCAP recording: frame batches per bus every
     ``wheelsoil.daq.logger.BATCH_INTERVAL_S`` in receive order (the logger's layout), the
@@ -653,7 +683,7 @@ def _write_mcap(run: SimulatedRun, path: Path, config=None) -> None:
     step = int(round(BATCH_INTERVAL_S * 1e9))
     edges = np.arange(run.start_ns, t_end + step, step, dtype=np.int64)
     cuts = {bus: np.searchsorted(b.timestamp_ns, edges) for bus, b in batches.items()}
-    prov = make_provenance("simulated", seed=int(run.info["seed"]), simulator=SIMULATOR)
+    prov = make_provenance("simulated", command=_redacted_command(), seed=int(run.info["seed"]), simulator=SIMULATOR)
     with RecordingWriter(path, config=config, provenance=prov, fsync=False) as writer:
         for bus in sorted(batches):
             writer.add_bus(bus, interface="simulated", channel=bus)

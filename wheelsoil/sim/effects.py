@@ -16,7 +16,10 @@ In family
   ``stress_distribution``  Wong-Reece normal stress, maximum at theta_m = (a1 + a2 s) theta1.
   ``terrain_drift``        a soil value changes along the run: ``compaction`` (linear in the
                            travelled distance: repeated passes) or ``patch`` (another patch of
-                           ground from a distance on, 2 m transition); centred on the lab value.
+                           ground from ``change_at`` x the distance on, tanh transition over 2 %
+                           of it). The change runs from lab/f to lab*f (a factor f) or lab - d to
+                           lab + d (a delta d): the lab value mid-run (compaction) or at the
+                           patch boundary.
 
 Out of family (``unexplained`` always acceptable)
   ``fx_gain``          the transducer's hub Fx reads g x the true value (calibration).
@@ -261,7 +264,7 @@ class TruthModel:
                 g = frac - 0.5  # linear in distance, centred: the lab value mid-run
             else:  # another patch of ground from change_at on (2 % of the run transition)
                 x = (frac - float(self.params["change_at"])) / 0.02
-                g = 0.5 * np.tanh(x) - 0.0
+                g = 0.5 * np.tanh(x)
             for name, ch in self.params["changes"].items():
                 soil = _apply_change(soil, self.width_m, name, ch["kind"], ch["value"], frac=2.0 * g)
         if variability is not None:
