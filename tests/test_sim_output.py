@@ -177,3 +177,23 @@ def test_truth_lists_acceptable_verdicts_for_every_effect():
     assert r.info["family"] == "in" and r.info["acceptable"] == ["terrain_mismatch"]
     assert r.info["terrain_true_mid_run"]["phi_deg"] == pytest.approx(r.info["terrain_named"]["phi_deg"] + 3.0)
     assert r.info["terrain_true_mid_run"]["n"] == r.info["terrain_named"]["n"]
+
+
+def test_vehicle_keys_replaced_or_added_and_loaded_by_the_daq_loader():
+    from wheelsoil.daq.config import tomllib
+    from wheelsoil.simulate import set_vehicle_keys, vehicle_config_for
+
+    base = '[vehicle]\nname = "x"\nwheel_radius_m = 0.47   # tyre\nwheel_width_m = 0.32\nwheel_mass_kg = 80.0\n\n[buses.can0]\ndbc = []\n'
+    out = set_vehicle_keys(base, {"wheel_radius_m": 0.6, "wheel_mass_kg": 95.0, "wheel_inertia_kgm2": 14.0})
+    doc = tomllib.loads(out)
+    assert doc["vehicle"] == {"name": "x", "wheel_radius_m": 0.6, "wheel_width_m": 0.32, "wheel_mass_kg": 95.0,
+                              "wheel_inertia_kgm2": 14.0}
+    assert out.count("wheel_mass_kg") == 1 and doc["buses"]["can0"]["dbc"] == []
+    with pytest.raises(ValueError, match=r"\[vehicle\]"):
+        set_vehicle_keys("[buses.can0]\n", {"wheel_radius_m": 1.0})
+    cfg = vehicle_config_for(0.61, 0.43)
+    assert (cfg.wheel_radius_m, cfg.wheel_width_m) == (0.61, 0.43)
+    vt = tomllib.loads(cfg.text)["vehicle"]
+    assert vt["wheel_mass_kg"] == 80.0 and vt["wheel_inertia_kgm2"] == 11.5
+    if hasattr(cfg, "wheel_mass_kg"):  # contract B (processing's VehicleConfig fields)
+        assert (cfg.wheel_mass_kg, cfg.wheel_inertia_kgm2) == (80.0, 11.5)

@@ -444,6 +444,25 @@ def _jsonable(x):
     return x
 
 
+def set_vehicle_keys(text: str, values: Mapping[str, float], *, where: str = "vehicle.toml") -> str:
+    """The vehicle TOML ``text`` with ``values`` set in its ``[vehicle]`` table: a key present is
+    replaced in place, a missing one appended to the table (comment: set by wheelsoil simulate).
+    Raises ValueError when the text has no ``[vehicle]`` table followed by another table."""
+    m = re.search(r"(?ms)^\[vehicle\]\s*\n(.*?)(?=^\[)", text)
+    if not m:
+        raise ValueError(f"{where}: no [vehicle] table to put the simulated wheel in")
+    body = m.group(1)
+    comment = "   # set by wheelsoil simulate (the simulated wheel)"
+    for key, val in values.items():
+        line = f"{key} = {float(val)!r}{comment}"
+        pat = re.compile(rf"(?m)^{re.escape(key)}\s*=.*$")
+        if pat.search(body):
+            body = pat.sub(lambda _m: line, body)
+        else:
+            body = body.rstrip("\n") + "\n" + line + "\n\n"
+    return text[:m.start(1)] + body + text[m.end(1):]
+
+
 def vehicle_config_for(radius_m: float, width_m: float, *, wheel_mass_kg: float = WHEEL_MASS_KG,
                        wheel_inertia_kgm2: float = WHEEL_INERTIA_KGM2):
     """The shipped vehicle configuration with the ``[vehicle]`` wheel keys of the simulated wheel.
@@ -458,22 +477,9 @@ def vehicle_config_for(radius_m: float, width_m: float, *, wheel_mass_kg: float 
     from wheelsoil.daq.config import default_vehicle_path, tomllib, vehicle_config_from_dict
 
     src = default_vehicle_path()
-    text = src.read_text(encoding="utf-8")
-    m = re.search(r"(?ms)^\[vehicle\]\s*\n(.*?)(?=^\[)", text)
-    if not m:
-        raise ValueError(f"{src}: no [vehicle] table to put the simulated wheel in")
-    body = m.group(1)
     values = {"wheel_radius_m": radius_m, "wheel_width_m": width_m, "wheel_mass_kg": wheel_mass_kg,
               "wheel_inertia_kgm2": wheel_inertia_kgm2}
-    comment = "   # set by wheelsoil simulate (the simulated wheel)"
-    for key, val in values.items():
-        line = f"{key} = {float(val)!r}{comment}"
-        pat = re.compile(rf"(?m)^{key}\s*=.*$")
-        if pat.search(body):
-            body = pat.sub(line, body)
-        else:
-            body = body.rstrip("\n") + "\n" + line + "\n\n"
-    text = text[:m.start(1)] + body + text[m.end(1):]
+    text = set_vehicle_keys(src.read_text(encoding="utf-8"), values, where=str(src))
     return vehicle_config_from_dict(tomllib.loads(text), source=src, text=text)
 
 
