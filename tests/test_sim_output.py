@@ -131,8 +131,12 @@ def test_cli_simulate_writes_recording_and_truth_only_when_asked(tmp_path):
     res = subprocess.run(cmd, capture_output=True, text=True)
     assert res.returncode == 0, res.stderr
     assert out.exists() and not list(tmp_path.glob("*.json"))
-    truth = tmp_path / "truth.json"
-    res = subprocess.run(cmd + ["--truth", str(truth)], capture_output=True, text=True)
+    # an .mcap from the CLI: the truth only in --truth; the recorded command has the effect's options redacted
+    from wheelsoil.daq import read_recording_info
+
+    truth = tmp_path / "t2.json"
+    mc = tmp_path / "run.mcap"
+    res = subprocess.run(cmd[:-1] + [str(mc), "--truth", str(truth)], capture_output=True, text=True)
     assert res.returncode == 0, res.stderr
     doc = json.loads(truth.read_text())
     assert doc["effect"] == "vasilev" and doc["params"]["H"] == 0.05
@@ -140,12 +144,6 @@ def test_cli_simulate_writes_recording_and_truth_only_when_asked(tmp_path):
     assert doc["gnss_latency_s"] == 0.1 and doc["seed"] == 2
     assert doc["wheel"]["radius_m"] == 0.55 and doc["wheel"]["width_m"] == 0.4
     assert doc["terrain_named"]["phi_deg"] == pytest.approx(14.0)
-    # an .mcap from the CLI records the command, with the effect's options redacted
-    from wheelsoil.daq import read_recording_info
-
-    mc = tmp_path / "run.mcap"
-    res = subprocess.run(cmd[:-1] + [str(mc), "--truth", str(tmp_path / "t2.json")], capture_output=True, text=True)
-    assert res.returncode == 0, res.stderr
     prov = read_recording_info(mc).provenance
     assert prov["command"][:2] == ["wheelsoil", "simulate"] and "--wheel-radius" in prov["command"]
     flat = json.dumps(prov)
