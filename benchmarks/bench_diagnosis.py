@@ -1,7 +1,7 @@
 """Adversarial benchmark of the diagnosis: hidden effects in and out of the hypotheses' family.
 
 Each seed N is one case drawn from N alone (``wheelsoil.simulate.draw_case``): the effect
-``EFFECTS[N % 15]`` (7 in family incl. ``none``, 8 out of family), a plausible run (the paper's
+``EFFECTS[N % 16]`` (7 in family incl. ``none``, 9 out of family), a plausible run (the paper's
 sand with the 0.47 x 0.32 m wheel at 8 + 5 kN, clay with the deflected tyre's 0.55 x 0.40 m
 equivalent rigid wheel at 8 + 3 kN, ...), an effect size uniform in [0, 1] (barely above the
 noise to large), GNSS latency and frame losses. The physical simulator
@@ -13,7 +13,7 @@ model) against the truth's acceptable verdicts. The diagnosis' thresholds are wh
 code holds (printed, never changed here). A run the vehicle could not drive is re-drawn with
 half the effect size (at most 3 times; noted).
 
-    python benchmarks/bench_diagnosis.py                 # 60 seeds (0..59), 2 processes
+    python benchmarks/bench_diagnosis.py                 # 64 seeds (0..63), 2 processes
     python benchmarks/bench_diagnosis.py --quick         # 6 seeds
     python benchmarks/bench_diagnosis.py --seed 17       # one row again
     python benchmarks/bench_diagnosis.py --front-wheels driven      # the 4x4's front wheels on FL/FR
@@ -179,7 +179,7 @@ def report(rows: list[dict], wall_s: float, args) -> str:
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
                                  formatter_class=argparse.RawDescriptionHelpFormatter, epilog=__doc__)
-    ap.add_argument("--seeds", type=int, default=60, help="seeds 0..N-1 (default 60: each of 15 effects 4 times)")
+    ap.add_argument("--seeds", type=int, default=64, help="seeds 0..N-1 (default 64: each of the 16 effects 4 times)")
     ap.add_argument("--seed", type=int, action="append", default=None, help="run only this seed (repeatable)")
     ap.add_argument("--quick", action="store_true", help="6 seeds (a smoke run)")
     ap.add_argument("--jobs", type=int, default=2, help="worker processes, at most 2 (default 2)")

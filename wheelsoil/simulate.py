@@ -16,7 +16,7 @@ Hidden effects (:data:`EFFECTS`, :mod:`wheelsoil.sim.effects`): in family
 (``none``, ``vasilev``, ``lyasko``, ``ding``, ``terrain_mismatch``,
 ``stress_distribution``, ``terrain_drift``) and out of family (``fx_gain``,
 ``my_gain``, ``load_gain``, ``angle_offset``, ``tyre_deflection``,
-``bulldozing``, ``load_dependent``, ``vertical_balance``), each with the verdicts
+``bulldozing``, ``load_dependent``, ``vertical_balance``, ``width_error``), each with the verdicts
 acceptable for it. The recording holds only what a logger would record: the
 vehicle configuration of the *simulated* wheel and a provenance record
 ``kind = "simulated"`` with the seed (never the effect); the truth goes to
@@ -886,6 +886,7 @@ effects (--effect; parameters with --param NAME=VALUE, the others drawn at --siz
     bulldozing           Bekker bulldozing resistance x factor (factor)
     load_dependent       k_eq (W/W_static)^beta (beta)
     vertical_balance     true sinkage from the vertical balance Eq. 7, not Eq. 10
+    width_error          the tyre's effective contact width is factor x b (factor)
 
 The recording holds only what a logger would record plus a provenance record
 (kind "simulated", the seed): the effect and its parameters go to --truth FILE
@@ -960,7 +961,7 @@ CLI_PARAMS = {
     "none": (), "vasilev": ("H",), "lyasko": ("m1", "m2"), "ding": ("n1",),
     "stress_distribution": ("a1", "a2"), "fx_gain": ("gain",), "my_gain": ("gain",), "load_gain": ("gain",),
     "angle_offset": ("offset_deg",), "tyre_deflection": ("kappa",), "bulldozing": ("factor",),
-    "load_dependent": ("beta",), "vertical_balance": (),
+    "load_dependent": ("beta",), "vertical_balance": (), "width_error": ("factor",),
     "terrain_mismatch": ("k_eq", "n", "c", "phi", "K"), "terrain_drift": ("k_eq", "n", "c", "phi", "K"),
 }
 
