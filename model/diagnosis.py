@@ -64,7 +64,10 @@ decides with this rule (constants below; none was tuned on a benchmark):
    with what was tried.  No supported hypothesis -> ``unexplained``.
 6. **Confidence** follows the effect's posterior probability (``high`` >=
    ``P_HIGH``, ``medium`` >= ``P_NAME``), capped at ``medium`` when the
-   named model is physically inconsistent (model W / measured W outside
+   named model is physically inconsistent, when one of the generic
+   alternatives for causes on no list (``dp_resistance``, ``radius``,
+   ``sensor_gain``, ``balance``) is also supported out of sample (with less
+   evidence: the data do not exclude an off-list cause), (model W / measured W outside
    ``LOAD_RATIO_TOL`` in a slip bin, Eq. 7, or static sinkage above D/6, the
    limit of Eq. 10's small-angle form), when there are fewer than
    ``MIN_UNITS_HIGH`` independent units, or when a fold could not be refitted.
@@ -137,7 +140,7 @@ EFFECT_TITLES = {
 #: Null values of each hypothesis' own effect parameters (the nested model they reduce to).
 NULLS = {"vasilev": {"H": 0.0}, "lyasko": {"m1": 0.0, "m2": 0.0}, "ding": {"n1": 0.0},
          "vasilev+terrain": {"H": 0.0}, "ding+terrain": {"n1": 0.0}, "wong_reece": {"a1": 0.0, "a2": 0.0},
-         "drift_linear": {"g_lnk": 0.0, "g_phi": 0.0, "g_c": 0.0}, "dp_resistance": {"R0": 0.0, "R1": 0.0},
+         "drift_linear": {"g_lnk": 0.0, "g_phi": 0.0, "g_c": 0.0, "g_lnK": 0.0}, "dp_resistance": {"R0": 0.0, "R1": 0.0},
          "radius": {"rho": 0.0}, "sensor_gain": {"g_dp": 0.0, "g_t": 0.0}}
 #: Hypotheses nested in a larger one: the larger one must beat each of them out of sample.
 NESTED = {"vasilev+terrain": ("terrain", "vasilev"), "ding+terrain": ("terrain", "ding"),
@@ -1013,6 +1016,11 @@ def _confidence(effect, model, fits, eprobs, consistency, data, tests_w, sink_ev
     if not cons.get("consistent", True):
         cap = max(cap, 1)
         why.append("the named model is physically inconsistent (" + "; ".join(cons.get("reasons", [])) + ")")
+    offlist = [k for k in supported if fits[k].effect == "unexplained"]
+    if offlist:
+        cap = max(cap, 1)
+        why.append("a cause on no list also explains the data out of sample, with less evidence ("
+                   + ", ".join(TITLES[k] for k in offlist) + ")")
     if (fits[model].cv or {}).get("failed_folds"):
         cap = max(cap, 1)
         why.append("some cross-validation folds could not be refitted")

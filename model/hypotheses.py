@@ -40,7 +40,7 @@ The hypotheses (paper numbering for Eqs.; Wong = *Theory of Ground Vehicles*, 4t
 * ``drift_linear``: terrain drift.  The terrain changes along the run:
   repeated passes compact the soil (k_eq, c and phi grow with the number of
   passes, Wong ch. 2 on repetitive loading), or the wheel reaches another patch
-  of ground.  ln k_eq, phi and c vary linearly with the normalised travelled
+  of ground.  ln k_eq, phi, c and ln K vary linearly with the normalised travelled
   distance x in [-0.5, 0.5] (time when no distance is recorded) around a
   mid-run terrain that is itself re-fitted against the lab priors.  The forces
   at x are the linear interpolation of the exact forces of the start (x = -0.5)
@@ -350,7 +350,7 @@ class WongReece(Hypothesis):
 
 
 class DriftLinear(Hypothesis):
-    """Terrain drift: ln k_eq, phi and c linear in the normalised distance x (module doc)."""
+    """Terrain drift: ln k_eq, phi, c and ln K linear in the normalised distance x (module doc)."""
 
     name, effect, title = "drift_linear", "terrain_drift", "terrain drifting along the run"
     source = "repeated passes compact the soil (Wong 2008 ch. 2); linear drift in travelled distance"
@@ -362,6 +362,7 @@ class DriftLinear(Hypothesis):
             HParam("g_lnk", 0.0, -1.5, 1.5, "-", "change of ln k_eq over the run (end - start)"),
             HParam("g_phi", 0.0, -0.35, 0.35, "rad", "change of phi over the run (end - start)"),
             HParam("g_c", 0.0, -20e3, 20e3, "Pa", "change of cohesion over the run (end - start)"),
+            HParam("g_lnK", 0.0, -1.5, 1.5, "-", "change of ln K over the run (end - start)"),
         )
 
     def predict(self, ctx, load_n, slip, x, p):
@@ -374,6 +375,7 @@ class DriftLinear(Hypothesis):
             q["k_eq"] = base["k_eq"] * math.exp(xe * base["g_lnk"])
             q["phi"] = base["phi"] + xe * base["g_phi"]
             q["c"] = max(base["c"] + xe * base["g_c"], 0.0)
+            q["K"] = base["K"] * math.exp(xe * base["g_lnK"])
             terrain = apply_terrain(ctx.terrain, q)
             out.append(wong_forces(terrain, ctx.wheel, load_n, slip, sinkage=ctx.sinkage))
         x = np.asarray(x, float)

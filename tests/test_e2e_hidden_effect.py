@@ -125,7 +125,9 @@ def test_verdict_survives_a_bus(tmp_path):
     base = 43000 + os.getpid() % 900
     specs = [f"can0=udp_multicast:239.74.2.1,port={base}", f"can1=udp_multicast:239.74.2.2,port={base + 1}"]
     logged = tmp_path / "logged.mcap"
-    log_cmd = EXE + ["log", *sum((["--bus", s] for s in specs), []), "-o", str(logged), "-q"]
+    # the logger on the (simulated) vehicle knows its wheel: the simulated wheel's configuration
+    vehicle = write_vehicle_config(run, tmp_path / "vehicle.toml")
+    log_cmd = EXE + ["log", *sum((["--bus", s] for s in specs), []), "-o", str(logged), "-q", "--vehicle", str(vehicle)]
     logger = subprocess.Popen(log_cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
         deadline = time.monotonic() + 20

@@ -98,6 +98,10 @@ def test_out_of_family_soil_and_tyre_effects(wong):
     np.testing.assert_allclose(ld.drive_forces(LOAD, SLIP)["drawbar_pull_n"], wong["drawbar_pull_n"], rtol=1e-9)
     hi = ld.drive_forces(LOAD * 1.2, SLIP)
     assert np.all(hi["sinkage_m"] < _tm("none").drive_forces(LOAD * 1.2, SLIP)["sinkage_m"])
+    we = _tm("width_error", factor=1.2).drive_forces(LOAD, SLIP)
+    direct = wheel_forces(SOIL, R, B * 1.2, LOAD, SLIP)
+    np.testing.assert_allclose(we["drawbar_pull_n"], direct["drawbar_pull_n"], rtol=1e-6)
+    assert np.all(we["sinkage_m"] < wong["sinkage_m"])  # a wider wheel sinks less
     vb = _tm("vertical_balance").drive_forces(LOAD, SLIP)
     np.testing.assert_allclose(vb["load_model_n"], LOAD, rtol=1e-7)
     assert not np.allclose(vb["sinkage_m"], wong["sinkage_m"], rtol=1e-3)
@@ -111,7 +115,6 @@ def base_run():
 @pytest.mark.parametrize("effect,params", [("fx_gain", {"gain": 1.1}), ("my_gain", {"gain": 0.9}),
                                            ("load_gain", {"gain": 1.05}), ("angle_offset", {"offset_deg": 1.0})])
 def test_sensor_effects_change_only_what_the_transducer_reports(base_run, effect, params):
-    from wheelsoil.daq import read_frames
     from wheelsoil.processing.decode import decode_batches
     from wheelsoil.daq import load_vehicle_config
 

@@ -131,8 +131,12 @@ def test_cli_simulate_writes_recording_and_truth_only_when_asked(tmp_path):
     res = subprocess.run(cmd, capture_output=True, text=True)
     assert res.returncode == 0, res.stderr
     assert out.exists() and not list(tmp_path.glob("*.json"))
-    truth = tmp_path / "truth.json"
-    res = subprocess.run(cmd + ["--truth", str(truth)], capture_output=True, text=True)
+    # an .mcap from the CLI: the truth only in --truth; the recorded command has the effect's options redacted
+    from wheelsoil.daq import read_recording_info
+
+    truth = tmp_path / "t2.json"
+    mc = tmp_path / "run.mcap"
+    res = subprocess.run(cmd[:-1] + [str(mc), "--truth", str(truth)], capture_output=True, text=True)
     assert res.returncode == 0, res.stderr
     doc = json.loads(truth.read_text())
     assert doc["effect"] == "vasilev" and doc["params"]["H"] == 0.05
@@ -140,6 +144,12 @@ def test_cli_simulate_writes_recording_and_truth_only_when_asked(tmp_path):
     assert doc["gnss_latency_s"] == 0.1 and doc["seed"] == 2
     assert doc["wheel"]["radius_m"] == 0.55 and doc["wheel"]["width_m"] == 0.4
     assert doc["terrain_named"]["phi_deg"] == pytest.approx(14.0)
+    prov = read_recording_info(mc).provenance
+    assert prov["command"][:2] == ["wheelsoil", "simulate"] and "--wheel-radius" in prov["command"]
+    flat = json.dumps(prov)
+    for word in ("vasilev", "H=0.05", "t2.json"):
+        assert word not in flat, word
+    assert prov["command"].count("<hidden>") == 3
     bad = subprocess.run(cmd[:-2] + ["--param", "m1=2", "-o", str(tmp_path / "x.log")], capture_output=True, text=True)
     assert bad.returncode == 2 and "m1" in bad.stderr
     bad = subprocess.run(cmd[:-2] + ["-o", str(tmp_path / "x.txt")], capture_output=True, text=True)
@@ -165,3 +175,23 @@ def test_truth_lists_acceptable_verdicts_for_every_effect():
     assert r.info["family"] == "in" and r.info["acceptable"] == ["terrain_mismatch"]
     assert r.info["terrain_true_mid_run"]["phi_deg"] == pytest.approx(r.info["terrain_named"]["phi_deg"] + 3.0)
     assert r.info["terrain_true_mid_run"]["n"] == r.info["terrain_named"]["n"]
+
+
+def test_vehicle_keys_replaced_or_added_and_loaded_by_the_daq_loader():
+    from wheelsoil.daq.config import tomllib
+    from wheelsoil.simulate import set_vehicle_keys, vehicle_config_for
+
+    base = '[vehicle]\nname = "x"\nwheel_radius_m = 0.47   # tyre\nwheel_width_m = 0.32\nwheel_mass_kg = 80.0\n\n[buses.can0]\ndbc = []\n'
+    out = set_vehicle_keys(base, {"wheel_radius_m": 0.6, "wheel_mass_kg": 95.0, "wheel_inertia_kgm2": 14.0})
+    doc = tomllib.loads(out)
+    assert doc["vehicle"] == {"name": "x", "wheel_radius_m": 0.6, "wheel_width_m": 0.32, "wheel_mass_kg": 95.0,
+                              "wheel_inertia_kgm2": 14.0}
+    assert out.count("wheel_mass_kg") == 1 and doc["buses"]["can0"]["dbc"] == []
+    with pytest.raises(ValueError, match=r"\[vehicle\]"):
+        set_vehicle_keys("[buses.can0]\n", {"wheel_radius_m": 1.0})
+    cfg = vehicle_config_for(0.61, 0.43)
+    assert (cfg.wheel_radius_m, cfg.wheel_width_m) == (0.61, 0.43)
+    vt = tomllib.loads(cfg.text)["vehicle"]
+    assert vt["wheel_mass_kg"] == 80.0 and vt["wheel_inertia_kgm2"] == 11.5
+    if hasattr(cfg, "wheel_mass_kg"):  # contract B (processing's VehicleConfig fields)
+        assert (cfg.wheel_mass_kg, cfg.wheel_inertia_kgm2) == (80.0, 11.5)

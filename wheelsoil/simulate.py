@@ -16,7 +16,7 @@ Hidden effects (:data:`EFFECTS`, :mod:`wheelsoil.sim.effects`): in family
 (``none``, ``vasilev``, ``lyasko``, ``ding``, ``terrain_mismatch``,
 ``stress_distribution``, ``terrain_drift``) and out of family (``fx_gain``,
 ``my_gain``, ``load_gain``, ``angle_offset``, ``tyre_deflection``,
-``bulldozing``, ``load_dependent``, ``vertical_balance``), each with the verdicts
+``bulldozing``, ``load_dependent``, ``vertical_balance``, ``width_error``), each with the verdicts
 acceptable for it. The recording holds only what a logger would record: the
 vehicle configuration of the *simulated* wheel and a provenance record
 ``kind = "simulated"`` with the seed (never the effect); the truth goes to
@@ -444,6 +444,25 @@ def _jsonable(x):
     return x
 
 
+def set_vehicle_keys(text: str, values: Mapping[str, float], *, where: str = "vehicle.toml") -> str:
+    """The vehicle TOML ``text`` with ``values`` set in its ``[vehicle]`` table: a key present is
+    replaced in place, a missing one appended to the table (comment: set by wheelsoil simulate).
+    Raises ValueError when the text has no ``[vehicle]`` table followed by another table."""
+    m = re.search(r"(?ms)^\[vehicle\]\s*\n(.*?)(?=^\[)", text)
+    if not m:
+        raise ValueError(f"{where}: no [vehicle] table to put the simulated wheel in")
+    body = m.group(1)
+    comment = "   # set by wheelsoil simulate (the simulated wheel)"
+    for key, val in values.items():
+        line = f"{key} = {float(val)!r}{comment}"
+        pat = re.compile(rf"(?m)^{re.escape(key)}\s*=.*$")
+        if pat.search(body):
+            body = pat.sub(lambda _m: line, body)
+        else:
+            body = body.rstrip("\n") + "\n" + line + "\n\n"
+    return text[:m.start(1)] + body + text[m.end(1):]
+
+
 def vehicle_config_for(radius_m: float, width_m: float, *, wheel_mass_kg: float = WHEEL_MASS_KG,
                        wheel_inertia_kgm2: float = WHEEL_INERTIA_KGM2):
     """The shipped vehicle configuration with the ``[vehicle]`` wheel keys of the simulated wheel.
@@ -458,22 +477,9 @@ def vehicle_config_for(radius_m: float, width_m: float, *, wheel_mass_kg: float 
     from wheelsoil.daq.config import default_vehicle_path, tomllib, vehicle_config_from_dict
 
     src = default_vehicle_path()
-    text = src.read_text(encoding="utf-8")
-    m = re.search(r"(?ms)^\[vehicle\]\s*\n(.*?)(?=^\[)", text)
-    if not m:
-        raise ValueError(f"{src}: no [vehicle] table to put the simulated wheel in")
-    body = m.group(1)
     values = {"wheel_radius_m": radius_m, "wheel_width_m": width_m, "wheel_mass_kg": wheel_mass_kg,
               "wheel_inertia_kgm2": wheel_inertia_kgm2}
-    comment = "   # set by wheelsoil simulate (the simulated wheel)"
-    for key, val in values.items():
-        line = f"{key} = {float(val)!r}{comment}"
-        pat = re.compile(rf"(?m)^{key}\s*=.*$")
-        if pat.search(body):
-            body = pat.sub(line, body)
-        else:
-            body = body.rstrip("\n") + "\n" + line + "\n\n"
-    text = text[:m.start(1)] + body + text[m.end(1):]
+    text = set_vehicle_keys(src.read_text(encoding="utf-8"), values, where=str(src))
     return vehicle_config_from_dict(tomllib.loads(text), source=src, text=text)
 
 
@@ -558,7 +564,6 @@ def _vehicle_bus_frames(dbs, rng, t_rel, speed, omega, slip, r, latency_s, start
     and arrive ``latency_s`` later; ``RT_SB_GPS_Time`` carries the fix's GPS
     week and time of week on the GPS clock (host clock + offset + drift).
     """
-    dt = t_rel[1] - t_rel[0]
     duration = t_rel[-1]
     wss, gps = dbs["wheel_speed"], dbs["gps_rt_speedbox"]
     parts = []
@@ -633,6 +638,36 @@ def _vehicle_bus_frames(dbs, rng, t_rel, speed, omega, slip, r, latency_s, start
 
 
 # ------------------------------------------------------------------------ output
+#: Options whose values would give the hidden effect away: redacted in the recorded command.
+_HIDDEN_OPTIONS = ("--effect", "--param", "--size", "--truth")
+
+
+def _redacted_command() -> list[str] | None:
+    """The ``wheelsoil`` command line that is running (as provenance records it), with the values of
+    :data:`_HIDDEN_OPTIONS` replaced by ``<hidden>``; None when not run from the wheelsoil CLI."""
+    import sys
+
+    argv = list(sys.argv)
+    if not argv:
+        return None
+    exe = Path(argv[0])
+    if not (exe.name.startswith("wheelsoil") or (exe.name == "__main__.py" and exe.parent.name == "wheelsoil")):
+        return None
+    out, hide_next = ["wheelsoil"], False
+    for a in argv[1:]:
+        if hide_next:
+            out.append("<hidden>")
+            hide_next = False
+        elif a in _HIDDEN_OPTIONS:
+            out.append(a)
+            hide_next = True
+        elif a.split("=", 1)[0] in _HIDDEN_OPTIONS and "=" in a:
+            out.append(a.split("=", 1)[0] + "=<hidden>")
+        else:
+            out.append(a)
+    return out
+
+
 def _write_mcap(run: SimulatedRun, path: Path, config=None) -> None:
     """Write ``run`` as an MCAP recording: frame batches per bus every
     ``wheelsoil.daq.logger.BATCH_INTERVAL_S`` in receive order (the logger's layout), the
@@ -654,7 +689,7 @@ def _write_mcap(run: SimulatedRun, path: Path, config=None) -> None:
     step = int(round(BATCH_INTERVAL_S * 1e9))
     edges = np.arange(run.start_ns, t_end + step, step, dtype=np.int64)
     cuts = {bus: np.searchsorted(b.timestamp_ns, edges) for bus, b in batches.items()}
-    prov = make_provenance("simulated", seed=int(run.info["seed"]), simulator=SIMULATOR)
+    prov = make_provenance("simulated", command=_redacted_command(), seed=int(run.info["seed"]), simulator=SIMULATOR)
     with RecordingWriter(path, config=config, provenance=prov, fsync=False) as writer:
         for bus in sorted(batches):
             writer.add_bus(bus, interface="simulated", channel=bus)
@@ -851,6 +886,7 @@ effects (--effect; parameters with --param NAME=VALUE, the others drawn at --siz
     bulldozing           Bekker bulldozing resistance x factor (factor)
     load_dependent       k_eq (W/W_static)^beta (beta)
     vertical_balance     true sinkage from the vertical balance Eq. 7, not Eq. 10
+    width_error          the tyre's effective contact width is factor x b (factor)
 
 The recording holds only what a logger would record plus a provenance record
 (kind "simulated", the seed): the effect and its parameters go to --truth FILE
@@ -925,7 +961,7 @@ CLI_PARAMS = {
     "none": (), "vasilev": ("H",), "lyasko": ("m1", "m2"), "ding": ("n1",),
     "stress_distribution": ("a1", "a2"), "fx_gain": ("gain",), "my_gain": ("gain",), "load_gain": ("gain",),
     "angle_offset": ("offset_deg",), "tyre_deflection": ("kappa",), "bulldozing": ("factor",),
-    "load_dependent": ("beta",), "vertical_balance": (),
+    "load_dependent": ("beta",), "vertical_balance": (), "width_error": ("factor",),
     "terrain_mismatch": ("k_eq", "n", "c", "phi", "K"), "terrain_drift": ("k_eq", "n", "c", "phi", "K"),
 }
 

@@ -16,7 +16,10 @@ In family
   ``stress_distribution``  Wong-Reece normal stress, maximum at theta_m = (a1 + a2 s) theta1.
   ``terrain_drift``        a soil value changes along the run: ``compaction`` (linear in the
                            travelled distance: repeated passes) or ``patch`` (another patch of
-                           ground from a distance on, 2 m transition); centred on the lab value.
+                           ground from ``change_at`` x the distance on, tanh transition over 2 %
+                           of it). The change runs from lab/f to lab*f (a factor f) or lab - d to
+                           lab + d (a delta d): the lab value mid-run (compaction) or at the
+                           patch boundary.
 
 Out of family (``unexplained`` always acceptable)
   ``fx_gain``          the transducer's hub Fx reads g x the true value (calibration).
@@ -36,6 +39,9 @@ Out of family (``unexplained`` always acceptable)
   ``load_dependent``   the soil stiffens/softens with the wheel load (plate-size / pressure
                        effect): k_eq(W) = k_eq (W / W_static)^beta; the lab value holds at
                        the static load, so the mean soil is the lab's.
+  ``width_error``      the tyre's effective contact width is b_e = f b, not the configured b
+                       (bulging sidewalls, a lab/setup error in a wheel value no hypothesis
+                       re-fits): Eqs. (2), (7)-(10) with b_e.
   ``vertical_balance`` the true static sinkage satisfies the vertical balance Eq. (7) = W
                        (with the shear term, at the sample's slip) instead of Eq. (10)'s
                        small-angle formula the models use.
@@ -62,7 +68,7 @@ VERDICTS = ("none", "slip_sinkage", "terrain_mismatch", "stress_distribution", "
 
 IN_FAMILY = ("none", "vasilev", "lyasko", "ding", "terrain_mismatch", "stress_distribution", "terrain_drift")
 OUT_OF_FAMILY = ("fx_gain", "my_gain", "load_gain", "angle_offset", "tyre_deflection", "bulldozing",
-                 "load_dependent", "vertical_balance")
+                 "load_dependent", "vertical_balance", "width_error")
 EFFECTS = IN_FAMILY + OUT_OF_FAMILY
 SENSOR_EFFECTS = ("fx_gain", "my_gain", "load_gain", "angle_offset")
 
@@ -84,6 +90,7 @@ ACCEPTABLE: dict[str, tuple[str, ...]] = {
     "bulldozing": ("unexplained",),
     "load_dependent": ("unexplained",),
     "vertical_balance": ("unexplained",),
+    "width_error": ("unexplained",),
 }
 
 #: Terrain parameters a mismatch / drift may change, with the relative (or absolute) range
@@ -103,7 +110,7 @@ PARAM_NAMES: dict[str, tuple[str, ...]] = {
     "terrain_mismatch": ("changes",), "terrain_drift": ("changes", "mode", "change_at"),
     "stress_distribution": ("a1", "a2"), "fx_gain": ("gain",), "my_gain": ("gain",), "load_gain": ("gain",),
     "angle_offset": ("offset_deg",), "tyre_deflection": ("kappa",), "bulldozing": ("factor",),
-    "load_dependent": ("beta",), "vertical_balance": (),
+    "load_dependent": ("beta",), "vertical_balance": (), "width_error": ("factor",),
 }
 
 
@@ -189,6 +196,8 @@ def draw_effect(effect: str, rng: np.random.Generator, *, size: float | None = N
         p = {"beta": sign * _mag(u, 0.5, 3.0)}
     elif effect == "vertical_balance":
         p = {}
+    elif effect == "width_error":
+        p = {"factor": 1.0 + sign * _mag(u, 0.05, 0.30)}
     p.update(given)
     p["size"] = u
     return p
@@ -261,7 +270,7 @@ class TruthModel:
                 g = frac - 0.5  # linear in distance, centred: the lab value mid-run
             else:  # another patch of ground from change_at on (2 % of the run transition)
                 x = (frac - float(self.params["change_at"])) / 0.02
-                g = 0.5 * np.tanh(x) - 0.0
+                g = 0.5 * np.tanh(x)
             for name, ch in self.params["changes"].items():
                 soil = _apply_change(soil, self.width_m, name, ch["kind"], ch["value"], frac=2.0 * g)
         if variability is not None:
@@ -281,6 +290,7 @@ class TruthModel:
         e, p = self.effect, self.params
         kw: dict[str, Any] = {}
         r = self.radius_m
+        b = self.width_m
         if e == "vasilev":
             kw["H"] = p["H"]
         elif e == "lyasko":
@@ -291,6 +301,8 @@ class TruthModel:
             kw["stress"] = (p["a1"], p["a2"])
         elif e == "vertical_balance":
             kw["sinkage"] = "balance"
+        elif e == "width_error":
+            b = self.width_m * p["factor"]
         elif e == "tyre_deflection":
             r = self.radius_m * (1.0 + p["kappa"] * w / self.static_load_n)
         elif e == "load_dependent":
@@ -298,10 +310,10 @@ class TruthModel:
             soil = dict(soil)
             soil["kc"] = soil["kc"] * f
             soil["kphi"] = soil["kphi"] * f
-        out = wheel_forces(soil, r, self.width_m, w, s, epsrel=self.epsrel, **kw)
+        out = wheel_forces(soil, r, b, w, s, epsrel=self.epsrel, **kw)
         if e == "bulldozing":
             out["drawbar_pull_n"] = out["drawbar_pull_n"] - p["factor"] * _bulldozing_resistance(
-                soil, self.width_m, out["sinkage_m"])
+                soil, b, out["sinkage_m"])
         return out
 
     def static_sinkage(self, load_n) -> np.ndarray:

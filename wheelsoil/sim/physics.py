@@ -12,7 +12,6 @@ wheel's position. The transducer signals carry the wheel's inertia
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
 import numpy as np
@@ -83,7 +82,6 @@ def simulate_physics(truth: TruthModel, rng: np.random.Generator, *, added_load_
 
     n_max = int(((duration_s or 600.0) + 60.0) / DT_S)
     slip_noise = bandlimited(rng, n_max, DT_S, 0.2, 3.0, 0.008)
-    bump_t = np.arange(n_max) * DT_S
     bf = bandlimited(rng, n_max, DT_S, 0.5, 8.0, 0.025 * wf0)
     br = bandlimited(rng, n_max, DT_S, 0.5, 8.0, 0.025 * wr0)
 

@@ -44,7 +44,6 @@ secant/bisection in log z (:func:`balance_sinkage`).
 
 from __future__ import annotations
 
-import math
 from typing import Any, Mapping
 
 import numpy as np
@@ -103,7 +102,6 @@ def _integrals(soil, r, b, z, s, n, theta_m_frac, epsrel):
     tau_max = c + sig_max * tanphi
     s_sig = np.maximum(sig_max * th1, 1e-300)
     s_tau = np.maximum(tau_max * th1, 1e-300)
-    sin1, cos1 = np.sin(th1), np.cos(th1)
 
     def integrand(u):
         if u <= 1.0:  # front region: theta1 - theta = (theta1 - theta_m) u^2
@@ -146,11 +144,11 @@ def balance_sinkage(soil, radius_m, width_m, load_n, slip, *, n=None, theta_m_fr
                     epsrel: float = 1e-9, tol: float = 1e-10) -> np.ndarray:
     """Sinkage z0 [m] with Eq. (7)(z0, s) = W for each sample (the exact vertical balance).
 
-    Vectorised bracketing root finder in x = log z: secant steps kept inside a
-    bracket, bisection when a step leaves it; converged when |log W_model - log W|
-    < ``tol``. ``load_n``, ``slip`` (N,). Raises ValueError naming the first sample
+    Vectorised bracketing root finder in x = log z: false position with the Illinois
+    modification inside a bracket, bisection when a step leaves it; converged when
+    |log W_model - log W| < ``tol``. ``load_n``, ``slip`` (N,). Raises ValueError naming the first sample
     whose load the wheel cannot carry with sinkage < 0.99 r.
-    Source: paper Eq. (7); root finding: Press et al., Numerical Recipes ch. 9 (false position/bisection).
+    Source: paper Eq. (7); root finding: Dowell & Jarratt (1971), the Illinois method (false position).
     """
     w = np.atleast_1d(np.asarray(load_n, float))
     size = len(w)
@@ -179,25 +177,27 @@ def balance_sinkage(soil, radius_m, width_m, load_n, slip, *, n=None, theta_m_fr
     gx = g(x, all_idx)
     out = np.full(size, np.nan)
     active = all_idx
+    side = np.zeros(size, dtype=int)  # which bracket end moved last (-1 low, +1 high): Illinois
     for _ in range(200):
         done = np.abs(gx) < tol
         out[active[done]] = np.exp(x[done])
         keep = ~done
         if not keep.any():
             return out
-        active, x, gx = active[keep], x[keep], gx[keep]
+        active, x, gx, side = active[keep], x[keep], gx[keep], side[keep]
         x_lo, g_lo, x_hi, g_hi = x_lo[keep], g_lo[keep], x_hi[keep], g_hi[keep]
         lo_side = gx < 0
+        # Illinois: an end kept twice in a row has its value halved (no one-sided stalling)
+        g_hi = np.where(lo_side & (side == -1), 0.5 * g_hi, g_hi)
+        g_lo = np.where(~lo_side & (side == 1), 0.5 * g_lo, g_lo)
         x_lo = np.where(lo_side, x, x_lo)
         g_lo = np.where(lo_side, gx, g_lo)
         x_hi = np.where(lo_side, x_hi, x)
         g_hi = np.where(lo_side, g_hi, gx)
-        # secant through the bracket ends (Illinois-free: bisect when the step stalls)
+        side = np.where(lo_side, -1, 1)
         x_new = x_lo - g_lo * (x_hi - x_lo) / (g_hi - g_lo)
-        bad = ~np.isfinite(x_new) | (x_new <= x_lo) | (x_new >= x_hi) | (np.abs(x_new - x) < 1e-14)
-        x_new = np.where(bad, 0.5 * (x_lo + x_hi), x_new)
-        # alternate a bisection every few steps against one-sided stalling
-        x = x_new
+        bad = ~np.isfinite(x_new) | (x_new <= x_lo) | (x_new >= x_hi)
+        x = np.where(bad, 0.5 * (x_lo + x_hi), x_new)
         gx = g(x, active)
     raise RuntimeError("balance sinkage did not converge")  # pragma: no cover
 
@@ -258,7 +258,7 @@ def wheel_forces(soil: Mapping[str, Any], radius_m: float, width_m: float, load_
     if sinkage == "eq10":
         z0 = sinkage_eq10(soil_n, r, b, w, n)
     else:
-        z0 = balance_sinkage(soil_n, r, b, w, s, n=n, theta_m_frac=tm)
+        z0 = balance_sinkage(soil_n, r, b, w, s, n=n, theta_m_frac=tm, epsrel=max(epsrel, 1e-10))
     z = z0.copy()
     if H is not None:
         z = z0 + _bc(H, size) * s  # Eq. (11)

@@ -210,7 +210,7 @@ def simulate_dynamics(table: ForceTable, veh: VehicleParams, rng: np.random.Gene
     (per wheel, as used), resistance_n, distance_m, phase (object), cycle (int)``, and
     ``mass_kg``. The distance fraction used for terrain drift is distance /
     ``dist_total_guess_m`` clipped to [0, 1] (the caller iterates to the true total).
-    Raises ValueError when the vehicle stalls in a pull-away for 10 s (cannot move).
+    Raises ValueError when the vehicle stalls in a pull-away for 20 s (cannot move).
     """
     m, wf0, wr0 = veh.loads(added_load_n)
     r = radius_m
@@ -298,11 +298,11 @@ def simulate_dynamics(table: ForceTable, veh: VehicleParams, rng: np.random.Gene
                 step("standstill", -1)
             # pull-away: the wheel rim speed ramps up; the vehicle follows by traction
             v_pa = rng.uniform(0.7, 1.1)
-            s_pa = rng.uniform(0.2, 0.35)
+            s_pa = min(max(slip_best, 0.2), 0.6)  # the driver pulls away near the best traction
             t0 = t
             while V < v_pa and t < t_end:
-                if t - t0 > 10.0:
-                    raise ValueError(f"the vehicle cannot move: after 10 s of pull-away at slip {s_pa:.2f} "
+                if t - t0 > 20.0:
+                    raise ValueError(f"the vehicle cannot move: after 20 s of pull-away at slip {s_pa:.2f} "
                                      f"its speed is {V:.2f} m/s (summed drawbar pull too small)")
                 ramp = min((t - t0) / 1.5, 1.0) * 0.35
                 step("other", -1, rw_cmd=max(V / (1.0 - s_pa), ramp))
