@@ -584,7 +584,20 @@ def _inflate(compression: str, data, usize: int) -> bytes:
         if cs != zstandard.CONTENTSIZE_UNKNOWN and cs != usize:
             raise ValueError(f"zstd frame holds {cs} bytes, the chunk claims {usize}")
         try:
-            out = zstandard.ZstdDecompressor().decompress(data, max_output_size=usize)
+            if cs == usize:  # the normal case: one allocation of the known size
+                out = zstandard.ZstdDecompressor().decompress(data)
+            else:  # size not in the frame: inflate piecewise, never more than claimed (+1 to notice)
+                import io
+
+                parts, got = [], 0
+                with zstandard.ZstdDecompressor().stream_reader(io.BytesIO(data)) as r:
+                    while got <= usize:
+                        piece = r.read(min(1 << 20, usize + 1 - got))
+                        if not piece:
+                            break
+                        parts.append(piece)
+                        got += len(piece)
+                out = b"".join(parts)
         except zstandard.ZstdError as exc:
             raise ValueError(f"zstd: {exc}") from None
     elif compression == "lz4":
