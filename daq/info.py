@@ -207,15 +207,14 @@ def _config_from_attachments(attachments: dict[str, bytes]):
                 raise ValueError(f"attachment vehicle.toml: [buses.{bus}] is not a table")
             d = tab.get("dbc", [])
             names = [Path(str(x)).name for x in ([d] if isinstance(d, str) else d)]
-            per_bus = [f"{_safe_name(str(bus))}/{_safe_name(n)}" for n in names]
-            if all((tmpd / p).is_file() for p in per_bus):
-                tab["dbc"] = per_bus
-            else:
-                tab["dbc"] = [_safe_name(n) for n in names]
-                missing = [n for n in tab["dbc"] if not (tmpd / n).is_file()]
-                if missing:
-                    raise ValueError(f"attachment vehicle.toml: bus {bus} needs {', '.join(missing)}, "
-                                     "not attached to the recording")
+            # dbc/<bus>/<name> (a name used on several buses) before dbc/<name>
+            files = [f"{_safe_name(str(bus))}/{_safe_name(n)}" for n in names]
+            files = [f if (tmpd / f).is_file() else _safe_name(n) for f, n in zip(files, names)]
+            missing = [f for f in files if not (tmpd / f).is_file()]
+            if missing:
+                raise ValueError(f"attachment vehicle.toml: bus {bus} needs {', '.join(missing)}, "
+                                 "not attached to the recording")
+            tab["dbc"] = files
         cfg = vehicle_config_from_dict(doc, source=tmpd / "vehicle.toml", text=text)
         by_path = {}
         for bus in cfg.buses:
