@@ -176,8 +176,10 @@ def _cmd_log(args) -> int:
     unknown = [name for name, b in st["buses"].items() if b["rx_dropped"] is None]
     known = sum(d for d in drops if d is not None)
     if lost or est or known or unknown or st.get("bad_frames"):
-        drop_txt = f"{known}" + (f" (unknown on {', '.join(unknown)}: that interface cannot report drops)"
-                                 if unknown else "")
+        parts = [f"{b['rx_dropped']} on {name}" for name, b in st["buses"].items() if b["rx_dropped"] is not None]
+        if unknown:
+            parts.append(f"unknown on {', '.join(unknown)} (the interface cannot report drops)")
+        drop_txt = ", ".join(parts)
         print(_safe(f"warning: lost WFT frames {lost} (counter gaps), frames missing by cycle time {est}, "
                     f"kernel rx drops {drop_txt}, unrecordable frames {st.get('bad_frames', 0)}"),
               file=sys.stderr)
