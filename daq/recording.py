@@ -464,6 +464,7 @@ _CHUNK_HDR = struct.Struct("<QQQII")       # start, end, uncompressed size, crc,
 MAX_RECORD_BYTES = 256 * 2**20
 #: Largest uncompressed chunk the reader inflates [bytes].
 MAX_CHUNK_BYTES = 256 * 2**20
+_OP_HEADER = 0x01
 _OP_FOOTER, _OP_SCHEMA, _OP_CHANNEL, _OP_MESSAGE, _OP_CHUNK, _OP_MSG_INDEX = 0x02, 0x03, 0x04, 0x05, 0x06, 0x07
 _OP_ATTACHMENT, _OP_METADATA, _OP_DATA_END = 0x09, 0x0C, 0x0F
 _KNOWN_OPS = frozenset(range(0x01, 0x10))
@@ -493,10 +494,29 @@ class _Strict:
 
 
 def _parse(cls, body, *args):
-    """Parse one mcap record body with the mcap library's own parser, strictly."""
+    """Parse one mcap record body with the mcap library's own parser, strictly: every
+    field within the body, and the fields fill the body exactly.
+
+    Raises:
+        EOFError: a field runs past the end. ValueError: bytes left over, bad UTF-8.
+    """
     from mcap.data_stream import ReadDataStream
 
-    return cls.read(ReadDataStream(_Strict(body)), *args)
+    src = _Strict(body)
+    rec = cls.read(ReadDataStream(src), *args)
+    if src._o != len(body):
+        raise ValueError(f"{cls.__name__} record has {len(body) - src._o} bytes past its fields")
+    return rec
+
+
+def _footer_ok(f, size: int) -> bool:
+    """The file ends with a footer record and the magic."""
+    tail = 8 + 9 + 20
+    if size < 8 + tail:
+        return False
+    f.seek(size - tail)
+    t = f.read(tail)
+    return t[-8:] == _MAGIC and t[0] == _OP_FOOTER and _U64.unpack_from(t, 1)[0] == 20
 
 
 @dataclass
@@ -784,10 +804,11 @@ def _iter_records(path, state: ReadReport, *, recover: bool, with_status: bool =
     and an entry in ``state.damage``; a file that ends inside a record (power
     cut) ends the read with a warning. With ``recover=False`` damage raises.
     """
-    from mcap.records import Attachment, Channel, Metadata, Schema
+    from mcap.records import Attachment, Channel, Header, Metadata, Schema
 
     path = Path(path)
     state.path = path
+    size = 0
     schemas: dict[int, object] = {}
     frame_channels: dict[int, str] = {}
     status_channels: set[int] = set()
@@ -876,6 +897,85 @@ def _iter_records(path, state: ReadReport, *, recover: bool, with_status: bool =
             elif rec.topic == STATUS_TOPIC:
                 status_channels.add(rec.id)
 
+    def _record(op: int, body, pos: int, ln: int, out: list) -> None:
+        """Handle one top-level record whose framing is intact; batches go to ``out``.
+        Raises ValueError/EOFError/struct.error when the record itself does not parse."""
+        if op == _OP_CHUNK:
+            t0, t1, usize, crc, comp, payload = _parse_chunk(body)
+            if _CHUNK_HDR.size + len(comp.encode()) + 8 + len(payload) != ln:
+                raise ValueError("chunk fields do not add up to the record length")
+            last_chunk_damage[0] = None
+            try:
+                raw = _inflate(comp, payload, usize)
+            except (ValueError, MemoryError) as exc:
+                last_chunk_damage[0] = damaged(
+                    f"{path}: chunk at byte {pos} of {size} damaged and skipped "
+                    f"({type(exc).__name__}: {exc})", "chunk", pos, None, t0=t0, t1=t1, skipped=ln + 9)
+                return
+            try:
+                recs, bad = _chunk_records(raw), None
+            except (ValueError, EOFError, struct.error, UnicodeDecodeError) as exc:
+                recs, bad = None, exc
+            if crc and zlib.crc32(raw) != crc:
+                lost, by_bus, nb = count_frames(recs) if recs is not None else (None, {}, None)
+                last_chunk_damage[0] = damaged(
+                    f"{path}: chunk at byte {pos} of {size} fails its CRC check (bit rot or a damaged "
+                    f"copy) and is skipped", "crc", pos, lost, by_bus, nb, t0, t1, skipped=ln + 9)
+            elif recs is None:
+                last_chunk_damage[0] = damaged(
+                    f"{path}: chunk at byte {pos} of {size} damaged and skipped "
+                    f"({type(bad).__name__}: {bad})", "chunk", pos, None, t0=t0, t1=t1, skipped=ln + 9)
+            else:
+                for op2, r in recs:
+                    if op2 == _OP_MESSAGE:
+                        b = message(r[0], r[1], r[2], pos)
+                        if b is not None:
+                            out.append(b)
+                    else:
+                        other(op2, r, pos)
+        elif op == _OP_MSG_INDEX:
+            if ln < 6 or _U32.unpack_from(body, 2)[0] != ln - 6 or (ln - 6) % 16:
+                raise ValueError("message index fields do not add up to the record length")
+            d = last_chunk_damage[0]
+            if d is not None:
+                (cid,) = struct.unpack_from("<H", body, 0)
+                if bus_of(cid) is not None:
+                    d["batches_lost"] = (d["batches_lost"] or 0) + (ln - 6) // 16
+        elif op == _OP_MESSAGE:
+            if ln < 22:
+                raise ValueError(f"message record of {ln} bytes")
+            cid, _seq, lt, _pt = _MSG_HDR.unpack_from(body, 0)
+            b = message(cid, lt, memoryview(body)[22:], pos)
+            if b is not None:
+                out.append(b)
+        elif op == _OP_SCHEMA:
+            other(op, _parse(Schema, body), pos)
+        elif op == _OP_CHANNEL:
+            other(op, _parse(Channel, body), pos)
+        elif op == _OP_METADATA:
+            md = _parse(Metadata, body)
+            state.metadata[md.name] = dict(md.metadata)
+            if md.name == CHANNELS_RECORD:
+                for k, v in md.metadata.items():
+                    if k.isdigit():
+                        backup_channels[int(k)] = v
+        elif op == _OP_ATTACHMENT:
+            att = _parse(Attachment, body)
+            crc = _U32.unpack_from(body, ln - 4)[0]
+            if crc and crc != zlib.crc32(memoryview(body)[:ln - 4]):
+                damaged(f"{path}: attachment {_printable(att.name)!r} at byte {pos} fails its CRC "
+                        f"check and is ignored", "attachment", pos, 0)
+            else:
+                state.attachments[att.name] = att.data
+        elif op == _OP_HEADER:
+            _parse(Header, body)
+        elif op == _OP_DATA_END:
+            if ln != 4:
+                raise ValueError(f"data end record of {ln} bytes")
+        elif op == _OP_FOOTER:
+            if ln != 20:
+                raise ValueError(f"footer record of {ln} bytes")
+
     with open(path, "rb") as f:
         size = state.size = os.fstat(f.fileno()).st_size
         head = f.read(8)
@@ -888,8 +988,11 @@ def _iter_records(path, state: ReadReport, *, recover: bool, with_status: bool =
             if s is not None and s.name == SCHEMA_NAME:
                 backup_channels[cid] = ch.metadata.get("bus") or ch.topic.split("/")[2]
         pos = 8
-        f.seek(pos)
+        first = True
+        data_ops = {_OP_SCHEMA, _OP_CHANNEL, _OP_MESSAGE, _OP_CHUNK, _OP_MSG_INDEX, _OP_ATTACHMENT,
+                    _OP_METADATA, _OP_DATA_END, _OP_FOOTER}
         while True:
+            f.seek(pos)
             hdr = f.read(9)
             if len(hdr) < 9:
                 damaged(f"{path}: ends at byte {size} without the MCAP footer (truncated: the writer did not "
@@ -898,124 +1001,61 @@ def _iter_records(path, state: ReadReport, *, recover: bool, with_status: bool =
                 break
             op, ln = _REC_HDR.unpack(hdr)
             body_at = pos + 9
-            if op not in _KNOWN_OPS or ln > size - body_at or ln > MAX_RECORD_BYTES:
-                if op in _KNOWN_OPS or ln > size - body_at:
-                    why = (f"record of type 0x{op:02X} at byte {pos} claims {ln} bytes, "
+            fits = ln <= size - body_at and ln <= MAX_RECORD_BYTES
+            body = None
+            out: list = []
+            if not fits:
+                problem = (f"record of type 0x{op:02X} at byte {pos} claims {ln} bytes, "
                            + (f"only {size - body_at} are left in the file" if ln > size - body_at
                               else f"more than the {MAX_RECORD_BYTES}-byte limit"))
-                else:
-                    why = f"record of unknown type 0x{op:02X} (corrupted record header) at byte {pos}"
-                nxt = _resync(f, pos + 1, size)
-                if nxt is None:
-                    last = op == _OP_CHUNK or ln > size - body_at
-                    damaged(f"{path}: damaged or truncated at byte {pos} of {size}: {why}; "
-                            f"kept the {state.frames} frames before it", "truncated" if last else "record",
-                            pos, None, skipped=size - pos)
-                    break
-                if op not in _KNOWN_OPS and ln <= size - body_at and body_at + ln == nxt:
-                    # record type damaged, size intact: count what the record held if it is a chunk
-                    f.seek(body_at)
-                    body = f.read(ln)
-                    lost, by_bus, nb, t0, t1 = None, {}, None, None, None
-                    try:
-                        t0, t1, usize, crc, comp, payload = _parse_chunk(body)
-                        lost, by_bus, nb = count_frames(_chunk_records(_inflate(comp, payload, usize)))
-                    except (ValueError, EOFError, struct.error):
-                        t0 = t1 = None
-                    last_chunk_damage[0] = damaged(
-                        f"{path}: chunk at byte {pos} of {size} skipped: {why}", "unknown_record", pos,
-                        lost, by_bus, nb, t0, t1, skipped=nxt - pos)
-                else:
-                    last_chunk_damage[0] = damaged(
-                        f"{path}: damaged record at byte {pos} of {size} ({why}); {nxt - pos} bytes skipped, "
-                        f"reading goes on at byte {nxt}", "record", pos, None, skipped=nxt - pos)
-                pos = nxt
-                f.seek(pos)
-                continue
-            if op == _OP_FOOTER:
-                state.footer = True
-                break
-            if op in (_OP_CHUNK, _OP_ATTACHMENT, _OP_METADATA, _OP_SCHEMA, _OP_CHANNEL, _OP_MESSAGE,
-                      _OP_MSG_INDEX):
-                body = f.read(ln)
-            else:  # header, data end, summary records: not needed
-                f.seek(ln, 1)
-                body = b""
-            nxt = body_at + ln
-            if op == _OP_CHUNK:
-                last_chunk_damage[0] = None
-                t0 = t1 = None
-                try:
-                    t0, t1, usize, crc, comp, payload = _parse_chunk(body)
-                    raw = _inflate(comp, payload, usize)
-                except (ValueError, EOFError, struct.error, MemoryError) as exc:
-                    last_chunk_damage[0] = damaged(
-                        f"{path}: chunk at byte {pos} of {size} damaged and skipped "
-                        f"({type(exc).__name__}: {exc})", "chunk", pos, None, t0=t0, t1=t1, skipped=ln + 9)
-                    raw = None
-                if raw is not None:
-                    try:
-                        recs = _chunk_records(raw)
-                    except (ValueError, EOFError, struct.error) as exc:
-                        recs, bad = None, exc
-                    if crc and zlib.crc32(raw) != crc:
-                        lost, by_bus, nb = count_frames(recs) if recs is not None else (None, {}, None)
-                        last_chunk_damage[0] = damaged(
-                            f"{path}: chunk at byte {pos} of {size} fails its CRC check (bit rot or a damaged "
-                            f"copy) and is skipped", "crc", pos, lost, by_bus, nb, t0, t1, skipped=ln + 9)
-                    elif recs is None:
-                        last_chunk_damage[0] = damaged(
-                            f"{path}: chunk at byte {pos} of {size} damaged and skipped "
-                            f"({type(bad).__name__}: {bad})", "chunk", pos, None, t0=t0, t1=t1, skipped=ln + 9)
-                    else:
-                        for op2, r in recs:
-                            if op2 == _OP_MESSAGE:
-                                b = message(r[0], r[1], r[2], pos)
-                                if b is not None:
-                                    yield b
-                            else:
-                                other(op2, r, pos)
-            elif op == _OP_MSG_INDEX:
-                d = last_chunk_damage[0]
-                if d is not None and len(body) >= 6:
-                    (cid,) = struct.unpack_from("<H", body, 0)
-                    n = _U32.unpack_from(body, 2)[0] // 16
-                    if bus_of(cid) is not None:
-                        d["batches_lost"] = (d["batches_lost"] or 0) + n
+            elif op not in data_ops and not (first and op == _OP_HEADER):
+                problem = f"record of {'unknown' if op not in _KNOWN_OPS else 'unexpected'} type 0x{op:02X} " \
+                          f"(corrupted record header) at byte {pos}"
             else:
+                body = f.read(ln)
                 try:
-                    if op == _OP_MESSAGE:
-                        if ln < 22:
-                            raise ValueError(f"message record of {ln} bytes")
-                        cid, _seq, lt, _pt = _MSG_HDR.unpack_from(body, 0)
-                        b = message(cid, lt, memoryview(body)[22:], pos)
-                        if b is not None:
-                            yield b
-                    elif op == _OP_SCHEMA:
-                        other(op, _parse(Schema, body), pos)
-                    elif op == _OP_CHANNEL:
-                        other(op, _parse(Channel, body), pos)
-                    elif op == _OP_METADATA:
-                        md = _parse(Metadata, body)
-                        state.metadata[md.name] = dict(md.metadata)
-                        if md.name == CHANNELS_RECORD:
-                            for k, v in md.metadata.items():
-                                if k.isdigit():
-                                    backup_channels[int(k)] = v
-                    elif op == _OP_ATTACHMENT:
-                        crc = _U32.unpack_from(body, ln - 4)[0] if ln >= 4 else 0
-                        att = _parse(Attachment, body)
-                        if crc and crc != zlib.crc32(memoryview(body)[:ln - 4]):
-                            damaged(f"{path}: attachment {_printable(att.name)!r} at byte {pos} fails its CRC "
-                                    f"check and is ignored", "attachment", pos, 0)
-                        else:
-                            state.attachments[att.name] = att.data
-                except (ValueError, EOFError, struct.error) as exc:
-                    damaged(f"{path}: record of type 0x{op:02X} at byte {pos} damaged and skipped "
-                            f"({type(exc).__name__}: {exc})", "record", pos, 0 if op != _OP_MESSAGE else None,
-                            skipped=ln + 9)
+                    problem = None
+                    _record(op, body, pos, ln, out)
+                except (ValueError, EOFError, struct.error, UnicodeDecodeError) as exc:
+                    problem = f"record of type 0x{op:02X} at byte {pos} does not parse ({type(exc).__name__}: {exc})"
+            first = False
+            if problem is None:
+                yield from out
+                if op == _OP_FOOTER:
+                    state.footer = True
+                    break
+                if op == _OP_DATA_END:
+                    if _footer_ok(f, size):
+                        state.footer = True
+                    else:
+                        damaged(f"{path}: summary or footer after byte {pos} damaged (every frame was read; "
+                                "wheelsoil recover writes a clean copy)", "footer", pos, 0)
+                    break
+                pos = body_at + ln
+                continue
+            # a damaged record: find where the next one starts and go on there
+            nxt = _resync(f, pos + 1, size)
+            lost, by_bus, nb, t0, t1 = None, {}, None, None, None
+            if body is None and fits:
+                f.seek(body_at)
+                body = f.read(ln)
+            if body is not None:  # what did it hold, if it was a chunk?
+                try:
+                    t0, t1, usize, _crc, comp, payload = _parse_chunk(body)
+                    lost, by_bus, nb = count_frames(_chunk_records(_inflate(comp, payload, usize)))
+                except (ValueError, EOFError, struct.error, UnicodeDecodeError):
+                    t0 = t1 = None
+            if nxt is None:
+                last = op == _OP_CHUNK or ln > size - body_at
+                damaged(f"{path}: damaged or truncated at byte {pos} of {size}: {problem}; "
+                        f"kept the {state.frames} frames before it", "truncated" if last else "record",
+                        pos, lost, by_bus, nb, t0, t1, skipped=size - pos)
+                break
+            kind = "record" if op in _KNOWN_OPS else "unknown_record"
+            last_chunk_damage[0] = damaged(
+                f"{path}: damaged record at byte {pos} of {size} skipped ({problem}); {nxt - pos} bytes "
+                f"skipped, reading goes on at byte {nxt}", kind, pos, lost, by_bus, nb, t0, t1, skipped=nxt - pos)
             pos = nxt
-            f.seek(pos)
 
 
 def _printable(s: str) -> str:
