@@ -813,6 +813,7 @@ def _iter_records(path, state: ReadReport, *, recover: bool, with_status: bool =
     frame_channels: dict[int, str] = {}
     status_channels: set[int] = set()
     backup_channels: dict[int, str] = {}     # from wheelsoil.channels metadata / the summary section
+    backup_schemas: dict[int, object] = {}   # from the summary section
     orphan: dict[int, dict] = {}             # channel id -> damage entry of messages without a channel
     last_chunk_damage: list = [None]
 
@@ -889,10 +890,13 @@ def _iter_records(path, state: ReadReport, *, recover: bool, with_status: bool =
         if op == _OP_SCHEMA:
             schemas[rec.id] = rec
         elif op == _OP_CHANNEL:
-            sch = schemas.get(rec.schema_id)
+            sch = schemas.get(rec.schema_id) or backup_schemas.get(rec.schema_id)
+            name = sch.name if sch else ""
+            if sch is None and (rec.id in backup_channels or rec.metadata.get("frames") == SCHEMA_NAME):
+                name = SCHEMA_NAME  # its schema record was in damaged data; the channel says what it is
             state.channels[rec.id] = {"topic": rec.topic, "encoding": rec.message_encoding,
-                                      "schema": sch.name if sch else "", "metadata": dict(rec.metadata)}
-            if sch is not None and sch.name == SCHEMA_NAME:
+                                      "schema": name, "metadata": dict(rec.metadata)}
+            if name == SCHEMA_NAME:
                 frame_channels[rec.id] = rec.metadata.get("bus") or rec.topic.split("/")[2]
             elif rec.topic == STATUS_TOPIC:
                 status_channels.add(rec.id)
@@ -983,6 +987,7 @@ def _iter_records(path, state: ReadReport, *, recover: bool, with_status: bool =
             raise RecordingError(f"{path}: not an MCAP file (starts with {head[:8]!r}, "
                                  f"{size} bytes)")
         sch_b, ch_b = _read_summary_channels(f, size)
+        backup_schemas.update(sch_b)
         for cid, ch in ch_b.items():
             s = sch_b.get(ch.schema_id)
             if s is not None and s.name == SCHEMA_NAME:
