@@ -201,3 +201,34 @@ def test_truncated_file_message_counts_the_frames_kept(tmp_path):
     n = sum(info.stats.frames.values())
     assert n > 0 and any(f"kept the {n} frames" in w for w in info.warnings), info.warnings
     assert np.isclose(n % 500, 0)
+
+
+def test_damaged_first_chunk_with_the_channel_definitions_loses_only_that_chunk(tmp_path):
+    """Schema and channel records live in the chunk where they were first used; losing that
+    chunk must not lose the later chunks of those channels (footer intact or not)."""
+    a = random_messages(1500, seed=11, remote=False)
+    b = random_messages(600, seed=12, remote=False)
+    path = tmp_path / "r.mcap"
+    with RecordingWriter(path) as w:
+        w.write_frames("can0", a[:500])
+        w.flush()
+        w.write_frames("can1", b[:300])   # can1's channel registered in chunk 2
+        w.flush()
+        w.write_frames("can0", a[500:])
+        w.write_frames("can1", b[300:])
+        w.flush()
+    first = _chunk_offsets(path)[0]
+    data = bytearray(path.read_bytes())
+    for cut in (None, len(data) - 200):
+        found = False
+        for k in range(60, 300, 5):
+            bad = bytearray(data)
+            bad[first + k] ^= 0x08
+            p = tmp_path / "first.mcap"
+            p.write_bytes(bytes(bad if cut is None else bad[:cut]))
+            got, rep, _ = _read(p)
+            if rep.damage and rep.damage[0]["offset"] == first:
+                found = True
+                assert len(got.get("can0", [])) == 1000 and len(got.get("can1", [])) == 600, (cut, k)
+                break
+        assert found
