@@ -21,6 +21,27 @@ source     -                optional (custom files), required (built-in)
 A custom file is either one terrain (the keys above at top level) or a
 library like the built-in one (``[terrains.<slug>]`` tables); pick one entry
 of a library file with ``path.toml#slug``.
+
+Lab uncertainties. Each terrain carries standard deviations of the
+identifiable subset of its parameters (``Terrain.prior_sd``; the wheel model
+only sees k_eq = kc/b + kphi, never kc and kphi apart): defaults in
+``DEFAULT_PRIOR_SD`` (reasoned there), overridden per terrain by an optional
+sub-table ``[terrains.<slug>.uncertainty]`` (``[uncertainty]`` in a
+single-terrain file), in the file's field units:
+
+==========  ======  ================================================
+key         unit    standard deviation of
+==========  ======  ================================================
+k_eq_rel    -       k_eq = kc/b + kphi, as a fraction of k_eq
+n           -       the sinkage exponent n
+c_kpa       kPa     cohesion c    (or ``c_rel``: fraction of c)
+phi_deg     deg     friction angle phi
+K_m         m       shear deformation modulus K (or ``K_rel``: fraction of K)
+source      -       optional text: where the numbers come from
+==========  ======  ================================================
+
+Every value must be a finite number > 0; a fraction is turned into an
+absolute SD with that entry's own value when the file is read.
 """
 
 from __future__ import annotations
@@ -39,6 +60,10 @@ except ModuleNotFoundError:  # pragma: no cover - Python 3.10
 
 __all__ = [
     "Terrain",
+    "PRIOR_KEYS",
+    "DEFAULT_PRIOR_SD",
+    "default_prior_sd",
+    "terrain_prior",
     "Wheel",
     "DEFAULT_WHEEL",
     "TERRAINS",
@@ -58,6 +83,91 @@ TERRAIN_KEYS: dict[str, str] = {
 }
 
 
+#: Names of the identifiable terrain parameters that carry a lab prior (SI units in ``prior_sd``).
+PRIOR_KEYS: tuple[str, ...] = ("k_eq", "n", "c", "phi", "K")
+
+#: Units of ``Terrain.prior_sd`` values (k_eq's SD is relative to k_eq).
+PRIOR_SD_UNITS: dict[str, str] = {"k_eq": "fraction of k_eq", "n": "-", "c": "Pa", "phi": "rad", "K": "m"}
+
+#: Default lab standard deviations (the rules ``default_prior_sd`` applies).
+#:
+#: These are ASSUMPTIONS, not a measured repeatability of the paper's lab (the
+#: paper gives Tab. 1 without uncertainties); their orders of magnitude follow
+#: the terramechanics and geotechnical literature:
+#:
+#: - ``k_eq_rel = 0.30``: Bekker moduli depend strongly on how the soil bed is
+#:   prepared and on plate size (Els, Hamersma & Kruger, "Factors affecting
+#:   bevameter soil characterization", ISTVS 2022, doi:10.56884/IKRL4697: soil
+#:   preparation has "a substantial influence on the pressure-sinkage
+#:   relationship"); kc and kphi are notoriously ill-separated by two-plate
+#:   fits, their combination k_eq less so. 30 % is our assumption.
+#: - ``n = 0.10`` (absolute): assumption, a typical spread of the exponent
+#:   between repeated plate tests of one soil.
+#: - ``c_rel = 0.30`` with a floor ``c_min_pa = 1000`` Pa: cohesion is the
+#:   intercept of a Mohr-Coulomb fit and poorly determined, worst for
+#:   near-cohesionless sands (hence the 1 kPa floor); assumption.
+#: - ``phi_deg = 2.5`` deg: friction angles from shear-box tests scatter by a
+#:   coefficient of variation of ~5-15 % for sands (Phoon & Kulhawy, Can.
+#:   Geotech. J. 36, 1999, and the discussion by Cherubini et al.: 5-15 %
+#:   sand, 10-50 % clay); 2.5 deg is 10 % of 25 deg.
+#: - ``K_rel = 0.30``: K comes from a fit of the Janosi-Hanamoto curve and
+#:   varies with normal load and shear-device type (rotational bevameter
+#:   rings over-predict drawbar pull by 30-40 %, Els et al. 2022 citing Chang
+#:   & Baker 1973 and Shoop 1993); assumption. The built-in entries whose K is
+#:   itself assumed (Wong's table has no K) override it with ``K_rel = 0.5``.
+DEFAULT_PRIOR_SD: dict[str, float] = {
+    "k_eq_rel": 0.30,
+    "n": 0.10,
+    "c_rel": 0.30,
+    "c_min_pa": 1000.0,
+    "phi_deg": 2.5,
+    "K_rel": 0.30,
+}
+
+
+def default_prior_sd(c: float, K: float) -> dict[str, float]:
+    """Default lab SDs (SI, keys ``PRIOR_KEYS``) for a terrain with cohesion c [Pa] and K [m].
+
+    k_eq: 0.30 (relative); n: 0.10; c: max(0.30 c, 1 kPa) [Pa]; phi: 2.5 deg
+    [rad]; K: 0.30 K [m]. Source: ``DEFAULT_PRIOR_SD`` (assumptions, reasoned there).
+    """
+    d = DEFAULT_PRIOR_SD
+    return {
+        "k_eq": d["k_eq_rel"],
+        "n": d["n"],
+        "c": max(d["c_rel"] * c, d["c_min_pa"]),
+        "phi": math.radians(d["phi_deg"]),
+        "K": d["K_rel"] * K,
+    }
+
+
+class _FrozenSD(Mapping):
+    """Read-only, hashable mapping name -> SD (explicit per-terrain overrides)."""
+
+    __slots__ = ("_items",)
+
+    def __init__(self, items: Mapping[str, float] | None = None) -> None:
+        object.__setattr__(self, "_items", dict(sorted((items or {}).items())))
+
+    def __getitem__(self, key: str) -> float:
+        return self._items[key]
+
+    def __iter__(self):
+        return iter(self._items)
+
+    def __len__(self) -> int:
+        return len(self._items)
+
+    def __hash__(self) -> int:
+        return hash(tuple(self._items.items()))
+
+    def __repr__(self) -> str:
+        return repr(self._items)
+
+    def __setattr__(self, name, value):  # pragma: no cover - immutability guard
+        raise AttributeError("uncertainty overrides are read-only; use Terrain.replace(prior_sd=...)")
+
+
 @dataclass(frozen=True)
 class Terrain:
     """Terrain parameters of Bekker's pressure-sinkage law and Janosi-Hanamoto shear.
@@ -65,7 +175,13 @@ class Terrain:
     Fields (SI): ``c`` cohesion [Pa], ``phi`` internal friction angle [rad],
     ``K`` shear deformation modulus [m], ``n`` sinkage exponent [-],
     ``kc`` cohesive modulus [N/m^(n+1)], ``kphi`` frictional modulus
-    [N/m^(n+2)], plus ``name`` and ``source`` (citation text).
+    [N/m^(n+2)], plus ``name`` and ``source`` (citation text), and
+    ``uncertainty``: explicit lab standard deviations overriding the defaults,
+    a mapping with keys from ``PRIOR_KEYS`` in SI (k_eq as a fraction of k_eq,
+    n absolute, c [Pa], phi [rad], K [m]); missing keys take the defaults.
+    ``prior_sd`` gives the full set (defaults + overrides);
+    ``replace(prior_sd={...})`` merges new overrides into the old ones;
+    ``uncertainty_source`` says where the overrides come from (text).
 
     The wheel model only uses the combination ``kc/b + kphi`` (Eq. 2) and
     ``kc + b*kphi`` (Eq. 10, which is ``b`` times the same thing), so a fitter
@@ -75,9 +191,11 @@ class Terrain:
 
     Raises ``ValueError`` on construction (naming the terrain and the field)
     for: a non-finite value, c < 0, phi outside [0, 90) deg, K <= 0,
-    n outside (0, 3) (Eq. 10 needs n < 3).
+    n outside (0, 3) (Eq. 10 needs n < 3), an unknown uncertainty key or an
+    uncertainty that is not a finite number > 0.
 
-    Source: paper Eqs. (2), (4); Bekker (1956); Janosi & Hanamoto (1961).
+    Source: paper Eqs. (2), (4); Bekker (1956); Janosi & Hanamoto (1961);
+    lab-uncertainty defaults: ``DEFAULT_PRIOR_SD``.
     """
 
     name: str
@@ -88,6 +206,8 @@ class Terrain:
     kc: float
     kphi: float
     source: str = ""
+    uncertainty: Mapping[str, float] | None = None
+    uncertainty_source: str = ""
 
     def __post_init__(self) -> None:
         where = f"terrain {self.name!r}"
@@ -110,6 +230,23 @@ class Terrain:
             raise ValueError(f"{where}: shear deformation modulus K must be > 0 m, got {self.K!r}")
         if not 0.0 < self.n < 3.0:
             raise ValueError(f"{where}: sinkage exponent n must be in (0, 3) (Eq. 10), got {self.n!r}")
+        overrides = self.uncertainty if self.uncertainty is not None else {}
+        if not isinstance(overrides, Mapping):
+            raise ValueError(f"{where}: uncertainty must be a mapping {{name: sd}} with names "
+                             f"{', '.join(PRIOR_KEYS)}, got {type(overrides).__name__}")
+        clean: dict[str, float] = {}
+        for key, value in overrides.items():
+            if key not in PRIOR_KEYS:
+                raise ValueError(f"{where}: unknown uncertainty {key!r}; names: {', '.join(PRIOR_KEYS)}")
+            try:
+                sd = float(value)
+            except (TypeError, ValueError):
+                raise ValueError(f"{where}: uncertainty {key} must be a number, got {value!r}") from None
+            if not (math.isfinite(sd) and sd > 0):
+                raise ValueError(f"{where}: uncertainty {key} must be a finite number > 0 "
+                                 f"[{PRIOR_SD_UNITS[key]}], got {value!r}")
+            clean[key] = sd
+        object.__setattr__(self, "uncertainty", _FrozenSD(clean))
 
     @property
     def phi_deg(self) -> float:
@@ -117,8 +254,37 @@ class Terrain:
         return math.degrees(self.phi)
 
     def replace(self, **changes: Any) -> "Terrain":
-        """A copy with some fields changed (``dataclasses.replace``; validated again)."""
+        """A copy with some fields changed (``dataclasses.replace``; validated again).
+
+        ``prior_sd={name: sd}`` (SI, see ``prior_sd``) merges into the existing
+        uncertainty overrides; ``uncertainty=None`` drops them (back to the
+        defaults). Raises ``ValueError`` like the constructor.
+        """
+        if "prior_sd" in changes:
+            extra = changes.pop("prior_sd")
+            if not isinstance(extra, Mapping):
+                raise ValueError(f"terrain {self.name!r}: prior_sd must be a mapping {{name: sd}}, "
+                                 f"got {type(extra).__name__}")
+            base = changes.pop("uncertainty", self.uncertainty) or {}
+            changes["uncertainty"] = {**base, **extra}
         return dataclasses.replace(self, **changes)
+
+    @property
+    def prior_sd(self) -> dict[str, float]:
+        """Lab standard deviations of ``PRIOR_KEYS`` in SI: the overrides, else the defaults.
+
+        Units: k_eq as a fraction of k_eq = kc/b + kphi; n [-]; c [Pa];
+        phi [rad]; K [m]. Defaults follow the current c and K
+        (``default_prior_sd``). Source: ``DEFAULT_PRIOR_SD``.
+        """
+        sd = default_prior_sd(self.c, self.K)
+        sd.update(self.uncertainty or {})
+        return sd
+
+    @property
+    def prior_sd_origin(self) -> dict[str, str]:
+        """For each of ``PRIOR_KEYS``: ``"terrain"`` (an override) or ``"default"`` (an assumption)."""
+        return {k: ("terrain" if k in (self.uncertainty or {}) else "default") for k in PRIOR_KEYS}
 
     def k_eq(self, width_m: float) -> float:
         """Combined pressure-sinkage modulus ``kc/b + kphi`` [N/m^(n+2)] for width b (Eq. 2)."""
@@ -136,8 +302,13 @@ class Terrain:
         kc: float,
         kphi: float,
         source: str = "",
+        uncertainty: Mapping[str, float] | None = None,
+        uncertainty_source: str = "",
     ) -> "Terrain":
-        """Build from field units: c [kPa], phi [deg], K [m], kc [kN/m^(n+1)], kphi [kN/m^(n+2)]."""
+        """Build from field units: c [kPa], phi [deg], K [m], kc [kN/m^(n+1)], kphi [kN/m^(n+2)].
+
+        ``uncertainty`` (optional) is already in SI, keys ``PRIOR_KEYS`` (see ``prior_sd``).
+        """
         return cls(
             name=name,
             c=float(c_kpa) * 1e3,
@@ -147,7 +318,15 @@ class Terrain:
             kc=float(kc) * 1e3,
             kphi=float(kphi) * 1e3,
             source=source,
+            uncertainty=uncertainty,
+            uncertainty_source=uncertainty_source,
         )
+
+    def uncertainty_field_units(self) -> dict[str, float]:
+        """``prior_sd`` in the terrain file's units: k_eq_rel [-], n [-], c_kpa, phi_deg, K_m."""
+        sd = self.prior_sd
+        return {"k_eq_rel": sd["k_eq"], "n": sd["n"], "c_kpa": sd["c"] / 1e3,
+                "phi_deg": math.degrees(sd["phi"]), "K_m": sd["K"]}
 
     def field_units(self) -> dict[str, float | str]:
         """The parameters in field units, keyed like a terrain TOML entry (plus name, source)."""
@@ -200,22 +379,86 @@ def terrain_from_mapping(data: Mapping[str, Any], *, name: str, where: str) -> T
             f"{where}: missing key(s) {', '.join(missing)} "
             f"(a terrain needs {', '.join(f'{k} [{u}]' for k, u in TERRAIN_KEYS.items())})"
         )
-    unknown = sorted(set(data) - set(TERRAIN_KEYS) - {"name", "source", "description"})
+    unknown = sorted(set(data) - set(TERRAIN_KEYS) - {"name", "source", "description", "uncertainty"})
     if unknown:
         raise ValueError(f"{where}: unknown key(s) {', '.join(unknown)}; allowed: "
-                         f"{', '.join(TERRAIN_KEYS)}, name, source, description")
+                         f"{', '.join(TERRAIN_KEYS)}, name, source, description, [uncertainty]")
     values: dict[str, float] = {}
     for key in TERRAIN_KEYS:
         value = data[key]
         if isinstance(value, bool) or not isinstance(value, (int, float)):
             raise ValueError(f"{where}: key {key} must be a number [{TERRAIN_KEYS[key]}], got {value!r}")
         values[key] = float(value)
+    uncertainty, uncertainty_source = None, ""
+    if "uncertainty" in data:
+        uncertainty = uncertainty_from_mapping(data["uncertainty"], values, where=f"{where} [uncertainty]")
+        uncertainty_source = str(data["uncertainty"].get("source", ""))
     try:
         return Terrain.from_field_units(
-            str(data.get("name", name)), source=str(data.get("source", "")), **values
+            str(data.get("name", name)), source=str(data.get("source", "")), uncertainty=uncertainty,
+            uncertainty_source=uncertainty_source, **values
         )
     except ValueError as exc:
         raise ValueError(f"{where}: {exc}") from None
+
+
+#: Keys of an ``[uncertainty]`` table in a terrain TOML file (field units; see module docstring).
+UNCERTAINTY_KEYS: dict[str, str] = {
+    "k_eq_rel": "fraction of k_eq",
+    "n": "-",
+    "c_kpa": "kPa",
+    "c_rel": "fraction of c",
+    "phi_deg": "deg",
+    "K_m": "m",
+    "K_rel": "fraction of K",
+}
+
+
+def uncertainty_from_mapping(data: Mapping[str, Any], values: Mapping[str, float], *, where: str) -> dict[str, float]:
+    """Lab SDs in SI (keys ``PRIOR_KEYS``) from an ``[uncertainty]`` table in field units.
+
+    ``values`` holds the terrain's own values in field units (``c_kpa``,
+    ``K_m``) for the relative keys ``c_rel``/``K_rel``. Raises ``ValueError``
+    naming ``where`` and the key for: a non-table, an unknown key, both the
+    absolute and relative form of one SD, a non-number, a NaN/inf, or an SD <= 0.
+    """
+    if not isinstance(data, Mapping):
+        raise ValueError(f"{where}: must be a table of standard deviations, got {type(data).__name__}")
+    unknown = sorted(set(data) - set(UNCERTAINTY_KEYS) - {"source"})
+    if unknown:
+        raise ValueError(f"{where}: unknown key(s) {', '.join(unknown)}; allowed: "
+                         f"{', '.join(f'{k} [{u}]' for k, u in UNCERTAINTY_KEYS.items())}, source")
+    for a, b in (("c_kpa", "c_rel"), ("K_m", "K_rel")):
+        if a in data and b in data:
+            raise ValueError(f"{where}: give {a} or {b}, not both")
+    sd: dict[str, float] = {}
+    for key in UNCERTAINTY_KEYS:
+        if key not in data:
+            continue
+        value = data[key]
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise ValueError(f"{where}: key {key} must be a number [{UNCERTAINTY_KEYS[key]}], got {value!r}")
+        value = float(value)
+        if not (math.isfinite(value) and value > 0):
+            raise ValueError(f"{where}: key {key} must be a finite standard deviation > 0 "
+                             f"[{UNCERTAINTY_KEYS[key]}], got {value!r}")
+        if key == "k_eq_rel":
+            sd["k_eq"] = value
+        elif key == "n":
+            sd["n"] = value
+        elif key == "c_kpa":
+            sd["c"] = value * 1e3
+        elif key == "c_rel":
+            if values["c_kpa"] <= 0:
+                raise ValueError(f"{where}: c_rel needs c > 0 (c_kpa = {values['c_kpa']!r}); give c_kpa instead")
+            sd["c"] = value * values["c_kpa"] * 1e3
+        elif key == "phi_deg":
+            sd["phi"] = math.radians(value)
+        elif key == "K_m":
+            sd["K"] = value
+        elif key == "K_rel":
+            sd["K"] = value * values["K_m"]
+    return sd
 
 
 def _read_toml(path: Path) -> dict[str, Any]:
@@ -288,3 +531,27 @@ def load_terrain(name_or_path: str | Path) -> Terrain:
             f"{path}: holds {len(terrains)} terrains ({', '.join(terrains)}); pick one with {path}#<slug>"
         )
     return next(iter(terrains.values()))
+
+
+def terrain_prior(terrain: Terrain, wheel: Wheel) -> dict[str, tuple[float, float]]:
+    """Lab prior of the identifiable terrain parameters: name -> (mean, sd), SI units.
+
+    Names ``PRIOR_KEYS``: ``k_eq`` = kc/b + kphi [N/m^(n+2)] for the wheel's
+    width b (Eq. 2; its SD is ``prior_sd["k_eq"]`` times k_eq), ``n`` [-],
+    ``c`` [Pa], ``phi`` [rad], ``K`` [m]; means are the terrain's (lab)
+    values, SDs ``terrain.prior_sd`` (per-terrain overrides, else
+    ``DEFAULT_PRIOR_SD``). Raises ``ValueError`` if k_eq <= 0 for this wheel.
+    Source: paper Eq. (2), Tab. 1; ``DEFAULT_PRIOR_SD``.
+    """
+    k_eq = terrain.k_eq(wheel.width)
+    if not k_eq > 0:
+        raise ValueError(f"terrain {terrain.name!r}: kc/b + kphi = {k_eq!r} must be > 0 "
+                         f"for wheel width b = {wheel.width} m (Eq. 2)")
+    sd = terrain.prior_sd
+    return {
+        "k_eq": (k_eq, sd["k_eq"] * k_eq),
+        "n": (terrain.n, sd["n"]),
+        "c": (terrain.c, sd["c"]),
+        "phi": (terrain.phi, sd["phi"]),
+        "K": (terrain.K, sd["K"]),
+    }

@@ -13,6 +13,18 @@ Equations (paper numbering; the two printed typos fixed as in hardware.md):
 - (10) z0 = [3 W / (sqrt(2r) (kc + b kphi) (3 - n))]^(2/(2n+1))
   integrals over theta in [0, theta1] (exit angle theta2 = 0).
 
+Normal-stress distribution (``stress=``). ``None``: the paper's Eqs. (2)-(3),
+maximum at theta = 0. ``(a1, a2)``: Wong-Reece (Wong, Theory of Ground
+Vehicles, 4th ed., Wiley 2008, ch. 2; Wong & Reece, J. Terramechanics 4(1)
+1967), maximum at theta_m = (a1 + a2 s) theta1:
+
+- front  theta_m <= theta <= theta1: sigma = k_eq (r (cos theta - cos theta1))^n
+- rear   0 <= theta <= theta_m:      sigma = k_eq (r (cos(theta1 - theta/theta_m
+  (theta1 - theta_m)) - cos theta1))^n
+
+with k_eq = kc/b + kphi, exit angle 0, shear by Eqs. (4)-(5) over the whole
+contact and W, Dp, T by Eqs. (7)-(9); a1 = a2 = 0 is the paper's model.
+
 Quadrature. sigma ~ (theta1 - theta)^n near the entrance angle, an endpoint
 singularity for n < 1 that limits plain Gauss-Legendre to ~1e-5 with 32
 points. We substitute theta1 - theta = theta1 u^3, dtheta = 3 theta1 u^2 du,
@@ -25,6 +37,18 @@ benchmarks/bench_model.py).
 All trigonometric terms are formed from sin/cos of (theta1 - theta)/2 and
 theta1 by angle-sum identities, which avoids the cancellation in
 cos(theta) - cos(theta1) and sin(theta1) - sin(theta) near theta1.
+With the Wong-Reece distribution the stress has a kink at theta_m, so each
+region gets its own rule: the front [theta_m, theta1] with theta1 - theta =
+(theta1 - theta_m) u^3 (singular end theta1), the rear [0, theta_m] with
+theta = theta_m u^3 (its stress vanishes like theta^n at theta = 0). The rear
+region maps linearly onto the front, so at equal u both have the same stress
+and it is computed once. Agreement with scipy.integrate.quad split at
+theta_m, over 2000 random built-in terrains, wheels (r 0.2-0.6 m), loads,
+slips and (a1, a2) in [0, 0.6]^2 (theta1 up to 89 deg): W and T to better
+than 1e-8 relative, Dp to 2e-7 relative at worst, where Dp is a few newtons
+left from cancelling kN terms (absolute error < 1e-6 N); every value within
+the 1e-6 relative / 1e-3 N criterion (tests/test_model_wong.py). Cost ~1.6x
+the paper distribution (benchmarks/bench_model.py).
 
 Sinkage modes. ``eq10``: z0 from Eq. (10), as in the paper. Eq. (10) is a
 small-angle approximation that also ignores the shear term of Eq. (7), so the
@@ -37,6 +61,10 @@ to Eq. (10)'s z0: the balance replaces Eq. (10) as the estimate of the static
 sinkage, and the slip sinkage comes on top (solving Eq. (7)(z(z0, s)) = W
 instead would cancel any slip-sinkage model). Ding's N enters the balance
 itself (it changes Eq. 2), so Ding keeps W_model = W in balance mode.
+With ``stress=(a1, a2)`` the balance is solved with the Wong-Reece
+distribution; Eq. (10) itself was derived for the paper's distribution, so in
+``eq10`` mode a shifted maximum carries less than W (the rear region's stress
+is below the paper's) -- use ``balance`` when the vertical balance matters.
 
 Domain. The model is for a driven wheel: 0 <= s < 1. Skid (s < 0, braking)
 is rejected with a ValueError naming the sample; callers filter those rows.
@@ -65,6 +93,8 @@ _WU = 0.5 * _WU
 #: d = theta1 * _UQ; the integral's weight per theta1 is _G = q u^(q-1) w.
 _UQ = _U**_Q
 _G = _Q * _U ** (_Q - 1) * _WU
+#: 1 - u^q at the nodes (rear region of the Wong-Reece distribution).
+_1MUQ = 1.0 - _UQ
 
 #: Samples per block (keeps the (block, QUAD_ORDER) temporaries in cache).
 _BLOCK = 2048
@@ -144,10 +174,14 @@ def sinkage_eq10(terrain: Terrain, wheel: Wheel, load_n, n=None) -> np.ndarray:
     return (3.0 * np.asarray(load_n, float) / (math.sqrt(2.0 * r) * k * (3.0 - n))) ** (2.0 / (2.0 * n + 1.0))
 
 
-def _integrals(terrain: Terrain, wheel: Wheel, z, s, n, load_only: bool = False):
+def _integrals(terrain: Terrain, wheel: Wheel, z, s, n, load_only: bool = False, ratio=None):
     """Eqs. (1)-(9) by substituted Gauss-Legendre quadrature; z, s, n of shape (N,).
 
-    Returns theta1 and W (Eq. 7), and unless ``load_only`` also Dp, T; all (N,).
+    ``ratio`` None: the paper's distribution (Eqs. 2-3 over [0, theta1]).
+    ``ratio`` (N,) array theta_m/theta1 in [0, 1): the Wong-Reece distribution
+    (front region [theta_m, theta1] and rear region [0, theta_m], see
+    ``wong_forces``). Returns theta1 and W (Eq. 7), and unless ``load_only``
+    also Dp, T; all (N,).
     """
     r, b = wheel.radius, wheel.width
     k = terrain.kc / b + terrain.kphi
@@ -162,9 +196,16 @@ def _integrals(terrain: Terrain, wheel: Wheel, z, s, n, load_only: bool = False)
         sl = slice(lo, lo + _BLOCK)
         t1 = theta1[sl, None]
         nn = n[sl, None]
+        ss = s[sl, None]
+        if ratio is None:
+            tm = None
+            span = t1
+        else:
+            tm = ratio[sl, None] * t1  # theta_m, Wong-Reece
+            span = t1 - tm  # front region length theta1 - theta_m
         s1 = np.sin(t1)
         c1 = np.cos(t1)
-        half = (0.5 * t1) * _UQ  # (theta1 - theta)/2
+        half = (0.5 * span) * _UQ  # (theta1 - theta)/2 on the front region's nodes
         sh = np.sin(half)
         ch = np.cos(half)
         sin_m = s1 * ch - c1 * sh  # sin((theta1 + theta)/2)
@@ -174,34 +215,55 @@ def _integrals(terrain: Terrain, wheel: Wheel, z, s, n, load_only: bool = False)
         with np.errstate(divide="ignore"):
             sigma = k * np.exp(nn * np.log(ztheta))  # Eq. (2)
         # Eq. (5): j = r [(theta1 - theta) - (1 - s)(sin theta1 - sin theta)]
-        j = r * (2.0 * half - (1.0 - s[sl, None]) * (2.0 * cos_m * sh))
+        j = r * (2.0 * half - (1.0 - ss) * (2.0 * cos_m * sh))
         tau = (c + sigma * tanphi) * -np.expm1(-j * inv_k)  # Eq. (4)
         # theta = theta1 - d with sin d = 2 sh ch, cos d = 1 - 2 sh^2
         sin_d = 2.0 * sh * ch
         cos_d = 1.0 - 2.0 * sh * sh
         cos_t = c1 * cos_d + s1 * sin_d
         sin_t = s1 * cos_d - c1 * sin_d
-        scale = t1[:, 0]
-        w_out[sl] = (r * b) * scale * ((sigma * cos_t + tau * sin_t) @ _G)  # Eq. (7)
+        scale = span[:, 0]
+        w_blk = (r * b) * scale * ((sigma * cos_t + tau * sin_t) @ _G)  # Eq. (7)
         if not load_only:
-            dp_out[sl] = (r * b) * scale * ((tau * cos_t - sigma * sin_t) @ _G)  # Eq. (8)
-            t_out[sl] = (r * r * b) * scale * (tau @ _G)  # Eq. (9)
+            dp_blk = (r * b) * scale * ((tau * cos_t - sigma * sin_t) @ _G)  # Eq. (8)
+            t_blk = (r * r * b) * scale * (tau @ _G)  # Eq. (9)
+        if tm is not None:
+            # Rear region, nodes theta = theta_m u^3 (the stress vanishes like theta^n at
+            # theta = 0). Its stress is the front's at theta' = theta1 - (theta/theta_m)
+            # (theta1 - theta_m) = theta1 - span u^3: the front region's node for the same
+            # u, so ``sigma`` is reused as it is.
+            th = tm * _UQ
+            sin_r = np.sin(th)
+            cos_r = np.cos(th)
+            # Eq. (5) over the same contact; theta1 - theta = span + theta_m (1 - u^3)
+            j_r = r * ((span + tm * _1MUQ) - (1.0 - ss) * (s1 - sin_r))
+            tau_r = (c + sigma * tanphi) * -np.expm1(-j_r * inv_k)  # Eq. (4)
+            scale_r = tm[:, 0]
+            w_blk = w_blk + (r * b) * scale_r * ((sigma * cos_r + tau_r * sin_r) @ _G)
+            if not load_only:
+                dp_blk = dp_blk + (r * b) * scale_r * ((tau_r * cos_r - sigma * sin_r) @ _G)
+                t_blk = t_blk + (r * r * b) * scale_r * (tau_r @ _G)
+        w_out[sl] = w_blk
+        if not load_only:
+            dp_out[sl] = dp_blk
+            t_out[sl] = t_blk
     return theta1, w_out, dp_out, t_out
 
 
-def _balance_sinkage(terrain, wheel, w, s, n, z_start) -> np.ndarray:
+def _balance_sinkage(terrain, wheel, w, s, n, z_start, ratio=None) -> np.ndarray:
     """z0 with Eq. (7)(z0, s) = W, per sample; safeguarded secant in log z vs log W.
 
     Raises ValueError naming the first sample whose load exceeds what the
-    wheel can carry with sinkage < r.
+    wheel can carry with sinkage < r: its bracket closes on the top,
+    z = r (1 - 1e-9), without ever finding a sinkage that carries W (W grows
+    with z, so no load test at the top is evaluated up front).
     """
     r = wheel.radius
     size = len(w)
     n = np.broadcast_to(np.asarray(n, dtype=float), (size,)).copy()
-    x_hi = np.full(size, math.log(r * (1.0 - 1e-9)))
-    _, w_hi, _, _ = _integrals(terrain, wheel, np.exp(x_hi), s, n, load_only=True)
-    _check(w > w_hi, "load_n", w, "load too large: balance-mode sinkage would reach the wheel "
-           f"radius r = {r} m (theta1 >= 90 deg)")
+    x_top = math.log(r * (1.0 - 1e-9))
+    x_hi = np.full(size, x_top)
+    too_large = np.zeros(size, dtype=bool)
     log_w = np.log(w)
     x_lo = np.full(size, -np.inf)
     x = np.log(np.minimum(z_start, 0.9 * r))
@@ -210,7 +272,8 @@ def _balance_sinkage(terrain, wheel, w, s, n, z_start) -> np.ndarray:
     active = np.arange(size)
     out = np.empty(size)
     for _ in range(100):
-        _, wm, _, _ = _integrals(terrain, wheel, np.exp(x), s[active], n[active], load_only=True)
+        _, wm, _, _ = _integrals(terrain, wheel, np.exp(x), s[active], n[active], load_only=True,
+                                 ratio=None if ratio is None else ratio[active])
         g = np.log(wm) - log_w[active]
         done = np.abs(g) < 1e-13
         if x_prev is not None:
@@ -220,10 +283,14 @@ def _balance_sinkage(terrain, wheel, w, s, n, z_start) -> np.ndarray:
             slope = np.where(slope > 1e-3, slope, n[active] + 0.5)
         x_lo = np.where(g < 0, x, x_lo)
         x_hi = np.where(g > 0, x, x_hi)
-        done |= (x_hi - x_lo) < 1e-15 * np.maximum(1.0, np.abs(x))
+        collapsed = (x_hi - x_lo) < 1e-15 * np.maximum(1.0, np.abs(x))
+        too_large[active[collapsed & (g < 0) & (x_hi == x_top)]] = True
+        done |= collapsed
         out[active[done]] = np.exp(x[done])
         keep = ~done
         if not keep.any():
+            _check(too_large, "load_n", w, "load too large: balance-mode sinkage would reach the wheel "
+                   f"radius r = {r} m (theta1 >= 90 deg)")
             return out
         active, x, g, slope = active[keep], x[keep], g[keep], np.broadcast_to(slope, keep.shape)[keep]
         x_lo, x_hi = x_lo[keep], x_hi[keep]
@@ -235,6 +302,46 @@ def _balance_sinkage(terrain, wheel, w, s, n, z_start) -> np.ndarray:
     raise RuntimeError("balance-mode sinkage did not converge")  # pragma: no cover
 
 
+def _small_angle_load_factor(ratio: np.ndarray, n: np.ndarray) -> np.ndarray:
+    """W(Wong-Reece) / W(paper) at equal sinkage, small angles and no shear; (N,) like ``ratio``.
+
+    With sigma ~ (theta1^2 - theta^2)^n and the rear region mapped linearly onto
+    the front, W ~ int_rho^1 (1 - x^2)^n dx / (1 - rho) against int_0^1 for
+    rho = theta_m/theta1 (incomplete beta function). Only a starting point for
+    the balance-mode solver: it saves about one secant iteration.
+    """
+    from scipy.special import betainc
+
+    return (1.0 - betainc(0.5, n + 1.0, ratio * ratio)) / (1.0 - ratio)
+
+
+def _stress_ratio(stress, s: np.ndarray) -> np.ndarray | None:
+    """theta_m/theta1 = a1 + a2 s of shape (N,) from ``stress = (a1, a2)``; None for None.
+
+    a1, a2 are scalars or (N,) arrays. Raises ValueError for a malformed pair,
+    a non-finite coefficient, or a ratio outside [0, 1) (naming the sample).
+    """
+    if stress is None:
+        return None
+    if isinstance(stress, (str, bytes)) or not hasattr(stress, "__len__") or len(stress) != 2:
+        raise ValueError(f"stress must be None or a pair (a1, a2) of the Wong-Reece theta_m = "
+                         f"(a1 + a2 s) theta1, got {stress!r}")
+    size = len(s)
+    coef = []
+    for label, value in zip(("stress_a1", "stress_a2"), stress):
+        try:
+            arr = np.broadcast_to(np.asarray(value, dtype=float), (size,))
+        except (TypeError, ValueError):
+            raise ValueError(f"{label} must be a number or an array of shape ({size},), got {value!r}") from None
+        _check(~np.isfinite(arr), label, arr, "Wong-Reece coefficient must be finite")
+        coef.append(arr)
+    ratio = coef[0] + coef[1] * s
+    _check((ratio < 0) | (ratio >= 1), "stress_ratio", ratio,
+           "theta_m/theta1 = a1 + a2*s must be in [0, 1) (the maximum normal stress lies "
+           "inside the contact, between exit (theta = 0) and entry (theta1))")
+    return ratio
+
+
 def wong_forces(
     terrain: Terrain,
     wheel: Wheel,
@@ -244,6 +351,7 @@ def wong_forces(
     sinkage: str = "eq10",
     z_fn: ZFn | None = None,
     n_fn: NFn | None = None,
+    stress=None,
 ) -> WheelForces:
     """Wong's rigid-wheel forces for each sample (paper Eqs. 1-10).
 
@@ -251,12 +359,39 @@ def wong_forces(
     broadcast). ``sinkage`` chooses the static sinkage z0:
     ``"eq10"`` Eq. (10) (small-angle closed form, the paper's choice), or
     ``"balance"`` solve Eq. (7)(z0, s) = W per sample (the exact vertical
-    balance at the sample's slip; Eq. (10) differs from it by several
-    percent for n < 0.8). ``n_fn(slip) -> N`` replaces the sinkage exponent in
-    both Eq. (2) and Eq. (10) (Ding, Eq. 13); ``z_fn(z0, slip) -> z`` maps the
-    static sinkage to the sinkage used in Eqs. (1)-(9) (Vasil'ev Eq. 11,
-    Lyasko Eq. 12). In balance mode the transform is applied to the balanced
-    z0, so the model's W equals the input W only without ``z_fn``.
+    balance at the sample's slip, with the chosen stress distribution; Eq. (10)
+    differs from it by several percent for n < 0.8). ``n_fn(slip) -> N``
+    replaces the sinkage exponent in both Eq. (2) and Eq. (10) (Ding, Eq. 13);
+    ``z_fn(z0, slip) -> z`` maps the static sinkage to the sinkage used in
+    Eqs. (1)-(9) (Vasil'ev Eq. 11, Lyasko Eq. 12). In balance mode the
+    transform is applied to the balanced z0, so the model's W equals the input
+    W only without ``z_fn``.
+
+    ``stress`` chooses the normal-stress distribution:
+
+    - ``None`` (default): the paper's, Eqs. (2)-(3) over [0, theta1]:
+      sigma = k_eq (r (cos theta - cos theta1))^n, largest at theta = 0
+      (bottom dead centre, where the exit angle theta2 = 0 lies).
+    - ``(a1, a2)`` (floats, or (N,) arrays): Wong-Reece. The maximum lies at
+      theta_m = (a1 + a2 s) theta1; front region theta_m <= theta <= theta1:
+      sigma = k_eq (r (cos theta - cos theta1))^n; rear region
+      0 <= theta <= theta_m: sigma = k_eq (r (cos(theta1 - theta/theta_m
+      (theta1 - theta_m)) - cos theta1))^n (zero at the exit theta2 = 0);
+      k_eq = kc/b + kphi. Shear from Eqs. (4)-(5) with j over the whole
+      contact, W, Dp, T from Eqs. (7)-(9). ``(0, 0)`` is the paper's model
+      (theta_m = 0, no rear region; same numbers bit for bit). a1 + a2 s must
+      lie in [0, 1) for every sample. In ``eq10`` mode z0 still comes from
+      Eq. (10) (derived for the paper's distribution); use ``balance`` for the
+      vertical balance with this distribution.
+      Source: Wong, Theory of Ground Vehicles, 4th ed., Wiley 2008, ch. 2
+      (Wong & Reece, J. Terramechanics 4(1) 1967). Values commonly quoted
+      from Wong & Reece for sand: a1 ~ 0.43, a2 ~ 0.32 (secondary citation,
+      not checked against the 1967 paper here). A fitter should bound
+      a1 + a2 s_max below 1 (e.g. a1 <= 0.6, a2 <= 0.35).
+
+    Quadrature: each region by the substituted 24-point Gauss-Legendre rule
+    (u^3 substitution at the end where the stress vanishes like a power n);
+    the kink at theta_m is a region boundary, so both integrands are smooth.
 
     Returns ``WheelForces`` with (N,) arrays: sinkage_m, theta1_rad,
     load_model_n (Eq. 7), drawbar_pull_n (Eq. 8), torque_nm (Eq. 9).
@@ -264,11 +399,13 @@ def wong_forces(
     Raises ``ValueError`` naming the element and the rule for: NaN/inf load
     or slip, W <= 0, s < 0 (skid is not modelled), s >= 1, a sinkage exponent
     outside (0, 3), kc/b + kphi <= 0, a sinkage < 0 or >= r (theta1 >= 90 deg),
-    an unknown ``sinkage`` mode.
+    an unknown ``sinkage`` mode, a malformed ``stress`` or a non-finite
+    coefficient, theta_m/theta1 = a1 + a2 s outside [0, 1) (``stress_ratio[i]``).
     """
     if sinkage not in SINKAGE_MODES:
         raise ValueError(f"sinkage mode must be one of {', '.join(SINKAGE_MODES)}, got {sinkage!r}")
     w, s = _as_samples(load_n, slip)
+    ratio = _stress_ratio(stress, s)
     r, b = wheel.radius, wheel.width
     if terrain.kc / b + terrain.kphi <= 0:
         raise ValueError(
@@ -283,25 +420,31 @@ def wong_forces(
                "sinkage exponent N must be in (0, 3) (Eqs. 2, 10)")
     z0 = sinkage_eq10(terrain, wheel, w, n)
     if sinkage == "balance":
-        z0 = _balance_sinkage(terrain, wheel, w, s, n, z0)
+        z_start = z0 if ratio is None else z0 * _small_angle_load_factor(ratio, n) ** (-1.0 / (n + 0.5))
+        z0 = _balance_sinkage(terrain, wheel, w, s, n, z_start, ratio)
     z = z0 if z_fn is None else np.broadcast_to(np.asarray(z_fn(z0, s), dtype=float), w.shape).copy()
     _check(~np.isfinite(z), "sinkage_m", z, "sinkage is not finite")
     _check(z < 0, "sinkage_m", z, "sinkage must be >= 0 m")
     _check(z >= r, "sinkage_m", z, f"sinkage must be < wheel radius r = {r} m "
            "(theta1 >= 90 deg is outside the model)")
-    theta1, w_model, dp, t = _integrals(terrain, wheel, z, s, n)
+    theta1, w_model, dp, t = _integrals(terrain, wheel, z, s, n, ratio=ratio)
     return WheelForces(
         sinkage_m=z, theta1_rad=theta1, load_model_n=w_model, drawbar_pull_n=dp, torque_nm=t
     )
 
 
-def wong_forces_quad(terrain: Terrain, wheel: Wheel, load_n, slip, *, sinkage_m=None, n=None) -> WheelForces:
+def wong_forces_quad(
+    terrain: Terrain, wheel: Wheel, load_n, slip, *, sinkage_m=None, n=None, stress=None
+) -> WheelForces:
     """Reference: Eqs. (1)-(10) written literally, one ``scipy.integrate.quad`` per integral and sample.
 
     Slow (about 1e3 samples/s); for tests and benchmarks only. ``sinkage_m``
-    (N,) overrides Eq. (10); ``n`` overrides the exponent. Same shapes and
-    output as ``wong_forces``; no input validation.
-    Source: paper Eqs. (1)-(10), typos fixed; scipy.integrate.quad (QUADPACK QAGS).
+    (N,) overrides Eq. (10); ``n`` overrides the exponent; ``stress``
+    ``(a1, a2)`` (scalars or (N,) arrays) selects the Wong-Reece distribution
+    exactly as in ``wong_forces`` (each integral split at theta_m, the kink of
+    the stress). Same shapes and output as ``wong_forces``; no input validation.
+    Source: paper Eqs. (1)-(10), typos fixed; Wong, Theory of Ground Vehicles,
+    4th ed., ch. 2 (Wong-Reece distribution); scipy.integrate.quad (QUADPACK QAGS).
     """
     from scipy.integrate import quad
 
@@ -309,6 +452,11 @@ def wong_forces_quad(terrain: Terrain, wheel: Wheel, load_n, slip, *, sinkage_m=
     s_all = np.broadcast_to(np.atleast_1d(np.asarray(slip, dtype=float)), w.shape)
     nn = terrain.n if n is None else n
     n_all = np.broadcast_to(np.asarray(nn, dtype=float), w.shape)
+    if stress is None:
+        a1_all = a2_all = np.zeros(w.shape)
+    else:
+        a1_all = np.broadcast_to(np.asarray(stress[0], dtype=float), w.shape)
+        a2_all = np.broadcast_to(np.asarray(stress[1], dtype=float), w.shape)
     r, b = wheel.radius, wheel.width
     c, phi, K, kc, kphi = terrain.c, terrain.phi, terrain.K, terrain.kc, terrain.kphi
     out = np.empty((5, len(w)))
@@ -319,19 +467,27 @@ def wong_forces_quad(terrain: Terrain, wheel: Wheel, load_n, slip, *, sinkage_m=
         else:
             z0 = float(np.broadcast_to(sinkage_m, w.shape)[i])
         th1 = math.acos(1 - z0 / r)  # Eq. (1)
+        thm = (float(a1_all[i]) + float(a2_all[i]) * s) * th1  # Wong-Reece theta_m (0: paper)
 
-        def sigma(th):  # Eqs. (2), (3)
+        def sigma_front(th):  # Eqs. (2), (3)
             return (kc / b + kphi) * max(r * (math.cos(th) - math.cos(th1)), 0.0) ** ni
 
-        def tau(th):  # Eqs. (4), (5)
+        def sigma_rear(th):  # Wong-Reece rear region: the front's stress at the mapped angle
+            return sigma_front(th1 - th / thm * (th1 - thm))
+
+        def tau(th, sigma):  # Eqs. (4), (5)
             j = r * (th1 - th - (1 - s) * (math.sin(th1) - math.sin(th)))
             return (c + sigma(th) * math.tan(phi)) * (1 - math.exp(-j / K))
 
         def integral(f):
-            return quad(f, 0.0, th1, epsabs=0.0, epsrel=1e-12, limit=200)[0]
+            total = 0.0
+            for lo, hi, sig in ((0.0, thm, sigma_rear), (thm, th1, sigma_front)):
+                if hi > lo:
+                    total += quad(lambda t: f(t, sig), lo, hi, epsabs=0.0, epsrel=1e-12, limit=200)[0]
+            return total
 
-        w_m = r * b * (integral(lambda t: sigma(t) * math.cos(t)) + integral(lambda t: tau(t) * math.sin(t)))
-        dp = r * b * (integral(lambda t: tau(t) * math.cos(t)) - integral(lambda t: sigma(t) * math.sin(t)))
+        w_m = r * b * (integral(lambda t, g: g(t) * math.cos(t)) + integral(lambda t, g: tau(t, g) * math.sin(t)))
+        dp = r * b * (integral(lambda t, g: tau(t, g) * math.cos(t)) - integral(lambda t, g: g(t) * math.sin(t)))
         tq = r * r * b * integral(tau)
         out[:, i] = (z0, th1, w_m, dp, tq)
     return WheelForces(*out)

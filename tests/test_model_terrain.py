@@ -134,3 +134,147 @@ def test_wheel():
         Wheel(0.0, 0.3)
     with pytest.raises(ValueError, match="width"):
         Wheel(0.4, float("inf"))
+
+
+# --- lab uncertainties (prior_sd, [uncertainty] tables, terrain_prior) --------------------------
+
+from wheelsoil.model.terrain import DEFAULT_PRIOR_SD, PRIOR_KEYS, default_prior_sd, terrain_prior  # noqa: E402
+
+
+def test_default_prior_sd_follows_the_documented_rules():
+    clay, sand = TERRAINS["clay"], TERRAINS["sand"]
+    assert set(clay.prior_sd) == set(PRIOR_KEYS)
+    assert clay.prior_sd == pytest.approx({"k_eq": 0.30, "n": 0.10, "c": 0.30 * 7580.0,
+                                           "phi": math.radians(2.5), "K": 0.30 * 0.025})
+    # sand's c = 1 kPa: 30 % would be 0.3 kPa, the floor of 1 kPa applies
+    assert sand.prior_sd["c"] == pytest.approx(DEFAULT_PRIOR_SD["c_min_pa"])
+    assert clay.prior_sd_origin == dict.fromkeys(PRIOR_KEYS, "default")
+    # defaults follow the current values
+    assert clay.replace(K=0.01).prior_sd["K"] == pytest.approx(0.003)
+    assert default_prior_sd(0.0, 0.02) == pytest.approx(
+        {"k_eq": 0.3, "n": 0.1, "c": 1000.0, "phi": math.radians(2.5), "K": 0.006})
+
+
+def test_builtin_assumed_k_carries_a_wider_prior():
+    dry = TERRAINS["dry-sand"]
+    assert dry.prior_sd["K"] == pytest.approx(0.5 * dry.K)
+    assert dry.prior_sd_origin["K"] == "terrain" and dry.prior_sd_origin["n"] == "default"
+    assert "assumed" in dry.uncertainty_source
+    for slug, terrain in TERRAINS.items():
+        if "K assumed" in terrain.source:
+            assert terrain.prior_sd["K"] == pytest.approx(0.5 * terrain.K), slug
+    assert TERRAINS["clay"].uncertainty == {}
+
+
+def test_terrain_prior_in_si_for_the_wheel():
+    clay = TERRAINS["clay"]
+    prior = terrain_prior(clay, DEFAULT_WHEEL)
+    assert list(prior) == list(PRIOR_KEYS)
+    k_eq = 43680.0 / 0.32 + 499300.0
+    assert prior["k_eq"] == pytest.approx((k_eq, 0.3 * k_eq))
+    assert prior["n"] == pytest.approx((0.85, 0.1))
+    assert prior["c"] == pytest.approx((7580.0, 2274.0))
+    assert prior["phi"] == pytest.approx((math.radians(14.0), math.radians(2.5)))
+    assert prior["K"] == pytest.approx((0.025, 0.0075))
+    # k_eq depends on the width, its relative SD does not
+    wide = terrain_prior(clay, Wheel(0.47, 0.64))["k_eq"]
+    assert wide[0] < prior["k_eq"][0] and wide[1] / wide[0] == pytest.approx(0.3)
+    with pytest.raises(ValueError, match=r"kc/b \+ kphi"):
+        terrain_prior(clay.replace(kc=-1e6, kphi=1.0), DEFAULT_WHEEL)
+
+
+def test_replace_overrides_merge_and_reset():
+    clay = TERRAINS["clay"]
+    a = clay.replace(prior_sd={"phi": math.radians(1.0)})
+    assert a.prior_sd["phi"] == pytest.approx(math.radians(1.0))
+    assert a.prior_sd["n"] == 0.1 and a.prior_sd_origin["phi"] == "terrain"
+    b = a.replace(prior_sd={"n": 0.05})
+    assert b.uncertainty == {"phi": pytest.approx(math.radians(1.0)), "n": 0.05}
+    assert b.replace(uncertainty=None).prior_sd == clay.prior_sd
+    assert a != clay and a.replace(prior_sd={}) == a
+    assert hash(a) == hash(clay.replace(prior_sd={"phi": math.radians(1.0)}))
+    assert clay.replace(K=0.01).uncertainty == {}  # other changes keep the (empty) overrides
+    with pytest.raises(ValueError, match="prior_sd must be a mapping"):
+        clay.replace(prior_sd=0.1)
+
+
+@pytest.mark.parametrize(
+    "sd, message",
+    [
+        ({"n": -0.1}, r"uncertainty n must be a finite number > 0 \[-\], got -0.1"),
+        ({"phi": float("nan")}, r"uncertainty phi must be a finite number > 0 \[rad\], got nan"),
+        ({"K": 0.0}, r"uncertainty K must be a finite number > 0"),
+        ({"c": "big"}, r"uncertainty c must be a number"),
+        ({"kc": 0.1}, r"unknown uncertainty 'kc'; names: k_eq, n, c, phi, K"),
+    ],
+)
+def test_replace_validates_uncertainty(sd, message):
+    with pytest.raises(ValueError, match=message):
+        TERRAINS["clay"].replace(prior_sd=sd)
+
+
+UNC = """
+[uncertainty]
+k_eq_rel = 0.2
+n = 0.05
+c_kpa = 0.5
+phi_deg = 1.5
+K_rel = 0.4
+source = "three repeated plate and shear-ring tests"
+"""
+
+
+def test_uncertainty_table_in_field_units(tmp_path):
+    path = tmp_path / "loam.toml"
+    path.write_text(GOOD + UNC)
+    t = load_terrain(path)
+    assert t.prior_sd == pytest.approx({"k_eq": 0.2, "n": 0.05, "c": 500.0,
+                                        "phi": math.radians(1.5), "K": 0.4 * 0.02})
+    assert t.uncertainty_source == "three repeated plate and shear-ring tests"
+    assert t.uncertainty_field_units() == pytest.approx(
+        {"k_eq_rel": 0.2, "n": 0.05, "c_kpa": 0.5, "phi_deg": 1.5, "K_m": 0.008})
+    # partial table: the rest stay defaults; relative c
+    path.write_text(GOOD + "\n[uncertainty]\nc_rel = 0.5\n")
+    t = load_terrain(path)
+    assert t.prior_sd["c"] == pytest.approx(2500.0) and t.prior_sd["n"] == 0.1
+    assert t.prior_sd_origin == {"k_eq": "default", "n": "default", "c": "terrain", "phi": "default",
+                                 "K": "default"}
+
+
+def test_uncertainty_table_in_a_library_file(tmp_path):
+    body = GOOD.replace('name = "Test loam"\n', "")
+    path = tmp_path / "lib.toml"
+    path.write_text("[terrains.a]\n" + body + "\n[terrains.a.uncertainty]\nphi_deg = 4.0\n\n[terrains.b]\n" + body)
+    lib = load_terrain_file(path)
+    assert lib["a"].prior_sd["phi"] == pytest.approx(math.radians(4.0))
+    assert lib["b"].prior_sd["phi"] == pytest.approx(math.radians(2.5))
+
+
+@pytest.mark.parametrize(
+    "table, message",
+    [
+        ("n = -0.1", r"bad\.toml \[uncertainty\]: key n must be a finite standard deviation > 0 \[-\], got -0.1"),
+        ("phi_deg = nan", r"bad\.toml \[uncertainty\]: key phi_deg must be a finite standard deviation > 0"),
+        ("K_m = inf", r"bad\.toml \[uncertainty\]: key K_m must be a finite standard deviation > 0"),
+        ("c_kpa = 0", r"bad\.toml \[uncertainty\]: key c_kpa must be a finite"),
+        ('k_eq_rel = "30 %"', r"bad\.toml \[uncertainty\]: key k_eq_rel must be a number"),
+        ("kc = 1.0", r"bad\.toml \[uncertainty\]: unknown key\(s\) kc"),
+        ("K_m = 0.01\nK_rel = 0.3", r"bad\.toml \[uncertainty\]: give K_m or K_rel, not both"),
+    ],
+)
+def test_bad_uncertainty_is_named_with_file_and_key(tmp_path, table, message):
+    path = tmp_path / "bad.toml"
+    path.write_text(GOOD + "\n[uncertainty]\n" + table + "\n")
+    with pytest.raises(ValueError, match=message):
+        load_terrain(path)
+
+
+def test_bad_uncertainty_in_library_names_the_entry(tmp_path):
+    body = GOOD.replace('name = "Test loam"\n', "")
+    path = tmp_path / "lib.toml"
+    path.write_text("[terrains.a]\n" + body + "\n[terrains.a.uncertainty]\nn = -1\n")
+    with pytest.raises(ValueError, match=r"lib\.toml \[terrains\.a\] \[uncertainty\]: key n"):
+        load_terrain_file(path)
+    path.write_text("[terrains.a]\n" + body + "\nuncertainty = 0.3\n")
+    with pytest.raises(ValueError, match=r"lib\.toml \[terrains\.a\] \[uncertainty\]: must be a table"):
+        load_terrain_file(path)

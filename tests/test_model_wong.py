@@ -263,3 +263,160 @@ def test_other_bad_calls():
         wong_forces(clay.replace(kc=-1e6, kphi=1.0), DEFAULT_WHEEL, [1000.0], [0.1])
     with pytest.raises(ValueError, match=r"sinkage_m\[0\] = -0.01: sinkage must be >= 0"):
         wong_forces(clay, DEFAULT_WHEEL, [1000.0], [0.1], z_fn=lambda z0, s: z0 * 0 - 0.01)
+
+
+# --- Wong-Reece normal-stress distribution (stress=(a1, a2)) -----------------------------------
+
+
+def _random_stress_cases(count: int, seed: int):
+    """(terrain, wheel, W, s, a1, a2) over every built-in terrain, a1, a2 in [0, 0.6], a1 + a2 s < 1."""
+    rng = np.random.default_rng(seed)
+    cases = []
+    for terrain, wheel, load, slip in _random_cases(3 * count, seed):
+        a1, a2 = rng.uniform(0.0, 0.6, 2)
+        if a1 + a2 * slip < 1.0:
+            cases.append((terrain, wheel, load, slip, a1, a2))
+        if len(cases) == count:
+            break
+    return cases
+
+
+def test_stress_zero_reproduces_the_paper_model_bit_for_bit():
+    rng = np.random.default_rng(11)
+    for name in ("clay", "sand", "dry-sand", "lete-sand", "heavy-clay-25"):
+        terrain = load_terrain(name)
+        w = rng.uniform(1000.0, 9000.0, 3000)
+        s = rng.uniform(0.0, 0.95, 3000)
+        for mode in ("eq10", "balance"):
+            paper = wong_forces(terrain, DEFAULT_WHEEL, w, s, sinkage=mode)
+            zero = wong_forces(terrain, DEFAULT_WHEEL, w, s, sinkage=mode, stress=(0.0, 0.0))
+            for field in ("sinkage_m", "theta1_rad", *FIELDS):
+                np.testing.assert_array_equal(getattr(zero, field), getattr(paper, field))
+
+
+def test_stress_matches_adaptive_quadrature_at_random_points():
+    # every built-in terrain, random wheels, loads, slips and (a1, a2) in [0, 0.6]^2
+    worst = 0.0
+    cases = _random_stress_cases(200, seed=5)
+    assert len(cases) == 200
+    for terrain, wheel, load, slip, a1, a2 in cases:
+        ours = wong_forces(terrain, wheel, [load], [slip], stress=(a1, a2))
+        ref = wong_forces_quad(terrain, wheel, [load], [slip], stress=(a1, a2))
+        _assert_close(ours, ref)
+        for field in FIELDS:
+            b = getattr(ref, field)[0]
+            if abs(b) > 1.0:
+                worst = max(worst, abs(getattr(ours, field)[0] - b) / abs(b))
+    assert worst < 1e-6
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    n=st.floats(0.05, 2.5),
+    phi_deg=st.floats(0.0, 45.0),
+    c_kpa=st.floats(0.0, 80.0),
+    K=st.floats(0.002, 0.1),
+    slip=st.floats(0.0, 0.99),
+    depth=st.floats(0.01, 0.95),
+    a1=st.floats(0.0, 0.6),
+    a2=st.floats(0.0, 0.6),
+)
+def test_stress_matches_quadrature_for_custom_terrains(n, phi_deg, c_kpa, K, slip, depth, a1, a2):
+    if a1 + a2 * slip >= 1.0:
+        a2 = 0.0
+    terrain = Terrain.from_field_units("custom", c_kpa=c_kpa, phi_deg=phi_deg, K_m=K, n=n, kc=20.0, kphi=900.0)
+    wheel = Wheel(0.4, 0.3)
+    z = depth * wheel.radius
+    ours = wong_forces(terrain, wheel, [1000.0], [slip], z_fn=lambda z0, s: np.full_like(z0, z), stress=(a1, a2))
+    ref = wong_forces_quad(terrain, wheel, [1000.0], [slip], sinkage_m=[z], stress=(a1, a2))
+    _assert_close(ours, ref)
+
+
+@pytest.mark.parametrize("ratio", [0.1, 0.3, 0.7])
+def test_stress_closed_form_n1_without_shear(ratio):
+    # n = 1, tau = 0: the integrals of sigma cos and sigma sin over both regions in closed form.
+    # front: int_{tm}^{t1} (cos t - cos t1) cos t, sin t;  rear: int_0^{tm} (cos(t1 - beta t) - cos t1) cos t, sin t
+    # with beta = (t1 - tm)/tm; cos(a)cos(b), cos(a)sin(b) product-to-sum.
+    terrain = Terrain("linear", c=0.0, phi=0.0, K=0.02, n=1.0, kc=0.0, kphi=1e6)
+    wheel = Wheel(0.4, 0.25)
+    a1 = ratio  # a2 = 0: theta_m = a1 theta1 at every slip
+    f = wong_forces(terrain, wheel, np.linspace(1e3, 2e4, 5), 0.3, stress=(a1, 0.0))
+    t1 = f.theta1_rad
+    tm = a1 * t1
+    beta = (t1 - tm) / tm
+
+    def icos(g):  # int_0^tm cos(t1 - g t) dt
+        return (np.sin(t1) - np.sin(t1 - g * tm)) / g
+
+    def isin(g):  # int_0^tm sin(t1 - g t) dt
+        return (np.cos(t1 - g * tm) - np.cos(t1)) / g
+
+    front_w = (t1 - tm) / 2 + (np.sin(2 * t1) - np.sin(2 * tm)) / 4 - np.cos(t1) * (np.sin(t1) - np.sin(tm))
+    rear_w = 0.5 * (icos(beta - 1) + icos(beta + 1)) - np.cos(t1) * np.sin(tm)
+    front_s = (np.cos(tm) ** 2 - np.cos(t1) ** 2) / 2 - np.cos(t1) * (np.cos(tm) - np.cos(t1))
+    rear_s = 0.5 * (isin(beta - 1) - isin(beta + 1)) - np.cos(t1) * (1 - np.cos(tm))
+    k_r2_b = 1e6 * 0.4**2 * 0.25
+    np.testing.assert_allclose(f.load_model_n, k_r2_b * (front_w + rear_w), rtol=1e-9)
+    np.testing.assert_allclose(f.drawbar_pull_n, -k_r2_b * (front_s + rear_s), rtol=1e-9)
+    np.testing.assert_array_equal(f.torque_nm, 0.0)
+
+
+def test_stress_shifted_maximum_carries_less_load_and_balance_sinks_deeper():
+    # The rear region's stress is at most sigma(theta_m) < the paper's sigma there, so at the
+    # same sinkage W falls as theta_m grows; in balance mode the wheel then sinks deeper to
+    # carry the same load, and the model's W equals the input W again.
+    clay = load_terrain("clay")
+    w = np.full(4, 11000.0)
+    s = np.array([0.1, 0.3, 0.6, 0.9])
+    loads = [wong_forces(clay, DEFAULT_WHEEL, w, s, stress=(a1, 0.2)).load_model_n for a1 in (0.0, 0.2, 0.4)]
+    assert np.all(loads[1] < wong_forces(clay, DEFAULT_WHEEL, w, s).load_model_n)
+    assert np.all(loads[2] < loads[1])
+    paper = wong_forces(clay, DEFAULT_WHEEL, w, s, sinkage="balance")
+    shifted = wong_forces(clay, DEFAULT_WHEEL, w, s, sinkage="balance", stress=(0.4, 0.2))
+    np.testing.assert_allclose(shifted.load_model_n, w, rtol=1e-9)
+    assert np.all(shifted.sinkage_m > paper.sinkage_m)
+    # with a2 > 0 theta_m grows with slip, so the balanced sinkage does too
+    assert np.all(np.diff(shifted.sinkage_m) > 0)
+
+
+def test_stress_balance_vectorised_equals_one_by_one_and_array_coefficients():
+    clay = load_terrain("clay")
+    w = np.array([3000.0, 9000.0, 13000.0, 6000.0])
+    s = np.array([0.9, 0.0, 0.3, 0.6])
+    a1 = np.array([0.1, 0.3, 0.5, 0.2])
+    together = wong_forces(clay, DEFAULT_WHEEL, w, s, sinkage="balance", stress=(a1, 0.25))
+    for i in range(len(w)):
+        alone = wong_forces(clay, DEFAULT_WHEEL, w[i : i + 1], s[i : i + 1], sinkage="balance",
+                            stress=(float(a1[i]), 0.25))
+        assert alone.sinkage_m[0] == pytest.approx(together.sinkage_m[i], rel=1e-10)
+        assert alone.drawbar_pull_n[0] == pytest.approx(together.drawbar_pull_n[i], rel=1e-10)
+
+
+@pytest.mark.parametrize(
+    "stress, message",
+    [
+        ((0.6, 0.6), r"stress_ratio\[1\] = 1.14\d*: theta_m/theta1 = a1 \+ a2\*s must be in \[0, 1\)"),
+        ((-0.2, 0.1), r"stress_ratio\[0\] = .*must be in \[0, 1\)"),
+        ((float("nan"), 0.1), r"stress_a1\[0\] = nan: Wong-Reece coefficient must be finite"),
+        ((0.1, np.array([0.1, 0.2, 0.3])), r"stress_a2 must be a number or an array of shape \(2,\)"),
+        ((0.4,), "stress must be None or a pair"),
+        ("ab", "stress must be None or a pair"),
+        (0.4, "stress must be None or a pair"),
+    ],
+)
+def test_stress_bad_input_names_the_rule(stress, message):
+    with pytest.raises(ValueError, match=message):
+        wong_forces(load_terrain("clay"), DEFAULT_WHEEL, [8000.0, 8000.0], [0.1, 0.9], stress=stress)
+
+
+def test_stress_with_a_slip_dependent_exponent_matches_quadrature():
+    # Ding's N = n + n1 s (Eq. 13) enters Eqs. (2) and (10); with the Wong-Reece distribution
+    # both regions use N.
+    sand = load_terrain("sand")
+    w = np.array([6000.0, 9000.0, 12000.0])
+    s = np.array([0.1, 0.5, 0.8])
+    n_eff = sand.n + 0.3 * s
+    ours = wong_forces(sand, DEFAULT_WHEEL, w, s, n_fn=lambda sl: sand.n + 0.3 * sl, stress=(0.35, 0.2))
+    ref = wong_forces_quad(sand, DEFAULT_WHEEL, w, s, n=n_eff, stress=(0.35, 0.2))
+    _assert_close(ours, ref)
+    np.testing.assert_allclose(ours.sinkage_m, ref.sinkage_m, rtol=1e-12)
