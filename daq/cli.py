@@ -358,6 +358,9 @@ def format_info(info) -> str:
     s = info.stats
     out.append(f"  lost frames (counter gaps): {s.total('lost_frames')}"
                + (f" ({', '.join(f'{k} {v}' for k, v in sorted(s.lost_frames.items()))})" if s.lost_frames else ""))
+    if s.lost_frames_estimated:
+        out.append(f"  frames missing by nominal cycle time (estimate): {s.total('lost_frames_estimated')} ("
+                   + ", ".join(f"{k} {v}" for k, v in sorted(s.lost_frames_estimated.items())) + ")")
     out.append(f"  unknown-id frames: {s.total('unknown_ids')}, DLC mismatches: {s.total('dlc_mismatch')}, "
                f"error frames: {s.total('error_frames')}")
     if info.damage:

@@ -144,3 +144,18 @@ def test_same_named_dbcs_on_two_buses_round_trip(tmp_path):
     assert names0 == {m.name for m in src.database("can0").messages}
     assert names1 == {m.name for m in src.database("can1").messages}
     assert base.exists()
+
+
+def test_decode_with_a_broken_embedded_configuration_falls_back_with_a_warning(tmp_path):
+    from wheelsoil.daq.decode_json import decode_recording
+
+    cfg = load_vehicle_config()
+    bad = dataclasses.replace(cfg, text="[buses\n")
+    bad._dbs = cfg._dbs
+    p = tmp_path / "c.mcap"
+    _rec(p, [_batch(T0 + np.arange(10) * 10**6)], config=bad)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        res = decode_recording(p, tmp_path / "d.mcap")
+    assert any(str(p) in w and "default" in w for w in res.warnings)
+    assert res.total == 10
