@@ -468,6 +468,8 @@ _OP_HEADER = 0x01
 _OP_FOOTER, _OP_SCHEMA, _OP_CHANNEL, _OP_MESSAGE, _OP_CHUNK, _OP_MSG_INDEX = 0x02, 0x03, 0x04, 0x05, 0x06, 0x07
 _OP_ATTACHMENT, _OP_METADATA, _OP_DATA_END = 0x09, 0x0C, 0x0F
 _KNOWN_OPS = frozenset(range(0x01, 0x10))
+#: What parsing a damaged record can raise (a ValueError subclass covers bad UTF-8).
+_PARSE_ERRORS = (ValueError, EOFError, struct.error, IndexError, KeyError, TypeError, OverflowError)
 # where a top-level record may start after damage: opcode, then a length < 4 GiB
 _RESYNC = re.compile(rb"(?=[\x02\x06\x07\x09\x0c\x0f].{4}\x00\x00\x00\x00)", re.S)
 _SCAN_WINDOW = 1 << 20
@@ -726,7 +728,7 @@ def _read_summary_channels(f, size: int) -> tuple[dict, dict]:
                 r = _parse(Channel, buf[o + 9:o + 9 + ln])
                 channels[r.id] = r
             o += 9 + ln
-    except (OSError, ValueError, EOFError, struct.error):
+    except (OSError,) + _PARSE_ERRORS:
         pass
     return schemas, channels
 
@@ -767,7 +769,7 @@ def _plausible_record(f, p: int, size: int) -> bool:
             crc = _U32.unpack_from(body, ln - 4)[0]
             _parse(Attachment, body)
             return crc == 0 or crc == zlib.crc32(memoryview(body)[:ln - 4])
-    except (ValueError, EOFError, struct.error):
+    except _PARSE_ERRORS:
         return False
     return False
 
@@ -876,15 +878,21 @@ def _iter_records(path, state: ReadReport, *, recover: bool, with_status: bool =
             except ValueError:
                 pass
         elif cid not in state.channels:
+            if not recover:
+                raise RecordingError(f"{path}: messages of channel {cid} at byte {where}: the record defining "
+                                     "the channel was in damaged data; run 'wheelsoil recover' to rewrite it")
             n = _batch_len(data)
-            d = orphan.get(cid)
-            if d is None:
-                d = orphan[cid] = damaged(
-                    f"{path}: messages of channel {cid} at byte {where} and after skipped: the record "
-                    f"defining the channel was in damaged data", "channel", where, 0, batches=0)
-            d["batches_lost"] += 1
-            d["frames_lost"] = None if (n is None or d["frames_lost"] is None) else d["frames_lost"] + n
+            d = orphan.setdefault(cid, {"offset": where, "batches": 0, "frames": 0})
+            d["batches"] += 1
+            d["frames"] = None if (n is None or d["frames"] is None) else d["frames"] + n
         return None
+
+    def report_orphans() -> None:
+        for cid, d in orphan.items():
+            damaged(f"{path}: {d['batches']} message(s) of channel {cid} from byte {d['offset']} on skipped: "
+                    "the record defining the channel was in damaged data", "channel", d["offset"], d["frames"],
+                    batches=d["batches"])
+        orphan.clear()
 
     def other(op: int, rec, where: int) -> None:
         if op == _OP_SCHEMA:
@@ -897,7 +905,7 @@ def _iter_records(path, state: ReadReport, *, recover: bool, with_status: bool =
             state.channels[rec.id] = {"topic": rec.topic, "encoding": rec.message_encoding,
                                       "schema": name, "metadata": dict(rec.metadata)}
             if name == SCHEMA_NAME:
-                frame_channels[rec.id] = rec.metadata.get("bus") or rec.topic.split("/")[2]
+                frame_channels[rec.id] = _bus_name(rec.metadata, rec.topic)
             elif rec.topic == STATUS_TOPIC:
                 status_channels.add(rec.id)
 
@@ -918,7 +926,7 @@ def _iter_records(path, state: ReadReport, *, recover: bool, with_status: bool =
                 return
             try:
                 recs, bad = _chunk_records(raw), None
-            except (ValueError, EOFError, struct.error, UnicodeDecodeError) as exc:
+            except _PARSE_ERRORS as exc:
                 recs, bad = None, exc
             if crc and zlib.crc32(raw) != crc:
                 lost, by_bus, nb = count_frames(recs) if recs is not None else (None, {}, None)
@@ -991,7 +999,7 @@ def _iter_records(path, state: ReadReport, *, recover: bool, with_status: bool =
         for cid, ch in ch_b.items():
             s = sch_b.get(ch.schema_id)
             if s is not None and s.name == SCHEMA_NAME:
-                backup_channels[cid] = ch.metadata.get("bus") or ch.topic.split("/")[2]
+                backup_channels[cid] = _bus_name(ch.metadata, ch.topic)
         pos = 8
         first = True
         data_ops = {_OP_SCHEMA, _OP_CHANNEL, _OP_MESSAGE, _OP_CHUNK, _OP_MSG_INDEX, _OP_ATTACHMENT,
@@ -1021,7 +1029,7 @@ def _iter_records(path, state: ReadReport, *, recover: bool, with_status: bool =
                 try:
                     problem = None
                     _record(op, body, pos, ln, out)
-                except (ValueError, EOFError, struct.error, UnicodeDecodeError) as exc:
+                except _PARSE_ERRORS as exc:
                     problem = f"record of type 0x{op:02X} at byte {pos} does not parse ({type(exc).__name__}: {exc})"
             first = False
             if problem is None:
@@ -1048,7 +1056,7 @@ def _iter_records(path, state: ReadReport, *, recover: bool, with_status: bool =
                 try:
                     t0, t1, usize, _crc, comp, payload = _parse_chunk(body)
                     lost, by_bus, nb = count_frames(_chunk_records(_inflate(comp, payload, usize)))
-                except (ValueError, EOFError, struct.error, UnicodeDecodeError):
+                except _PARSE_ERRORS:
                     t0 = t1 = None
             if nxt is None:
                 last = op == _OP_CHUNK or ln > size - body_at
@@ -1061,6 +1069,13 @@ def _iter_records(path, state: ReadReport, *, recover: bool, with_status: bool =
                 f"{path}: damaged record at byte {pos} of {size} skipped ({problem}); {nxt - pos} bytes "
                 f"skipped, reading goes on at byte {nxt}", kind, pos, lost, by_bus, nb, t0, t1, skipped=nxt - pos)
             pos = nxt
+        report_orphans()
+
+
+def _bus_name(meta, topic: str) -> str:
+    """Bus of a frame channel: its ``bus`` metadata, else the ``<bus>`` of ``/can/<bus>/frames``."""
+    parts = str(topic).split("/")
+    return str(meta.get("bus") or (parts[2] if len(parts) > 2 else topic))
 
 
 def _printable(s: str) -> str:
