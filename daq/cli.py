@@ -317,6 +317,9 @@ def format_info(info) -> str:
         ex = "; ".join(f"{e['bus']} frame {e['frame']} at {_utc(e['t_ns'])}" for e in tb.get("examples", [])[:3])
         out.append(f"  OUTLIER TIMESTAMPS: {info.outlier_frames} frame(s) far outside the run ({ex}); "
                    "not counted in the first/last time and duration")
+    if info.time.get("gaps_s"):
+        out.append("  gaps of more than an hour inside the run: "
+                   + ", ".join(f"{g / 3600:.2f} h" for g in info.time["gaps_s"]))
     for bus, n in sorted(info.non_monotonic.items()):
         back = info.time.get("max_backward_s", {}).get(bus, 0.0)
         out.append(f"  NON-MONOTONIC TIME on {bus}: {n} backward step(s), largest {back:.6g} s "

@@ -213,6 +213,8 @@ OUTLIER_IN_BATCH_NS = 60 * 10**9
 #: Batches whose times are more than this apart belong to separate clusters; the
 #: cluster holding most frames is the run, the others are outliers [ns].
 OUTLIER_GAP_NS = 3600 * 10**9
+#: ... and when that cluster holds less than this share of all frames.
+OUTLIER_SHARE = 0.01
 
 
 class TimeBaseAccumulator:
@@ -222,8 +224,9 @@ class TimeBaseAccumulator:
     A frame is an outlier when it is more than :data:`OUTLIER_IN_BATCH_NS` from
     its batch's median (and further than 20 interquartile ranges of the batch),
     or when its whole batch lies in a time cluster separated from the one that
-    holds most frames by more than :data:`OUTLIER_GAP_NS` (a frame 6 h or a day
-    off, 0 or huge values). Per batch only a few numbers are kept
+    holds most frames by more than :data:`OUTLIER_GAP_NS` and holding less than
+    :data:`OUTLIER_SHARE` of the frames (a frame 6 h or a day off, 0 or huge
+    values); bigger far clusters are part of the run (their gaps in ``gaps_s``). Per batch only a few numbers are kept
     (O(batches) memory, one median per batch).
 
     Source: robust location by medians (Hampel identifier idea; Huber & Ronchetti,
@@ -292,14 +295,15 @@ class TimeBaseAccumulator:
     def result(self) -> dict:
         """``{"first_ns", "last_ns", "outliers": {"frames", "examples": [{bus, frame, t_ns}],
         "batches"}, "first_ns_by_bus", "last_ns_by_bus", "backward_steps": {bus: n},
-        "max_backward_s": {bus: s}, "first_backward": {bus: {frame, t_ns}}}`` (times in ns
+        "max_backward_s": {bus: s}, "first_backward": {bus: {frame, t_ns}}, "gaps_s": [s]}`` (times in ns
         since the Unix epoch; None without frames)."""
         out = {"first_ns": None, "last_ns": None, "first_ns_by_bus": {}, "last_ns_by_bus": {},
                "outliers": {"frames": self.n_in_batch_outliers, "batches": 0,
                             "examples": [{"bus": b, "frame": i, "t_ns": t} for b, i, t in self.in_batch_outliers]},
                "backward_steps": dict(self.backward),
                "max_backward_s": {b: v / 1e9 for b, v in self.max_backward_ns.items()},
-               "first_backward": {b: {"frame": i, "t_ns": t} for b, (i, t) in self.first_backward.items()}}
+               "first_backward": {b: {"frame": i, "t_ns": t} for b, (i, t) in self.first_backward.items()},
+               "gaps_s": []}
         if not self._batches:
             return out
         arr = np.array([(m, n) for m, _lo, _hi, n, _b, _i in self._batches], np.float64)
@@ -307,8 +311,15 @@ class TimeBaseAccumulator:
         meds = arr[order, 0]
         cut = np.flatnonzero(np.diff(meds) > OUTLIER_GAP_NS) + 1
         groups = np.split(order, cut)
-        weights = [arr[g, 1].sum() for g in groups]
-        keep = set(groups[int(np.argmax(weights))].tolist())
+        weights = np.array([arr[g, 1].sum() for g in groups])
+        # outliers: clusters far from the main one holding < 1 % of the frames; a big
+        # cluster (two logs of one day joined) is part of the run, its gap is reported
+        big = weights >= max(OUTLIER_SHARE * weights.sum(), 1)
+        big[int(np.argmax(weights))] = True
+        keep = set(np.concatenate([g for g, b_ in zip(groups, big) if b_]).tolist())
+        # cut m separates cluster m from cluster m + 1
+        out["gaps_s"] = [float((meds[c] - meds[c - 1]) / 1e9) for m, c in enumerate(cut.tolist())
+                         if big[m] and big[m + 1]]
         for k, (m, lo, hi, n, bus, base) in enumerate(self._batches):
             if k in keep:
                 out["first_ns"] = lo if out["first_ns"] is None else min(out["first_ns"], lo)

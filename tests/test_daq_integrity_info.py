@@ -159,3 +159,13 @@ def test_decode_with_a_broken_embedded_configuration_falls_back_with_a_warning(t
         res = decode_recording(p, tmp_path / "d.mcap")
     assert any(str(p) in w and "default" in w for w in res.warnings)
     assert res.total == 10
+
+
+def test_two_big_parts_hours_apart_are_both_the_run_not_outliers(tmp_path):
+    a = T0 + np.arange(2000, dtype=np.int64) * 10_000_000
+    b = a + 4 * 3600 * 10**9
+    p = tmp_path / "g.mcap"
+    _rec(p, [_batch(a[:1000]), _batch(a[1000:]), _batch(b[:1000]), _batch(b[1000:])])
+    info = read_recording_info(p)
+    assert info.outlier_frames == 0 and info.start_ns == a[0] and info.end_ns == b[-1]
+    assert info.time["gaps_s"] and abs(info.time["gaps_s"][0] - 4 * 3600) < 60
