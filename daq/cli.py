@@ -186,6 +186,17 @@ def _cmd_log(args) -> int:
     return 0
 
 
+def _overwrite_kw(fn, args) -> dict:
+    """``{"overwrite": ...}`` for library writers that take it (import/export do their own
+    atomic write and output check), else {} (the CLI checked the output itself)."""
+    import inspect
+
+    try:
+        return {"overwrite": args.overwrite} if "overwrite" in inspect.signature(fn).parameters else {}
+    except (TypeError, ValueError):
+        return {}
+
+
 def _counts(d: dict) -> str:
     return ", ".join(f"{b} {n}" for b, n in d.items()) or "no bus"
 
@@ -214,7 +225,7 @@ def _cmd_import(args) -> int:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
         res = import_log(args.inputs, args.output, channel_map=parse_channel_map(args.map),
-                         config=_config(args.vehicle))
+                         config=_config(args.vehicle), **_overwrite_kw(import_log, args))
     _print_warnings(res.warnings)
     print(_safe(f"imported {res.total} frames ({_counts(res.frames)}) into "
                 f"{res.output}" + (f"; skipped {res.skipped} unparsable line(s)" if res.skipped else "")))
@@ -230,14 +241,18 @@ def _cmd_export(args) -> int:
     from .recording import check_output
 
     out = check_output(args.output, [args.recording], overwrite=args.overwrite)
-    # write a temporary file next to the output, rename it into place only on success
-    tmp = out.with_name(f".{out.stem}.tmp-{secrets.token_hex(4)}{out.suffix}")
-    try:
-        res = export_recording(args.recording, tmp, channel_map=parse_channel_map(args.map), buses=args.bus)
-        os.replace(tmp, out)
-    finally:
-        if tmp.exists():
-            tmp.unlink()
+    kw = _overwrite_kw(export_recording, args)
+    if kw:  # export_recording writes atomically itself
+        tmp = out
+        res = export_recording(args.recording, out, channel_map=parse_channel_map(args.map), buses=args.bus, **kw)
+    else:  # write a temporary file next to the output, rename it into place only on success
+        tmp = out.with_name(f".{out.stem}.tmp-{secrets.token_hex(4)}{out.suffix}")
+        try:
+            res = export_recording(args.recording, tmp, channel_map=parse_channel_map(args.map), buses=args.bus)
+            os.replace(tmp, out)
+        finally:
+            if tmp.exists():
+                tmp.unlink()
     res.output = Path(out)
     _print_warnings([w.replace(str(tmp), str(out)) for w in res.warnings])
     print(_safe(f"exported {res.total} frames ({_counts(res.frames)}) to {out}"))
