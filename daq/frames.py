@@ -175,6 +175,128 @@ class FrameBatch:
                 dlc=dlc, data=bytes(row[:n]), channel=ch, check=False)
 
 
+#: Payload lengths a CAN FD frame can have (ISO 11898-1:2015, DLC codes 0-15).
+FD_LENGTHS = (0, 1, 2, 3, 4, 5, 6, 7, 8, 12, 16, 20, 24, 32, 48, 64)
+#: Largest 11-bit (standard) and 29-bit (extended) identifier (ISO 11898-1).
+MAX_STANDARD_ID = 0x7FF
+MAX_EXTENDED_ID = 0x1FFFFFFF
+#: Timestamps accepted from a file [s since the Unix epoch]: 0 <= t < this (int64 ns end in 2262).
+MAX_TIMESTAMP_S = 9.2e9
+
+_FD_LENGTH_OK = np.zeros(65, bool)
+_FD_LENGTH_OK[list(FD_LENGTHS)] = True
+
+
+def checked_batch_from_messages(bus: str, msgs) -> tuple["FrameBatch", np.ndarray, list[str]]:
+    """Like :meth:`FrameBatch.from_messages`, but frames that cannot be real CAN frames are left out.
+
+    Vectorised over the messages (a few list comprehensions, then numpy). A
+    frame is rejected when (first rule that applies):
+
+    1. its timestamp is not finite or outside ``0 <= t <`` :data:`MAX_TIMESTAMP_S` s;
+    2. its identifier is out of range: 11-bit > 0x7FF, 29-bit (or error frame) > 0x1FFFFFFF, negative;
+    3. it is a remote frame marked CAN FD (CAN FD has no remote frames);
+    4. it is a remote frame with data bytes or a requested length (DLC) above 8;
+    5. a classic (non-FD) frame with more than 8 data bytes;
+    6. a CAN FD frame whose length is not one of :data:`FD_LENGTHS`;
+    7. a data frame whose DLC is not its number of data bytes (python-can's
+       ``dlc`` is the payload length in bytes).
+
+    Source: ISO 11898-1:2015 (classic and FD frame formats, DLC -> length table).
+
+    Args:
+        bus: bus name of the batch.
+        msgs: python-can :class:`can.Message` objects (list, length N).
+
+    Returns:
+        ``(batch, bad, reasons)``: :class:`FrameBatch` of the valid frames in
+        their order; ``bad`` int64 (K,) indices into ``msgs`` of the rejected
+        ones (ascending); ``reasons`` K texts, one per rejected frame.
+    """
+    if not isinstance(msgs, list):
+        msgs = list(msgs)
+    n = len(msgs)
+    if n == 0:
+        return FrameBatch.empty(bus), np.zeros(0, np.int64), []
+    ts = np.array([m.timestamp for m in msgs], np.float64)  # None -> nan (rejected)
+    idl = [m.arbitration_id for m in msgs]
+    if max(idl) > 0xFFFFFFFF or min(idl) < 0:
+        idl = [-1 if i < 0 else min(i, 0x100000000) for i in idl]
+    ids = np.array(idl, np.int64)
+    fl = np.zeros(n, np.uint8)
+    for bit, attr in ((FLAG_EXTENDED, "is_extended_id"), (FLAG_REMOTE, "is_remote_frame"),
+                      (FLAG_ERROR, "is_error_frame"), (FLAG_FD, "is_fd"), (FLAG_BRS, "bitrate_switch"),
+                      (FLAG_ESI, "error_state_indicator")):
+        col = [getattr(m, attr) for m in msgs]
+        if any(col):
+            fl[np.array(col, bool)] |= bit
+    rx = [m.is_rx for m in msgs]
+    if not all(rx):
+        fl[~np.array(rx, bool)] |= FLAG_TX
+    dll = [m.dlc for m in msgs]
+    if max(dll) > 0xFFFF or min(dll) < 0:
+        dll = [-1 if d < 0 else min(d, 0x10000) for d in dll]
+    dlc = np.array(dll, np.int64)
+    datas = [m.data or b"" for m in msgs]
+    lens = np.fromiter(map(len, datas), np.int64, n)
+
+    ext = (fl & FLAG_EXTENDED) != 0
+    remote = (fl & FLAG_REMOTE) != 0
+    err = (fl & FLAG_ERROR) != 0
+    fd = (fl & FLAG_FD) != 0
+    with np.errstate(invalid="ignore"):
+        bad_t = ~(np.isfinite(ts) & (ts >= 0) & (ts < MAX_TIMESTAMP_S))
+    bad_id = (ids < 0) | (ids > np.where(ext | err, MAX_EXTENDED_ID, MAX_STANDARD_ID))
+    rules = (
+        bad_t,
+        bad_id,
+        remote & fd,
+        remote & ((lens > 0) | (dlc > 8) | (dlc < 0)),
+        ~fd & (lens > CLASSIC_WIDTH),
+        (fd & ~remote & ~_FD_LENGTH_OK[np.minimum(lens, 64)]) | (lens > FD_WIDTH),
+        ~remote & ~err & (dlc != lens),
+    )
+    code = np.zeros(n, np.int8)
+    for k in range(len(rules), 0, -1):
+        code[rules[k - 1]] = k
+    bad = np.flatnonzero(code)
+    reasons = []
+    for i in bad.tolist():
+        k = int(code[i])
+        if k == 1:
+            reasons.append(f"timestamp {float(ts[i])!r} s is not a time (finite, 0 <= t < {MAX_TIMESTAMP_S:.3g} s)")
+        elif k == 2:
+            wide = bool(ext[i] or err[i])
+            reasons.append(f"identifier 0x{int(ids[i]) & 0x1FFFFFFFF:X} out of range for a "
+                           f"{'29' if wide else '11'}-bit id (max 0x{MAX_EXTENDED_ID if wide else MAX_STANDARD_ID:X})")
+        elif k == 3:
+            reasons.append("remote frame marked CAN FD (CAN FD has no remote frames)")
+        elif k == 4:
+            reasons.append(f"remote frame with {int(lens[i])} data bytes / requested length {int(dlc[i])} (max 8)")
+        elif k == 5:
+            reasons.append(f"classic CAN frame with {int(lens[i])} data bytes (at most 8)")
+        elif k == 6:
+            reasons.append(f"CAN FD frame with {int(lens[i])} data bytes (allowed: 0-8, 12, 16, 20, 24, 32, 48, 64)")
+        else:
+            reasons.append(f"DLC {int(dlc[i])} but {int(lens[i])} data bytes")
+    if bad.size:
+        keep = code == 0
+        ts, ids, fl, dlc, lens = ts[keep], ids[keep], fl[keep], dlc[keep], lens[keep]
+        datas = [d for d, k in zip(datas, keep.tolist()) if k]
+        if not datas:
+            return FrameBatch.empty(bus), bad, reasons
+    m = len(datas)
+    width = FD_WIDTH if int(lens.max()) > CLASSIC_WIDTH else CLASSIC_WIDTH
+    if int(lens.min()) == width:
+        flat = b"".join(datas)
+    else:
+        flat = b"".join([bytes(d).ljust(width, b"\0") for d in datas])
+    data = np.frombuffer(flat, np.uint8).reshape(m, width)
+    batch = FrameBatch.from_columns(bus, seconds_to_ns(ts), ids.astype(np.uint32), fl,
+                                    np.clip(dlc, 0, 255).astype(np.uint8), data)
+    return batch, bad, reasons
+
+
 def message_flags(m) -> int:
     """The :attr:`FrameBatch.flags` byte of one python-can :class:`can.Message`."""
     return ((FLAG_EXTENDED if m.is_extended_id else 0) | (FLAG_REMOTE if m.is_remote_frame else 0)

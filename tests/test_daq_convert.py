@@ -162,7 +162,8 @@ def test_bad_inputs_give_clear_errors(tmp_path, capsys):
     rc = cli("import", blf, "-o", tmp_path / "y.mcap")
     err = capsys.readouterr().err
     assert "bad.blf" in err and "Traceback" not in err
-    assert rc in (0, 2)
+    assert rc == 2  # no frame in it: an error, not "imported 0 frames"
+    assert not (tmp_path / "y.mcap").exists()
 
 
 def test_decode_adds_json_channels_with_physical_values(tmp_path, capsys):
