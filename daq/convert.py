@@ -1109,7 +1109,7 @@ def rewrite_recording(path, output, *, on_batch=None, note: tuple[str, dict] | N
         if note is not None:
             w.add_metadata(note[0], dict(note[1], source_file=str(path), source_complete=str(state.complete),
                                          damage="; ".join(state.warnings) or "none",
-                                         damage_json=__import__("json").dumps(getattr(state, "damage", []))))
+                                         damage_json=json.dumps(getattr(state, "damage", []))))
         if "wheelsoil.summary" in state.metadata:
             w.summary.update(state.metadata["wheelsoil.summary"])
     except BaseException:
