@@ -105,7 +105,8 @@ class CanLogger:
             ``<stem>-001.mcap``, ``-002``... instead (the logger writes straight
             into its file, fsynced every flush, so a power cut keeps what was recorded).
         provenance: the ``recorded`` provenance record
-            (:func:`~wheelsoil.daq.provenance.make_provenance`) written to every file.
+            (:func:`~wheelsoil.daq.provenance.make_provenance`) written to every file
+            (None: one made here, adapters from ``bus_meta``).
     """
 
     def __init__(self, buses: Mapping[str, object], output, *, config=None, split_minutes: float | None = None,
@@ -126,7 +127,14 @@ class CanLogger:
         self.flush_interval_s = flush_interval_s
         self.status_interval_s = status_interval_s
         self.overwrite = bool(overwrite)
-        self.provenance = dict(provenance) if provenance is not None else None
+        if provenance is None:  # a library caller: recorded, adapters from the channel metadata
+            from .provenance import make_provenance
+
+            adapters = [f"{name}={self.bus_meta[name]['interface']}:{self.bus_meta[name]['channel']}"
+                        if {"interface", "channel"} <= set(self.bus_meta.get(name, {})) else name
+                        for name in self.buses]
+            provenance = make_provenance("recorded", adapters=adapters)
+        self.provenance = dict(provenance)
         # a plain flag, not threading.Event: Event.set() from a signal handler can
         # deadlock on the Event's lock when the handler interrupts Event.wait()
         self._stop_requested = False
