@@ -606,9 +606,10 @@ def _inflate(compression: str, data, usize: int) -> bytes:
         if cs != zstandard.CONTENTSIZE_UNKNOWN and cs != usize:
             raise ValueError(f"zstd frame holds {cs} bytes, the chunk claims {usize}")
         try:
-            if cs == usize:  # the normal case: one allocation of the known size
+            if cs == usize and usize <= 64 * len(data) + (1 << 20):  # normal: one allocation of the known size
                 out = zstandard.ZstdDecompressor().decompress(data)
-            else:  # size not in the frame: inflate piecewise, never more than claimed (+1 to notice)
+            else:  # size not in the frame, or a ratio no real chunk has: inflate piecewise, allocating
+                # only what really comes out, never more than claimed (+1 to notice)
                 import io
 
                 parts, got = [], 0

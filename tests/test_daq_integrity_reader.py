@@ -232,3 +232,47 @@ def test_damaged_first_chunk_with_the_channel_definitions_loses_only_that_chunk(
                 assert len(got.get("can0", [])) == 1000 and len(got.get("can1", [])) == 600, (cut, k)
                 break
         assert found
+
+
+def _zstd_with_content_size(payload: bytes, claimed: int) -> bytes:
+    """A zstd frame of ``payload`` whose header claims ``claimed`` bytes of content."""
+    import zstandard
+
+    f = zstandard.ZstdCompressor(write_content_size=False, write_checksum=False).compress(payload)
+    desc = f[4]
+    assert desc & 0xC0 == 0 and desc & 0x03 == 0  # no content size, no dictionary id
+    single = desc & 0x20
+    hdr_len = 5 + (0 if single else 1)
+    window = b"" if single else f[5:6]
+    new_desc = 0xC0 | (desc & 0x3C)             # 8-byte content size field, same other flags
+    return f[:4] + bytes([new_desc]) + window + claimed.to_bytes(8, "little") + f[hdr_len:]
+
+
+def test_crafted_zstd_frame_claiming_a_large_size_allocates_only_what_inflates(tmp_path):
+    import zlib
+
+    import zstandard
+    from mcap.data_stream import RecordBuilder
+    from mcap.records import Chunk, Header
+
+    usize = 200_000_000
+    inner = b"\x05" + (30).to_bytes(8, "little") + bytes(30)
+    comp = _zstd_with_content_size(inner, usize)
+    assert zstandard.get_frame_parameters(comp).content_size == usize
+    rb = RecordBuilder()
+    Header(profile="", library="crafted").write(rb)
+    for _ in range(20):
+        Chunk(compression="zstd", data=comp, message_start_time=0, message_end_time=0,
+              uncompressed_crc=zlib.crc32(inner), uncompressed_size=usize).write(rb)
+    p = tmp_path / "crafted2.mcap"
+    p.write_bytes(b"\x89MCAP0\r\n" + rb.end())
+    tracemalloc.start()
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            info = read_recording_info(p)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak < 64 * 2**20, f"peak {peak / 2**20:.0f} MiB"
+    assert len(info.damage) >= 20 and all("crafted2.mcap" in d["message"] for d in info.damage)
