@@ -36,7 +36,6 @@ Counted:
 from __future__ import annotations
 
 import argparse
-import os
 import random
 import re
 import resource

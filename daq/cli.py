@@ -313,8 +313,6 @@ def _cmd_info(args) -> int:
 def format_info(info) -> str:
     """Human-readable text of a :class:`~wheelsoil.daq.info.RecordingInfo` (control
     characters and terminal escape sequences from the file are shown escaped, never raw)."""
-    import time
-
     d = info.to_dict()
     if info.complete:
         state = "complete"

@@ -8,7 +8,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from .provenance import PROVENANCE_RECORD, provenance_from_metadata
-from .recording import ReadReport, _iter_records, _printable
+from .recording import ReadReport, _iter_records
 from .stats import FrameStats, StatsAccumulator, TimeBaseAccumulator
 
 
