@@ -30,7 +30,7 @@ Counted:
 - peak memory: tracemalloc peak of one case and the process's ru_maxrss
   (target < 1 GB).
 
-    .venv/bin/python benchmarks/bench_fuzz.py [--n 300] [--seed 0] [--process-every 10] [--fit-every 40]
+    .venv/bin/python benchmarks/bench_fuzz.py [--n 200] [--seed 0] [--process-every 10] [--fit-every 50]
 """
 
 from __future__ import annotations
@@ -279,10 +279,10 @@ class Tally:
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--n", type=int, default=300, help="mutated inputs (default 300)")
+    ap.add_argument("--n", type=int, default=200, help="mutated inputs (default 200)")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--process-every", type=int, default=10, help="process every k-th case (default 10)")
-    ap.add_argument("--fit-every", type=int, default=40, help="fit every k-th case (default 40; 0 = never)")
+    ap.add_argument("--fit-every", type=int, default=50, help="fit every k-th case (default 50; 0 = never)")
     ap.add_argument("--keep", default=None, metavar="DIR", help="keep the mutated files here")
     ap.add_argument("-v", "--verbose", action="store_true")
     args = ap.parse_args(argv)
