@@ -37,7 +37,7 @@ def make_recording(path: Path, minutes: float) -> None:
     from wheelsoil.model import load_terrain
     from wheelsoil.simulate import simulate_run, write_simulation
 
-    run = simulate_run(load_terrain("clay"), duration_s=minutes * 60.0, gnss_latency_s=0.1,
+    run = simulate_run(load_terrain("clay"), wheel=(0.55, 0.40), duration_s=minutes * 60.0, gnss_latency_s=0.1,
                        drop_rate=0.0005, seed=1)
     write_simulation(run, path)
 

@@ -31,6 +31,33 @@ UNIT_TO_SI = {
     "s": 1.0, "ms": 1e-3, "m": 1.0, "mm": 1e-3, "week": 1.0,
 }
 
+#: Dimension of each unit of :data:`UNIT_TO_SI` (to compare a TOML unit with the DBC's).
+UNIT_DIMENSION = {
+    "": "1", "-": "1", "1": "1", "N": "force", "kN": "force", "N.m": "moment", "Nm": "moment",
+    "N*m": "moment", "kN.m": "moment", "rad": "angle", "deg": "angle", "rad/s": "angular speed",
+    "rpm": "angular speed", "deg/s": "angular speed", "m/s": "speed", "km/h": "speed", "kph": "speed",
+    "mph": "speed", "s": "time", "ms": "time", "m": "length", "mm": "length", "week": "1",
+}
+
+#: Other spellings of units found in DBC files (normalised before comparison).
+UNIT_ALIASES = {"nm": "N.m", "n.m": "N.m", "n*m": "N.m", "n m": "N.m", "°": "deg", "degree": "deg",
+                "degrees": "deg", "1/min": "rpm", "u/min": "rpm", "min-1": "rpm", "km/h": "km/h",
+                "kmh": "km/h", "m/sec": "m/s", "sec": "s", "rad/sec": "rad/s", "kn": "kN"}
+
+#: Plausible ranges of the ``[vehicle]`` numbers: key -> (low, high, unit, hint for a value
+#: outside). Source: hardware.md (r = 0.47 m, b = 0.32 m, m_w = 80 kg, I_w = 11.5 kg m^2) and
+#: the sizes of wheels on single-wheel testbeds (r from 0.05 m) up to large tractor tyres.
+VEHICLE_RANGES = {
+    "wheel_radius_m": (0.05, 2.0, "m", "radius"),
+    "wheel_width_m": (0.02, 1.5, "m", "width"),
+    "wheel_mass_kg": (0.0, 2000.0, "kg", "wheel mass (rim + tyre outboard of the WFT)"),
+    "wheel_inertia_kgm2": (0.0, 1000.0, "kg m^2", "polar moment of inertia about the axle"),
+}
+
+#: hardware.md defaults of the wheel outboard of the WFT (used when the TOML omits them).
+DEFAULT_WHEEL_MASS_KG = 80.0
+DEFAULT_WHEEL_INERTIA_KGM2 = 11.5
+
 
 @dataclass(frozen=True)
 class SignalRef:
@@ -43,6 +70,8 @@ class SignalRef:
         unit: unit of the DBC's physical value.
         scale_to_si: multiply the DBC physical value by this to get SI
             (N, N.m, rad, rad/s, m/s, s); from the TOML or from :data:`UNIT_TO_SI`.
+        cycle_time_s: nominal period of the message [s] from the TOML's
+            ``cycle_time_s`` (None: not given; see :meth:`VehicleConfig.cycle_time_s`).
     """
 
     bus: str
@@ -50,6 +79,7 @@ class SignalRef:
     signal: str
     unit: str
     scale_to_si: float = 1.0
+    cycle_time_s: float | None = None
 
 
 @dataclass
@@ -65,6 +95,11 @@ class VehicleConfig:
         bus_options: bus name -> the other keys of its TOML table (bitrate, description).
         source: the TOML file it was loaded from (None if built in code).
         text: the TOML text (stored in recordings as an attachment).
+        wheel_mass_kg: mass m_w of the wheel assembly outboard of the WFT (rim + tyre) [kg].
+        wheel_inertia_kgm2: its polar moment of inertia I_w about the axle [kg m^2]
+            (hardware.md: the WFT measures ``Fx = Dp - m_w dV/dt``, ``My = T + I_w domega/dt``).
+        notes: sentences about defaults used (e.g. a key the TOML omits); without the
+            file name, which the consumer prefixes (a recording's embedded TOML has no path).
     """
 
     buses: dict[str, list[Path]]
@@ -75,6 +110,9 @@ class VehicleConfig:
     bus_options: dict[str, dict] = field(default_factory=dict)
     source: Path | None = None
     text: str = ""
+    wheel_mass_kg: float = DEFAULT_WHEEL_MASS_KG
+    wheel_inertia_kgm2: float = DEFAULT_WHEEL_INERTIA_KGM2
+    notes: list = field(default_factory=list)
     _dbs: dict = field(default_factory=dict, repr=False, compare=False)
     _texts: dict = field(default_factory=dict, repr=False, compare=False)
 
@@ -105,6 +143,25 @@ class VehicleConfig:
                     self._texts[p.name] = Path(p).read_text(encoding="utf-8", errors="replace")
                 out[p.name] = self._texts[p.name]
         return out
+
+    def cycle_time_s(self, bus: str, message: str) -> tuple[float | None, str]:
+        """Nominal period [s] of ``message`` on ``bus`` and where it comes from.
+
+        A ``cycle_time_s`` on any ``[signals.*]`` table of that message wins;
+        else the DBC's ``GenMsgCycleTime`` attribute (cantools ``Message.cycle_time``,
+        ms); else ``(None, "unknown")``. Returns ``(period_s or None, source text)``.
+        """
+        for key, ref in sorted(self.signals.items()):
+            if ref.bus == bus and ref.message == message and ref.cycle_time_s:
+                return float(ref.cycle_time_s), f"vehicle configuration [signals.{key}] cycle_time_s"
+        try:
+            msg = self.database(bus).get_message_by_name(message)
+        except (KeyError, ValueError, OSError):
+            return None, "unknown"
+        ct = getattr(msg, "cycle_time", None)
+        if ct:
+            return float(ct) * 1e-3, "DBC GenMsgCycleTime"
+        return None, "unknown"
 
     def counter_specs(self) -> list[tuple[str, int, bool, int, int]]:
         """Sample counters to watch for gaps: (bus, frame id, is_extended, byte, modulo).
@@ -170,11 +227,19 @@ def load_vehicle_config(path: str | Path | None = None, *, check_dbc: bool = Tru
             bus's DBCs; the message names the file and the TOML key.
     """
     src = default_vehicle_path() if path is None else Path(path)
-    text = src.read_text(encoding="utf-8")
+    raw = src.read_bytes()
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        line = raw[:exc.start].count(b"\n") + 1
+        raise ValueError(f"{src}: not UTF-8 text (byte 0x{raw[exc.start]:02x} at offset {exc.start}, "
+                         f"line {line}); save the file as UTF-8") from None
     try:
         doc = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise ValueError(f"{src}: not valid TOML: {exc}") from None
+    if not isinstance(doc, Mapping):  # pragma: no cover - tomllib always gives a dict
+        raise ValueError(f"{src}: not a TOML table")
     return vehicle_config_from_dict(doc, source=src, text=text, check_dbc=check_dbc)
 
 
@@ -184,13 +249,20 @@ def vehicle_config_from_dict(doc: Mapping, *, source: Path | None = None, text: 
     where = str(source) if source else "vehicle config"
     base = source.parent if source else Path.cwd()
     veh = doc.get("vehicle", {})
-    try:
-        radius = float(veh.get("wheel_radius_m", 0.47))
-        width = float(veh.get("wheel_width_m", 0.32))
-    except (TypeError, ValueError):
-        raise ValueError(f"{where}: [vehicle] wheel_radius_m / wheel_width_m must be numbers") from None
-    if not (radius > 0 and width > 0):
-        raise ValueError(f"{where}: [vehicle] wheel_radius_m and wheel_width_m must be > 0")
+    if not isinstance(veh, Mapping):
+        raise ValueError(f"{where}: [vehicle] must be a table")
+    nums = {}
+    notes = []
+    for key, default in (("wheel_radius_m", 0.47), ("wheel_width_m", 0.32),
+                         ("wheel_mass_kg", DEFAULT_WHEEL_MASS_KG),
+                         ("wheel_inertia_kgm2", DEFAULT_WHEEL_INERTIA_KGM2)):
+        if key not in veh:
+            if key in ("wheel_mass_kg", "wheel_inertia_kgm2"):
+                notes.append(f"[vehicle] has no {key}; the hardware.md default {default:g} is used "
+                             "for the inertia compensation")
+            nums[key] = default
+            continue
+        nums[key] = _vehicle_number(where, key, veh[key])
 
     buses: dict[str, list[Path]] = {}
     bus_options: dict[str, dict] = {}
@@ -222,19 +294,40 @@ def vehicle_config_from_dict(doc: Mapping, *, source: Path | None = None, text: 
                              f"({', '.join(buses)})")
         unit = str(tab.get("unit", ""))
         if "scale_to_si" in tab:
+            raw = tab["scale_to_si"]
             try:
-                scale = float(tab["scale_to_si"])
+                if isinstance(raw, bool):
+                    raise TypeError
+                scale = float(raw)
             except (TypeError, ValueError):
-                raise ValueError(f"{where}: [signals.{key}] scale_to_si must be a number") from None
+                raise ValueError(f"{where}: [signals.{key}] scale_to_si = {raw!r}: must be a number") from None
+            if not (math.isfinite(scale) and scale != 0.0):
+                raise ValueError(f"{where}: [signals.{key}] scale_to_si = {raw!r}: must be a finite, "
+                                 "non-zero factor to SI")
         elif unit in UNIT_TO_SI:
             scale = UNIT_TO_SI[unit]
         else:
             raise ValueError(f"{where}: [signals.{key}] unit {unit!r} is unknown; give scale_to_si "
                              f"(known units: {', '.join(u for u in UNIT_TO_SI if u)})")
-        signals[key] = SignalRef(str(tab["bus"]), str(tab["message"]), str(tab["signal"]), unit, scale)
+        cycle = None
+        if "cycle_time_s" in tab:
+            raw = tab["cycle_time_s"]
+            try:
+                if isinstance(raw, bool):
+                    raise TypeError
+                cycle = float(raw)
+            except (TypeError, ValueError):
+                cycle = float("nan")
+            if not (math.isfinite(cycle) and 1e-4 <= cycle <= 5.0):
+                raise ValueError(f"{where}: [signals.{key}] cycle_time_s = {raw!r}: not a plausible "
+                                 "message period in s (1e-4 - 5); did you give ms?")
+        signals[key] = SignalRef(str(tab["bus"]), str(tab["message"]), str(tab["signal"]), unit, scale, cycle)
 
-    cfg = VehicleConfig(buses=buses, signals=signals, wheel_radius_m=radius, wheel_width_m=width,
-                        name=str(veh.get("name", "")), bus_options=bus_options, source=source, text=text)
+    cfg = VehicleConfig(buses=buses, signals=signals, wheel_radius_m=nums["wheel_radius_m"],
+                        wheel_width_m=nums["wheel_width_m"], name=str(veh.get("name", "")),
+                        bus_options=bus_options, source=source, text=text,
+                        wheel_mass_kg=nums["wheel_mass_kg"], wheel_inertia_kgm2=nums["wheel_inertia_kgm2"],
+                        notes=notes)
     if check_dbc:
         for key, ref in signals.items():
             db = cfg.database(ref.bus)
@@ -246,4 +339,63 @@ def vehicle_config_from_dict(doc: Mapping, *, source: Path | None = None, text: 
             if ref.signal not in [s.name for s in msg.signals]:
                 raise ValueError(f"{where}: [signals.{key}] message {ref.message} has no signal "
                                  f"{ref.signal!r} (it has {', '.join(s.name for s in msg.signals)})")
+            dbc_unit = msg.get_signal_by_name(ref.signal).unit or ""
+            problem = unit_mismatch(ref.unit, dbc_unit)
+            if problem:
+                files = ", ".join(p.name for p in buses[ref.bus])
+                raise ValueError(f"{where}: [signals.{key}] unit = {ref.unit!r} but the DBC ({files}) gives "
+                                 f"{ref.message}.{ref.signal} in {dbc_unit!r}: {problem}; write "
+                                 f"unit = {dbc_unit!r} (the unit of the DBC's physical value) and, if it is "
+                                 "not SI, scale_to_si")
     return cfg
+
+
+def _vehicle_number(where: str, key: str, raw) -> float:
+    """One ``[vehicle]`` number, checked to be finite and within :data:`VEHICLE_RANGES`.
+
+    Raises ``ValueError`` naming the file, the key and the value (with a hint when
+    the value looks like millimetres or grams).
+    """
+    lo, hi, unit, what = VEHICLE_RANGES[key]
+    try:
+        if isinstance(raw, bool):
+            raise TypeError
+        val = float(raw)
+    except (TypeError, ValueError):
+        raise ValueError(f"{where}: [vehicle] {key} = {raw!r}: must be a number in {unit}") from None
+    if not (math.isfinite(val) and lo <= val <= hi):
+        hint = ""
+        if math.isfinite(val) and unit == "m" and lo * 1e3 <= val <= hi * 1e3:
+            hint = "; did you give mm?"
+        elif math.isfinite(val) and val < 0:
+            hint = "; it cannot be negative"
+        raise ValueError(f"{where}: [vehicle] {key} = {raw!r}: not a plausible {what} in {unit} "
+                         f"({lo:g}-{hi:g}){hint}")
+    return val
+
+
+def _norm_unit(u: str) -> str:
+    u = str(u).strip()
+    return UNIT_ALIASES.get(u.lower(), u)
+
+
+def unit_mismatch(toml_unit: str, dbc_unit: str) -> str:
+    """Why ``toml_unit`` (vehicle.toml) cannot be the DBC's ``dbc_unit``, or "" if it can.
+
+    Empty DBC units say nothing and match anything. Known units
+    (:data:`UNIT_TO_SI`) match when they have the same dimension and factor to SI
+    (``N.m`` = ``Nm``); unknown ones when their spelling matches (case aside).
+    """
+    a, b = _norm_unit(toml_unit), _norm_unit(dbc_unit)
+    if not b or a == b:
+        return ""
+    if a in UNIT_TO_SI and b in UNIT_TO_SI:
+        if UNIT_DIMENSION[a] != UNIT_DIMENSION[b]:
+            return f"{a!r} is a {UNIT_DIMENSION[a]}, {b!r} a {UNIT_DIMENSION[b]}"
+        if not math.isclose(UNIT_TO_SI[a], UNIT_TO_SI[b], rel_tol=1e-9):
+            f = UNIT_TO_SI[a] / UNIT_TO_SI[b]
+            return (f"values would be scaled {f:g}x " + ("too high" if f > 1 else "too low"))
+        return ""
+    if a.lower() == b.lower():
+        return ""
+    return "the units differ"

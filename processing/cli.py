@@ -15,18 +15,29 @@ output columns (one row per grid point, from the first frame on):
   t_s             time since the first frame [s] (host clock)
   slip            slip ratio s = (r*omega - V)/(r*omega), paper Eq. (6); empty where r*omega < 0.1 m/s
   load_n          vertical load W [N]            (WFT, hub frame, Fz)
-  drawbar_pull_n  drawbar pull Dp [N]            (WFT, hub frame, Fx)
-  torque_nm       driving torque T [N m]         (WFT My)
+  drawbar_pull_n  drawbar pull Dp [N]            (WFT, hub frame: Fx + m_w dV/dt, inertia compensated)
+  torque_nm       driving torque T [N m]         (WFT: My - I_w domega/dt, inertia compensated)
   speed_mps       vehicle speed V [m/s]          (GNSS/INS forward velocity, latency removed)
   omega_radps     wheel angular speed [rad/s]    (wheel speed module)
   phase           accel | brake | standstill | other
   valid           all values present, no long frame gap, slip in [-1, 1)
+  distance_m      travelled distance [m]         (integral of V)
+  fx_n, my_nm     WFT Fx [N] and My [N m] as measured (filtered, before inertia compensation)
+
+Inertia: the WFT measures what the rim + tyre transmit, Fx = Dp - m_w dV/dt and
+My = T + I_w domega/dt (m_w = wheel_mass_kg, I_w = wheel_inertia_kgm2 in the vehicle
+configuration); both are compensated unless --no-inertia. dV/dt and domega/dt are
+derivatives of the filtered V and omega (same filter and cutoff as the forces).
 
 Filtering: zero-phase Butterworth low-pass (order 4, run forward and backward),
 per contiguous segment (never across lost-frame gaps longer than 3 samples),
 cutoff 5 Hz unless --cutoff; capped at 0.4 x --rate (anti-alias).
 The GNSS velocity latency is estimated against the free-rolling front wheels'
-r*omega and removed; the host->GPS time mapping is fitted from RT_SB_GPS_Time.
+r*omega (or, when the fronts turn with the measured wheel, from the GNSS
+acceleration against the measured drawbar pull) and removed; the host->GPS
+time mapping is fitted from RT_SB_GPS_Time. Frames with timestamps far outside
+their neighbours are set aside and listed; logs joined out of order are sorted
+(refused when their parts overlap in time).
 """
 
 
@@ -53,6 +64,11 @@ def register(subparsers) -> None:
     p.add_argument("--config", "--vehicle", dest="config", default=None, metavar="TOML",
                    help="vehicle configuration (default: the one stored in the recording, "
                    "else the shipped dbc/vehicle.toml)")
+    p.add_argument("--wheel-radius", type=float, default=None, metavar="R",
+                   help="wheel radius r [m] for slip (Eq. 6), overriding the vehicle configuration's "
+                   "(a different value is reported as a conflict); 'wheelsoil fit --wheel-radius' uses it too")
+    p.add_argument("--no-inertia", action="store_true",
+                   help="do not compensate the wheel's inertia (drawbar_pull_n = Fx, torque_nm = My as measured)")
     p.add_argument("--progress", action="store_true", help="show a progress bar while decoding")
     p.set_defaults(func=_cmd_process)
 
@@ -67,7 +83,8 @@ def _cmd_process(args) -> int:
     if suffix not in (".csv", ".parquet"):
         raise ValueError(f"output {out}: use a .csv or .parquet file name")
     res = process_recording(args.recording, config=args.config, rate_hz=args.rate,
-                            cutoff_hz=args.cutoff, progress=args.progress)
+                            cutoff_hz=args.cutoff, progress=args.progress,
+                            wheel_radius_m=args.wheel_radius, inertia=not args.no_inertia)
     if suffix == ".csv":
         res.signals.to_csv(out, index=False, float_format="%.6g")
     else:

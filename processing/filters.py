@@ -22,6 +22,7 @@ import math
 
 import numpy as np
 from scipy import signal
+from scipy.interpolate import CubicSpline
 
 __all__ = ["DEFAULT_CUTOFF_HZ", "FILTER_ORDER", "MAX_FILL_SAMPLES", "segments", "lowpass",
            "lowpass_segments", "filter_to_grid"]
@@ -69,7 +70,7 @@ def lowpass_segments(x: np.ndarray, fs_hz: float, cutoff_hz: float, *, order: in
 
 
 def filter_to_grid(t_s: np.ndarray, x: np.ndarray, period_s: float, t_grid: np.ndarray,
-                   cutoff_hz: float) -> np.ndarray:
+                   cutoff_hz: float, *, derivative: bool = False):
     """Filter a source series per segment and interpolate it onto an output grid.
 
     ``t_s`` (n,) sorted times [s], ``x`` (n,) values (NaN = lost sample);
@@ -77,14 +78,28 @@ def filter_to_grid(t_s: np.ndarray, x: np.ndarray, period_s: float, t_grid: np.n
     are missing. Within a segment the series is resampled uniformly at
     ``period_s`` (lost samples linearly bridged), low-passed zero-phase and
     interpolated onto the ``t_grid`` points inside it; others stay NaN.
+
+    With ``derivative=True`` returns ``(values, dxdt)``, both (len(t_grid),):
+    ``dxdt`` [unit of x per s] is the time derivative *of the filtered series*
+    (a cubic spline through the filtered uniform samples of each segment,
+    differentiated and evaluated on the grid). Differentiation and the
+    (linear, zero-phase) low-pass commute, so ``dxdt`` is the derivative of the
+    signal passed through the same filter, with the same cutoff, segments and
+    no phase lag: a correction ``m dV/dt`` built from it lines up with a force
+    filtered by this function (inertia compensation, processing/pipeline.py).
     """
     out = np.full(t_grid.shape[0], np.nan)
+    dout = np.full(t_grid.shape[0], np.nan) if derivative else None
+
+    def ret():
+        return (out, dout) if derivative else out
+
     if not period_s > 0:  # unknown period (too few samples): nothing to put on the grid
-        return out
+        return ret()
     ok = np.isfinite(x) & np.isfinite(t_s)
     t, v = t_s[ok], x[ok]
     if t.shape[0] < 2:
-        return out
+        return ret()
     brk = np.flatnonzero(np.diff(t) > (MAX_FILL_SAMPLES + 1.5) * period_s) + 1
     fs = 1.0 / period_s
     for a, b in zip(np.concatenate([[0], brk]), np.concatenate([brk, [t.shape[0]]])):
@@ -99,4 +114,9 @@ def filter_to_grid(t_s: np.ndarray, x: np.ndarray, period_s: float, t_grid: np.n
         hi = np.searchsorted(t_grid, tu[-1], side="right")
         if hi > lo:
             out[lo:hi] = np.interp(t_grid[lo:hi], tu, xu)
-    return out
+            if derivative:
+                if n_u >= 4:
+                    dout[lo:hi] = CubicSpline(tu, xu).derivative()(t_grid[lo:hi])
+                else:
+                    dout[lo:hi] = np.interp(t_grid[lo:hi], tu, np.gradient(xu, tu))
+    return ret()

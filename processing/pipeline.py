@@ -9,12 +9,22 @@ Steps (each in its own module):
    lost runs of at most ``MAX_FILL_SAMPLES`` samples are interpolated,
    longer ones split the data into segments;
 3. clocks: host->GPS time mapping, GNSS latency from the free-rolling front
-   wheels (or the measured wheel when it is nearly unloaded), removed from
-   the GNSS timestamps (:mod:`.timesync`);
+   wheels (or the measured wheel when it is nearly unloaded; or, when the
+   front wheels turn with the measured one (all wheels driven) or that
+   reference fails, from the vehicle dynamics: GNSS dV/dt against the
+   measured Fx), removed from the GNSS timestamps (:mod:`.timesync`);
 4. per source and per contiguous segment: uniform resampling at the source's
    own rate, zero-phase Butterworth low-pass (:mod:`.filters`), linear
    interpolation onto the output grid (``rate_hz``, from the first frame);
-5. slip (Eq. 6), phase, cycle id, ``valid`` (:mod:`.slip`).
+5. inertia compensation: the WFT measures what the wheel assembly outboard
+   of it transmits, ``Fx = Dp - m_w dV/dt``, ``My = T + I_w domega/dt``
+   (hardware.md), so ``Dp = Fx + m_w dV/dt`` and ``T = My - I_w domega/dt``
+   with ``m_w``, ``I_w`` from the vehicle configuration; dV/dt and domega/dt
+   are the derivatives of the filtered V and omega (same zero-phase filter,
+   same cutoff, same segments, :func:`.filters.filter_to_grid`), so the
+   correction has the same response as the filtered forces (on by default);
+6. slip (Eq. 6) with the wheel radius of the configuration or the one given
+   (the radius the fit then uses), phase, cycle id, ``valid`` (:mod:`.slip`).
 
 Every problem met on the way is appended to ``ProcessResult.warnings`` with
 what is missing and what was still computed; nothing silently turns into
@@ -34,6 +44,7 @@ import pandas as pd
 from .decode import DecodedMessage, Decoder, decode_batches
 from .filters import DEFAULT_CUTOFF_HZ, MAX_FILL_SAMPLES, filter_to_grid, segments
 from .slip import accel_cycles, classify_phases, slip_ratio
+from .timebase import MAX_GRID_ROWS, cycle_loss, find_time_outliers, robust_period, split_joined_parts
 from .timesync import LatencyEstimate, estimate_latency, fit_gps_time_mapping
 from .wft import assemble_wft_samples, rotate_to_hub
 
@@ -41,7 +52,9 @@ __all__ = ["ProcessResult", "process_recording", "COLUMNS", "MAX_FILL_SAMPLES"]
 
 #: The columns of ``ProcessResult.signals``, in order (docs/architecture.md).
 COLUMNS = ("t_s", "slip", "load_n", "drawbar_pull_n", "torque_nm", "speed_mps", "omega_radps",
-           "phase", "valid")
+           "phase", "valid", "distance_m", "fx_n", "my_nm")
+#: Plausible wheel radius [m] for ``wheel_radius_m`` (as ``daq.config.VEHICLE_RANGES``).
+RADIUS_RANGE_M = (0.05, 2.0)
 #: r*omega below this [m/s] leaves the slip undefined (NaN).
 MIN_WHEEL_SPEED_MPS = 0.1
 #: WFT Status bits that invalidate a sample (overload, bridge fault, encoder fault).
@@ -67,8 +80,26 @@ class ProcessResult:
     None; ``lost_frames`` message -> dict(lost, gaps, longest_gap_s, received,
     method); ``warnings`` list of sentences; ``cycle`` int64 (N,)
     accelerate-cycle id (-1 outside); plus ``t0_ns`` (host time of the first
-    frame), ``rate_hz``, ``cutoff_hz``, ``wheel_radius_m``, ``wheel_width_m`` (from
-    the vehicle configuration used), ``latency_reference``.
+    frame processed, outliers set aside), ``rate_hz``, ``cutoff_hz``, ``wheel_radius_m`` (the radius slip was
+    computed with: the ``wheel_radius_m`` argument, else the vehicle
+    configuration's) and ``wheel_radius_source``, ``wheel_width_m``,
+    ``latency_reference``.
+
+    Signals also carry ``distance_m`` (travelled distance, integral of V from
+    the first GNSS sample [m], NaN where V is), ``fx_n`` and ``my_nm`` (the
+    WFT's Fx [N] and My [N m], filtered, before the inertia compensation);
+    ``drawbar_pull_n = fx_n + m_w dV/dt`` and ``torque_nm = my_nm - I_w
+    domega/dt`` when the compensation is applied.
+
+    ``inertia`` dict: ``applied`` bool, ``wheel_mass_kg``, ``wheel_inertia_kgm2``,
+    ``max_abs_force_n`` / ``max_abs_torque_nm`` (largest correction applied, None
+    if not applied), ``method``, ``source``.
+    ``excluded`` list of dicts ``{t0_s, t1_s, reason}`` (+ details): spans of
+    data set aside (outlier timestamps, long gaps, the gap between joined parts,
+    damaged parts of the file as the reader reports them; ``t0_s``/``t1_s`` None
+    when the time is unknown).
+    ``quality`` dict: frames with outlier timestamps, non-monotonic parts, lost
+    frames per message (None = unknown), grid size.
     """
 
     signals: pd.DataFrame
@@ -85,13 +116,27 @@ class ProcessResult:
     wheel_width_m: float = float("nan")
     latency_reference: str = ""
     latency_detail: LatencyEstimate | None = field(default=None, repr=False)
+    wheel_radius_source: str = ""
+    inertia: dict = field(default_factory=dict)
+    excluded: list = field(default_factory=list)
+    quality: dict = field(default_factory=dict)
 
     def summary(self) -> str:
         """Human-readable report: latency, GPS time mapping, lost frames, valid share, warnings."""
         s = self.signals
         lines = [f"samples: {len(s)} at {self.rate_hz:g} Hz ({len(s) / self.rate_hz:.1f} s), "
                  f"low-pass {self.cutoff_hz:g} Hz (zero-phase Butterworth, order 4 x2), "
-                 f"wheel radius {self.wheel_radius_m:g} m"]
+                 f"wheel radius {self.wheel_radius_m:g} m ({self.wheel_radius_source}) for slip (Eq. 6)"]
+        ine = self.inertia or {}
+        if ine.get("applied"):
+            lines.append(f"inertia compensated: Dp = Fx + m_w dV/dt, T = My - I_w domega/dt with "
+                         f"m_w = {ine['wheel_mass_kg']:g} kg, I_w = {ine['wheel_inertia_kgm2']:g} kg m^2 "
+                         f"({ine.get('source', '')}); largest correction "
+                         f"{_fmt(ine.get('max_abs_force_n'), ' N')} on Dp, "
+                         f"{_fmt(ine.get('max_abs_torque_nm'), ' N m')} on T")
+        elif ine:
+            lines.append("inertia NOT compensated: drawbar_pull_n = Fx and torque_nm = My as measured "
+                         f"({ine.get('reason', 'switched off')})")
         if self.gnss_latency_s is not None:
             lines.append(f"GNSS latency: {self.gnss_latency_s * 1e3:.1f} ms +- "
                          f"{self.gnss_latency_stderr_s * 1e3:.1f} ms (reference: {self.latency_reference}; removed)")
@@ -110,7 +155,8 @@ class ProcessResult:
         if self.lost_frames:
             lines.append("lost frames:")
             for name, d in self.lost_frames.items():
-                lines.append(f"  {name}: {d['lost']} lost in {d['gaps']} gaps (longest "
+                lost = "unknown number" if d['lost'] is None else d['lost']
+                lines.append(f"  {name}: {lost} lost in {d['gaps']} gaps (longest "
                              f"{d['longest_gap_s'] * 1e3:.0f} ms), {d['received']} received [{d['method']}]")
         n = len(s)
         share = float(s["valid"].mean()) if n else 0.0
@@ -119,29 +165,65 @@ class ProcessResult:
         lines.append(f"valid samples: {share * 100:.1f} % of {n}; phases: "
                      + ", ".join(f"{k} {counts.get(k, 0)}" for k in ("accel", "brake", "standstill", "other"))
                      + f"; accelerate cycles: {n_cycles}")
+        q = self.quality or {}
+        ts = q.get("timestamps") or {}
+        if ts.get("outlier_frames") or ts.get("joined_parts"):
+            lines.append(f"time base: {ts.get('outlier_frames', 0)} frames with outlier timestamps set "
+                         f"aside; {ts.get('joined_parts', 0)} out-of-order parts sorted")
+        if self.excluded:
+            lines.append(f"excluded spans: {len(self.excluded)}")
+            for e in self.excluded[:10]:
+                span = ("time unknown" if e["t0_s"] is None or e["t1_s"] is None
+                        else f"{e['t0_s']:.3f}-{e['t1_s']:.3f} s")
+                lines.append(f"  {span}: {e['reason']}")
+            if len(self.excluded) > 10:
+                lines.append(f"  ... {len(self.excluded) - 10} more")
         for w in self.warnings:
             lines.append(f"warning: {w}")
         return "\n".join(lines)
 
 
+def _fmt(v, unit: str) -> str:
+    return "n/a" if v is None else f"{v:.3g}{unit}"
+
+
 # --------------------------------------------------------------------------- configuration
 def _resolve_config(path: Path, config: Any, warnings: list[str]):
-    """VehicleConfig from an object, a TOML path, the recording's attachment, or the default."""
+    """VehicleConfig from an object, a TOML path, the recording's attachment, or the default.
+
+    Returns ``(config, where)``, ``where`` naming the source for messages."""
     from wheelsoil.daq import VehicleConfig, load_recording_config, load_vehicle_config
 
     if isinstance(config, VehicleConfig):
-        return config
+        return config, f"vehicle configuration {config.source or '(given)'}"
     if config is not None:
-        return load_vehicle_config(config)
+        return load_vehicle_config(config), f"vehicle configuration {config}"
     try:
         cfg = load_recording_config(path)
         if cfg is not None:
-            return cfg
+            return cfg, "the recording's vehicle configuration"
         warnings.append(f"{path}: no vehicle configuration attached; using the shipped default")
     except ValueError as exc:  # not an MCAP file is reported by the reader; a bad attachment here
         warnings.append(f"{path}: attached vehicle configuration not usable ({exc}); "
                         "using the shipped default")
-    return load_vehicle_config()
+    return load_vehicle_config(), "the shipped default vehicle.toml"
+
+
+def check_wheel_radius(value, what: str = "wheel radius") -> float:
+    """``value`` as a float radius [m], checked finite and within :data:`RADIUS_RANGE_M`.
+
+    Raises ``ValueError`` naming ``what`` and the value (hint for millimetres)."""
+    try:
+        if isinstance(value, bool):
+            raise TypeError
+        r = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{what} = {value!r}: must be a number in m") from None
+    lo, hi = RADIUS_RANGE_M
+    if not (math.isfinite(r) and lo <= r <= hi):
+        hint = "; did you give mm?" if math.isfinite(r) and lo * 1e3 <= r <= hi * 1e3 else ""
+        raise ValueError(f"{what} = {value!r}: not a plausible radius in m ({lo:g}-{hi:g}){hint}")
+    return r
 
 
 def _front_wheel_refs(config) -> list:
@@ -161,19 +243,205 @@ def _front_wheel_refs(config) -> list:
             for s in msg.signals if s.name.upper().endswith(("FL", "FR")) and s.name != ws.signal]
 
 
+# --------------------------------------------------------------------------- latency helpers
+#: |front r*omega / measured r*omega - 1| below this for 99 % of the moving samples, while the
+#: measured wheel is driven hard: the front wheels are coupled to it (not free rolling).
+COUPLED_MAX_DEV = 0.02
+
+
+def _fronts_coupled(t_front_ns: np.ndarray, v_front: np.ndarray, t_rear_ns: np.ndarray,
+                    v_rear: np.ndarray) -> bool:
+    """True when the front wheels' r*omega (n,) follows the measured wheel's r*omega (m,)
+    within :data:`COUPLED_MAX_DEV` wherever it exceeds 1 m/s (at least 100 samples): all
+    wheels turn together (locked differentials), so the fronts slip as much as the measured
+    wheel and cannot serve as the latency reference. (A run without any slip also looks like
+    this; the caller then checks against :func:`_force_latency`.)"""
+    rear = np.interp(t_front_ns.astype(np.float64), t_rear_ns.astype(np.float64), v_rear)
+    mv = np.isfinite(rear) & np.isfinite(v_front) & (rear > 1.0)
+    if np.count_nonzero(mv) < 100:
+        return False
+    return bool(np.percentile(np.abs(v_front[mv] / rear[mv] - 1.0), 99) < COUPLED_MAX_DEV)
+
+
+def _force_latency(g_rel: np.ndarray, g_v: np.ndarray, g_period: float, t_grid: np.ndarray,
+                   fx: np.ndarray, cutoff_hz: float) -> LatencyEstimate | None:
+    """GNSS latency from vehicle dynamics: the vehicle's acceleration follows the soil's
+    longitudinal forces, ``m dV/dt ~ a Fx + b`` (the measured wheel's Fx standing for the sum
+    over the wheels, hence a free gain ``a``), so the GNSS dV/dt (g_rel (n,) s, g_v (n,) m/s,
+    derivative of the filtered V) lags the measured Fx (fx (N,) N on ``t_grid``) by the
+    latency. Both sides low-passed with the same zero-phase filter at ``cutoff_hz``; the fit is
+    :func:`.timesync.estimate_latency`. None when it cannot be estimated."""
+    ok = np.isfinite(fx)
+    if np.count_nonzero(ok) < 100 or not g_period > 0:
+        return None
+    dv = filter_to_grid(g_rel, g_v, g_period, g_rel, cutoff_hz, derivative=True)[1]
+    dt = float(t_grid[1] - t_grid[0]) if t_grid.size > 1 else 0.01
+    fxs = filter_to_grid(t_grid[ok], fx[ok], dt, t_grid, cutoff_hz)
+    try:
+        return estimate_latency(g_rel, dv, t_grid, fxs, usable_ref=np.isfinite(fxs), min_speed_mps=-np.inf)
+    except ValueError:
+        return None
+
+
 # --------------------------------------------------------------------------- resampling
-def _time_gaps(name: str, ts_ns: np.ndarray) -> tuple[dict, float]:
-    """Lost frames of a message without counter, from time gaps > 1.5 nominal periods."""
-    if ts_ns.shape[0] < 3:
-        return {"lost": 0, "gaps": 0, "longest_gap_s": 0.0, "received": int(ts_ns.shape[0]),
-                "method": "too few frames"}, float("nan")
-    dt = np.diff(np.sort(ts_ns)) * 1e-9
-    period = float(np.median(dt))
-    steps = np.round(dt / period)
-    big = steps > 1.5
-    return {"lost": int(np.sum(steps[big] - 1)), "gaps": int(np.count_nonzero(big)),
+def _time_gaps(name: str, ts_ns: np.ndarray, nominal_s: float | None = None, nominal_src: str = "",
+               *, parts: list | None = None) -> tuple[dict, float]:
+    """Lost frames of a message without a counter and the period to filter it with.
+
+    ``ts_ns`` int64 (n,) sorted receive times; ``nominal_s`` the nominal cycle
+    time [s] (DBC ``GenMsgCycleTime`` or vehicle.toml ``cycle_time_s``, from
+    ``nominal_src``) or None; ``parts`` frame ranges of joined parts (the time
+    between them is not counted as loss). Returns ``(report, period_s)``:
+    ``report`` dict(lost: int | None (unknown), gaps, longest_gap_s, received,
+    method) with ``lost`` counted against the nominal cycle
+    (:func:`.timebase.cycle_loss`); gaps are spacings over 2.5 periods;
+    ``period_s`` the nominal period, else a robust estimate
+    (:func:`.timebase.robust_period`).
+    """
+    n = int(ts_ns.shape[0])
+    if n < 3:
+        return {"lost": None, "gaps": 0, "longest_gap_s": 0.0, "received": n,
+                "method": "too few frames: loss unknown"}, float("nan")
+    est = robust_period(ts_ns)
+    period = float(nominal_s) if nominal_s else est
+    lost, note = cycle_loss(ts_ns, nominal_s, breaks=parts)
+    dt = np.diff(ts_ns) * 1e-9
+    if parts and len(parts) > 1:  # the time between joined parts is no gap of the message
+        dt[[a - 1 for a, _ in parts[1:]]] = 0.0
+    big = dt > 2.5 * period if period > 0 else np.zeros(dt.shape, bool)
+    if nominal_s and lost is not None:
+        method = f"frames counted against the nominal cycle time {nominal_s * 1e3:g} ms ({nominal_src})"
+    elif nominal_s:
+        method = note
+    else:
+        method = (f"no counter and no nominal cycle time (DBC GenMsgCycleTime or vehicle.toml "
+                  f"cycle_time_s): loss unknown; period estimated {est * 1e3:.1f} ms")
+    return {"lost": lost, "gaps": int(np.count_nonzero(big)),
             "longest_gap_s": float(dt[big].max()) if big.any() else 0.0,
-            "received": int(ts_ns.shape[0]), "method": f"time gaps, period {period * 1e3:.1f} ms"}, period
+            "received": n, "method": method}, period
+
+
+#: Excluded spans listed one by one per kind; more are summarised in one entry.
+MAX_EXCLUDED_LISTED = 50
+
+
+def _clean_time_base(dec: dict, path: Path, warns: list[str]):
+    """Set aside outlier timestamps and sort joined parts of every decoded message.
+
+    ``dec`` message name -> :class:`DecodedMessage` (file order). Returns
+    ``(dec, runs, parts, quality)``: the messages with outliers removed and
+    frames sorted by time; ``runs`` [(message, bus, run dict of
+    :func:`.timebase.find_time_outliers`)]; ``parts`` message -> frame ranges of
+    its joined parts in the sorted arrays (only for messages with > 1 part);
+    ``quality`` dict(outlier_frames, outliers_by_message, joined_parts,
+    non_monotonic). Raises ``ValueError`` (naming the file, message and bus)
+    when joined parts overlap in time.
+    """
+    out: dict = {}
+    runs_all: list = []
+    parts_by_msg: dict = {}
+    q = {"outlier_frames": 0, "outliers_by_message": {}, "joined_parts": 0, "non_monotonic": {}}
+    for name, m in dec.items():
+        ts = np.asarray(m.timestamp_ns, dtype=np.int64)
+        if ts.shape[0] == 0:
+            continue
+        keep, runs = find_time_outliers(ts)
+        nbad = int(np.count_nonzero(~keep))
+        if nbad:
+            q["outlier_frames"] += nbad
+            q["outliers_by_message"][name] = nbad
+            runs_all.extend((name, m.bus, r) for r in runs)
+            r0 = runs[0]
+            warns.append(f"{path}: {nbad} frame(s) of {name} ({m.bus}) with timestamps far outside their "
+                         f"neighbours set aside, in {len(runs)} place(s); first at frame {r0['first']}: "
+                         f"{_claim_text(r0)} (ProcessResult.excluded lists them)")
+        ts_k = ts[keep]
+        if ts_k.size == 0:
+            warns.append(f"{path}: every frame of {name} ({m.bus}) has an outlier timestamp: {name} not used")
+            continue
+        try:
+            parts = split_joined_parts(ts_k)
+        except ValueError as exc:
+            raise ValueError(f"{path}: {name} on bus {m.bus}: {exc}") from None
+        order = np.argsort(ts_k, kind="stable")
+        if len(parts) > 1:
+            q["joined_parts"] = max(q["joined_parts"], len(parts) - 1)
+            sizes = [b - a for a, b in sorted(parts, key=lambda p: int(ts_k[p[0]:p[1]].min()))]
+            bounds = np.concatenate([[0], np.cumsum(sizes)]).astype(int)
+            sorted_parts = [(int(a), int(b)) for a, b in zip(bounds[:-1], bounds[1:])]
+            parts_by_msg[name] = sorted_parts
+            q["non_monotonic"].setdefault(m.bus, {})[name] = {
+                "parts": len(parts),
+                "backward_at_frames": [int(a) for a, _ in parts[1:]],
+            }
+            warns.append(f"{path}: {name} ({m.bus}): time runs backwards at frame(s) "
+                         f"{', '.join(str(a) for a, _ in parts[1:])}: {len(parts)} parts joined out of order; "
+                         "they do not overlap in time, so they were sorted by time (the time between them is "
+                         "left empty and not counted as lost)")
+        out[name] = DecodedMessage(m.bus, m.name, m.frame_id, m.is_extended, ts_k[order],
+                                   {k: np.asarray(v)[keep][order] for k, v in m.signals.items()})
+    return out, runs_all, parts_by_msg, q
+
+
+def _fmt_duration(sec: float) -> str:
+    a = abs(sec)
+    if a >= 86400 * 365:
+        return f"{sec / (86400 * 365.25):+.3g} years"
+    if a >= 86400:
+        return f"{sec / 86400:+.3g} days"
+    if a >= 3600:
+        return f"{sec / 3600:+.3g} h"
+    if a >= 60:
+        return f"{sec / 60:+.3g} min"
+    return f"{sec:+.3g} s"
+
+
+def _claim_text(run: dict) -> str:
+    lo, hi = run["claimed_ns"]
+    ref = run["before_ns"] if run["before_ns"] is not None else run["after_ns"]
+    if lo <= -(2 ** 62) or hi >= 2 ** 62:
+        what = "an impossible timestamp (a NaN or overflow stored as int64)"
+    elif ref is None:
+        what = "timestamps far from the rest"
+    else:
+        what = f"{_fmt_duration((lo - ref) * 1e-9)} from its neighbours"
+    n = run["frames"]
+    return f"{n} frame{'s' if n > 1 else ''} claiming {what}"
+
+
+def _time_base_excluded(runs: list, parts: dict, dec: dict, t0_ns: int) -> list[dict]:
+    """``ProcessResult.excluded`` entries for outlier timestamps (placed where they sit in
+    the file: between their kept neighbours) and for the time between joined parts."""
+    out = []
+    per_msg: dict = {}
+    for name, bus, r in runs:
+        k = per_msg[name] = per_msg.get(name, 0) + 1
+        if k > MAX_EXCLUDED_LISTED:
+            continue
+        a = r["before_ns"] if r["before_ns"] is not None else r["after_ns"]
+        b = r["after_ns"] if r["after_ns"] is not None else r["before_ns"]
+        out.append({"t0_s": (a - t0_ns) * 1e-9, "t1_s": (b - t0_ns) * 1e-9,
+                    "reason": f"outlier timestamp: {name} ({bus}) frames {r['first']}-{r['last']}: "
+                              f"{_claim_text(r)}; set aside",
+                    "message": name, "bus": bus, "frames": r["frames"],
+                    "claimed_t_s": [(c - t0_ns) * 1e-9 if abs(c) < 2 ** 62 else None for c in r["claimed_ns"]]})
+    for name, k in per_msg.items():
+        if k > MAX_EXCLUDED_LISTED:
+            out.append({"t0_s": 0.0, "t1_s": 0.0, "message": name,
+                        "reason": f"outlier timestamp: {k - MAX_EXCLUDED_LISTED} more places in {name} "
+                                  "(not listed one by one)"})
+    seen_bus = set()
+    for name, rngs in parts.items():
+        m = dec[name]
+        if m.bus in seen_bus:
+            continue
+        seen_bus.add(m.bus)
+        for (_, b), (c, _) in zip(rngs[:-1], rngs[1:]):
+            out.append({"t0_s": (int(m.timestamp_ns[b - 1]) - t0_ns) * 1e-9,
+                        "t1_s": (int(m.timestamp_ns[c]) - t0_ns) * 1e-9, "bus": m.bus,
+                        "reason": f"between two parts of bus {m.bus} joined out of order (sorted by time): "
+                                  "no data recorded"})
+    return out
 
 
 # --------------------------------------------------------------------------- log files
@@ -181,7 +449,8 @@ def _time_gaps(name: str, ts_ns: np.ndarray) -> tuple[dict, float]:
 LOG_SUFFIXES = (".log", ".asc", ".blf", ".trc")
 
 
-def _process_log(path: Path, *, config, rate_hz, cutoff_hz, progress) -> "ProcessResult":
+def _process_log(path: Path, *, config, rate_hz, cutoff_hz, progress, wheel_radius_m=None,
+                 inertia=True) -> "ProcessResult":
     """Import a candump/ASC/BLF/TRC log into a temporary MCAP, then process that."""
     import tempfile
     import warnings as _w
@@ -195,7 +464,8 @@ def _process_log(path: Path, *, config, rate_hz, cutoff_hz, progress) -> "Proces
         with _w.catch_warnings():
             _w.simplefilter("ignore", RuntimeWarning)  # listed in conv.warnings
             conv = import_log(path, mcap, config=cfg)
-        res = process_recording(mcap, config=cfg, rate_hz=rate_hz, cutoff_hz=cutoff_hz, progress=progress)
+        res = process_recording(mcap, config=cfg, rate_hz=rate_hz, cutoff_hz=cutoff_hz, progress=progress,
+                                wheel_radius_m=wheel_radius_m, inertia=inertia)
     res.warnings[:0] = [f"{path}: imported {sum(conv.frames.values())} frames "
                         f"({', '.join(f'{b}: {n}' for b, n in conv.frames.items())})"] + list(conv.warnings)
     return res
@@ -203,6 +473,7 @@ def _process_log(path: Path, *, config, rate_hz, cutoff_hz, progress) -> "Proces
 
 # --------------------------------------------------------------------------- main entry
 def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: float | None = None,
+                      wheel_radius_m: float | None = None, inertia: bool = True,
                       progress: bool = False) -> ProcessResult:
     """Decode, synchronise, filter and compute slip for one MCAP recording.
 
@@ -213,16 +484,27 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
     configuration attached to the recording, else ``dbc/vehicle.toml``);
     ``rate_hz`` output grid rate [Hz] (default 100); ``cutoff_hz`` low-pass
     cutoff [Hz] (default :data:`~.filters.DEFAULT_CUTOFF_HZ` = 5 Hz, capped at
-    0.4 x ``rate_hz`` so it also serves as anti-alias filter); ``progress``
-    shows a tqdm bar over the frames read.
+    0.4 x ``rate_hz`` so it also serves as anti-alias filter);
+    ``wheel_radius_m`` the radius r [m] for slip (Eq. 6), overriding the
+    configuration's (a different value is reported in ``warnings``; the fit
+    must use the same r: ``wheelsoil fit --wheel-radius`` passes it here);
+    ``inertia`` compensate the wheel assembly's inertia (hardware.md:
+    ``Dp = Fx + m_w dV/dt``, ``T = My - I_w domega/dt``, ``m_w``/``I_w`` from
+    the configuration; default on); ``progress`` shows a tqdm bar over the
+    frames read.
 
     Returns :class:`ProcessResult` (columns :data:`COLUMNS`, one row per grid
-    point from the first frame of the recording to the last). Slip is Eq. (6)
-    of the seed paper with r = ``config.wheel_radius_m``.
+    point from the first to the last frame of the messages processing reads,
+    once frames with outlier timestamps are set aside and parts of logs joined
+    out of order are sorted: :mod:`.timebase`; both reported in ``excluded``,
+    ``quality`` and ``warnings``). Slip is Eq. (6) of the seed paper with
+    r = ``wheel_radius_m`` or ``config.wheel_radius_m``.
 
     Raises: ``OSError`` unreadable file; ``ValueError`` not an MCAP
-    recording, bad options, or a recording holding none of the configured
-    messages (names what was looked for). Missing parts (no GNSS, no wheel
+    recording, bad options (an implausible ``wheel_radius_m``), or a recording
+    holding none of the configured messages (names what was looked for), parts
+    of joined logs that overlap in time (names the message, bus and frames), or
+    a run longer than :data:`~.timebase.MAX_GRID_ROWS` grid rows (memory bound). Missing parts (no GNSS, no wheel
     speed, no WFT, lost frames) are reported in ``warnings`` instead.
     """
     from wheelsoil.daq import iter_frame_batches
@@ -237,12 +519,26 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
     if cutoff > 0.4 * rate_hz:
         warns.append(f"cutoff {cutoff:g} Hz lowered to {0.4 * rate_hz:g} Hz (0.4 x the output rate, anti-alias)")
         cutoff = 0.4 * rate_hz
+    if wheel_radius_m is not None:
+        wheel_radius_m = check_wheel_radius(wheel_radius_m, "wheel_radius_m (--wheel-radius)")
     if not path.exists():
         raise OSError(f"{path}: no such file")
     if path.suffix.lower() in LOG_SUFFIXES:
-        return _process_log(path, config=config, rate_hz=rate_hz, cutoff_hz=cutoff_hz, progress=progress)
-    cfg = _resolve_config(path, config, warns)
-    r = float(cfg.wheel_radius_m)
+        return _process_log(path, config=config, rate_hz=rate_hz, cutoff_hz=cutoff_hz, progress=progress,
+                            wheel_radius_m=wheel_radius_m, inertia=inertia)
+    cfg, cfg_where = _resolve_config(path, config, warns)
+    warns.extend(f"{cfg_where}: {n}" for n in (getattr(cfg, "notes", None) or []))
+    cfg_r = float(cfg.wheel_radius_m)
+    if wheel_radius_m is None:
+        r = cfg_r
+        r_source = f"from {cfg_where}"
+    else:
+        r = wheel_radius_m
+        r_source = "given"
+        if not math.isclose(r, cfg_r, rel_tol=1e-6):
+            warns.append(f"WHEEL RADIUS CONFLICT: {r:g} m given, {cfg_where} says {cfg_r:g} m; slip (Eq. 6) "
+                         f"is computed with the given {r:g} m (and the fit must use it too): check which "
+                         "radius is right")
     sig = cfg.signals
     fronts = _front_wheel_refs(cfg)
 
@@ -263,8 +559,18 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
     n_frames = [0]
     buses_seen: dict[str, int] = {}
 
+    # the reader's damage report (byte offset, frames lost, time span), where the daq
+    # reader offers one (wheelsoil.daq.recording.ReadReport)
+    read_report = None
+    try:
+        from wheelsoil.daq.recording import ReadReport
+
+        read_report = ReadReport()
+    except ImportError:
+        pass
+
     def batches():
-        it = iter_frame_batches(path)
+        it = iter_frame_batches(path) if read_report is None else iter_frame_batches(path, report=read_report)
         bar = None
         if progress:
             from tqdm import tqdm
@@ -291,7 +597,8 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
         dec = decode_batches(batches(), decoder)
     # the reader's warnings (a truncated or damaged file) name the file
     warns += [str(c.message) for c in caught
-              if issubclass(c.category, RuntimeWarning) and str(path) in str(c.message)]
+              if issubclass(c.category, RuntimeWarning)
+              and (str(path) in str(c.message) or path.name in str(c.message))]
     if span[0] is None:
         raise ValueError(f"{path}: the recording holds no CAN frames" + "".join(f"; {w}" for w in warns))
 
@@ -311,9 +618,34 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
         raise ValueError(f"{path}: none of the configured messages found in {n_frames[0]} frames ({seen}) "
                          f"(looked for {looked}); wrong vehicle configuration or bus names?")
 
-    t0_ns = int(span[0])
-    n_grid = int(math.floor((span[1] - t0_ns) * 1e-9 * rate_hz)) + 1
+    # ---- 1b. time base: outlier timestamps set aside, joined parts sorted ------------------
+    dec, tb_runs, tb_parts, tb_quality = _clean_time_base(dec, path, warns)
+    if not dec:
+        raise ValueError(f"{path}: no frame of the configured messages has a usable timestamp")
+    t0_ns = min(int(m.timestamp_ns[0]) for m in dec.values())
+    t_end_ns = max(int(m.timestamp_ns[-1]) for m in dec.values())
+    span_s = (t_end_ns - t0_ns) * 1e-9
+    n_grid = int(math.floor(span_s * rate_hz)) + 1
+    if n_grid > MAX_GRID_ROWS:
+        raise ValueError(
+            f"{path}: the run spans {span_s:.0f} s ({span_s / 3600:.1f} h) after setting aside "
+            f"{tb_quality['outlier_frames']} frames with outlier timestamps: {n_grid} grid rows at {rate_hz:g} Hz, "
+            f"more than the {MAX_GRID_ROWS} processing holds in memory; split the recording (or lower --rate)")
     t_grid = np.arange(n_grid) / rate_hz
+    excluded: list[dict] = _time_base_excluded(tb_runs, tb_parts, dec, t0_ns)
+    quality: dict = {"timestamps": {**tb_quality, "grid_rows": n_grid, "span_s": span_s}}
+    damage = list(getattr(read_report, "damage", None) or [])
+    if damage:
+        quality["damage"] = damage
+        for d in damage:
+            a, b = d.get("t0_ns"), d.get("t1_ns")
+            lost = d.get("frames_lost")
+            excluded.append({
+                "t0_s": (a - t0_ns) * 1e-9 if a is not None else None,
+                "t1_s": (b - t0_ns) * 1e-9 if b is not None else None,
+                "reason": f"damaged recording ({d.get('kind')}) at byte {d.get('offset')}: "
+                          f"{'unknown number of' if lost is None else lost} frames lost",
+                "offset": d.get("offset")})
 
     def rel_s(ts_ns: np.ndarray) -> np.ndarray:
         return (ts_ns - t0_ns) * 1e-9
@@ -322,7 +654,7 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
     nan = np.full(n_grid, np.nan)
 
     # ---- 2. WFT -------------------------------------------------------------------------
-    load = dp = torque = nan
+    load = dp = torque = fx_f = my_f = nan
     wft_period = None
     streams = {}
     for ckey, cols in (("wft_counter_force", ("wft_fx_w", "wft_fz_w")), ("wft_counter_moment", ("wft_my",)),
@@ -348,9 +680,23 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
         except ValueError as exc:
             ws = None
             warns.append(f"WFT counters unusable ({exc}): load, drawbar pull and torque not computed")
+            for name in streams:
+                lost_frames[name] = {"lost": None, "gaps": 0, "longest_gap_s": 0.0,
+                                     "received": int(streams[name][0].shape[0]),
+                                     "method": "counter unusable: loss unknown"}
         if ws is not None:
             wft_period = ws.period_s
             for name, rep in ws.reports.items():
+                # the time between joined parts was not recorded: not lost frames
+                joints = set()
+                if name in tb_parts:
+                    t_s = streams[name][0]
+                    rngs = tb_parts[name]
+                    joints = {(int(t_s[b - 1]), int(t_s[c])) for (_, b), (c, _) in zip(rngs[:-1], rngs[1:])}
+                if joints:
+                    between = [g for g in rep.gaps if (g[0], g[1]) in joints]
+                    rep.gaps = [g for g in rep.gaps if (g[0], g[1]) not in joints]
+                    rep.lost -= sum(g[2] for g in between)
                 longest = max(((b - a) * 1e-9 for a, b, _ in rep.gaps), default=0.0)
                 lost_frames[name] = {"lost": rep.lost, "gaps": len(rep.gaps), "longest_gap_s": longest,
                                      "counter_jumps": rep.jumps,
@@ -373,16 +719,29 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
                 fx, fz = rotate_to_hub(cols["wft_fx_w"], cols["wft_fz_w"], cols["wft_angle"])
                 fx[bad] = np.nan
                 fz[bad] = np.nan
-                dp = filter_to_grid(t_w, fx, ws.period_s, t_grid, cutoff)
+                fx_f = filter_to_grid(t_w, fx, ws.period_s, t_grid, cutoff)
                 load = filter_to_grid(t_w, fz, ws.period_s, t_grid, cutoff)
             else:
                 warns.append("WFT force or angle frames missing: load_n and drawbar_pull_n not computed (NaN)")
             if "wft_my" in cols:
                 my = np.where(bad, np.nan, cols["wft_my"])
-                torque = filter_to_grid(t_w, my, ws.period_s, t_grid, cutoff)
+                my_f = filter_to_grid(t_w, my, ws.period_s, t_grid, cutoff)
             else:
                 warns.append("WFT moment frames missing: torque_nm not computed (NaN)")
             total_lost = sum(rep.lost for rep in ws.reports.values())
+            joint_spans = [(e["t0_s"], e["t1_s"]) for e in excluded if "joined out of order" in e["reason"]]
+            long_runs = [(a, b) for a, b in segments(~ws.complete) if b - a > MAX_FILL_SAMPLES
+                         and not any(t_w[max(a - 1, 0)] <= j1 and t_w[min(b, t_w.size - 1)] >= j0
+                                     and (b - a) * ws.period_s > 0.5 * (j1 - j0) for j0, j1 in joint_spans)]
+            for a, b in long_runs[:MAX_EXCLUDED_LISTED]:
+                excluded.append({"t0_s": float(t_w[max(a - 1, 0)]), "t1_s": float(t_w[min(b, t_w.size - 1)]),
+                                 "reason": f"WFT: {b - a} samples lost (counter gap longer than "
+                                           f"{MAX_FILL_SAMPLES} samples): left invalid, not interpolated"})
+            if len(long_runs) > MAX_EXCLUDED_LISTED:
+                excluded.append({"t0_s": float(t_w[long_runs[MAX_EXCLUDED_LISTED][0]]),
+                                 "t1_s": float(t_w[min(long_runs[-1][1], t_w.size - 1)]),
+                                 "reason": f"WFT: {len(long_runs) - MAX_EXCLUDED_LISTED} more gaps longer than "
+                                           f"{MAX_FILL_SAMPLES} samples (not listed one by one)"})
             if total_lost:
                 runs = [b - a for a, b in segments(~ws.complete)]
                 long_gaps = sum(1 for k in runs if k > MAX_FILL_SAMPLES)
@@ -398,7 +757,7 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
                      "still computed")
 
     # ---- 3a. wheel speeds -----------------------------------------------------------------
-    omega = nan
+    omega = domega = nan
     ws_ref = sig["wheel_speed"]
     got = get("wheel_speed")
     wss_t = wss_rel = None
@@ -410,13 +769,21 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
                      "forces and speed still computed")
     else:
         wss_t, w_rl = got
-        rep, period = _time_gaps(ws_ref.message, wss_t)
+        rep, period = _time_gaps(ws_ref.message, wss_t, *cfg.cycle_time_s(ws_ref.bus, ws_ref.message),
+                                 parts=tb_parts.get(ws_ref.message))
         lost_frames[ws_ref.message] = rep
         wss_rel = rel_s(wss_t)
-        omega = filter_to_grid(wss_rel, w_rl, period, t_grid, cutoff)
+        omega, domega = filter_to_grid(wss_rel, w_rl, period, t_grid, cutoff, derivative=True)
+
+    # ---- 3a'. inertia: T = My - I_w domega/dt (hardware.md) ------------------------------
+    m_w, i_w = float(cfg.wheel_mass_kg), float(cfg.wheel_inertia_kgm2)
+    torque = my_f - i_w * domega if inertia else my_f
+    if inertia and np.isfinite(my_f).any() and not np.isfinite(domega).any():
+        warns.append("inertia compensation needs the wheel speed (domega/dt): torque_nm is NaN; "
+                     "my_nm has the measured, uncompensated My")
 
     # ---- 3b. GNSS speed, GPS time, latency ---------------------------------------------
-    speed = nan
+    speed = dspeed = nan
     latency: LatencyEstimate | None = None
     lat_ref = ""
     g_fwd, g_spd = get("gnss_forward_velocity"), get("gnss_speed")
@@ -450,7 +817,8 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
         except ValueError as exc:
             warns.append(f"GPS time mapping not possible: {exc}")
     if g_t is not None:
-        rep, g_period = _time_gaps(g_msg, g_t)
+        g_bus = dec[g_msg].bus
+        rep, g_period = _time_gaps(g_msg, g_t, *cfg.cycle_time_s(g_bus, g_msg), parts=tb_parts.get(g_msg))
         lost_frames[g_msg] = rep
         g_rel = rel_s(g_t)
         # latency reference: free-rolling front wheels, else the measured wheel at low torque
@@ -472,17 +840,67 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
             dv = np.gradient(np.nan_to_num(ref_f), ref_t)
             use = dv > -LATENCY_MAX_DECEL_MPS2
             usable = use if usable is None else (usable & use)
+            lat_err = ""
             try:
                 latency = estimate_latency(g_rel, g_v, ref_t, ref_f, usable_ref=usable)
-                if latency.note:
-                    warns.append(f"GNSS latency: {latency.note}")
             except ValueError as exc:
-                warns.append(f"GNSS latency not estimated ({exc}); GNSS timestamps used as received")
+                lat_err = str(exc)
+            # front wheels that turn exactly with the measured wheel while it is driven (a 4x4
+            # with locked differentials) are no free-rolling reference: check against physics
+            coupled = f_series and wss_t is not None and _fronts_coupled(ft, fv, wss_t, got[1] * r)
+            if coupled or (latency is not None and latency.note) or lat_err:
+                alt = _force_latency(g_rel, g_v, g_period, t_grid, fx_f, min(cutoff, 0.4 / g_period))
+                disagree = (latency is not None and alt is not None and abs(alt.latency_s - latency.latency_s)
+                            > 3.0 * math.hypot(alt.stderr_s, latency.stderr_s))
+                if alt is not None and not alt.note and (latency is None or latency.note or disagree):
+                    why = ("the front wheels turn with the measured wheel (all wheels driven?), so they are no "
+                           "free-rolling reference" if coupled else
+                           f"the wheel-speed reference gave {'no estimate' if latency is None else latency.note}")
+                    warns.append(f"GNSS latency from the GNSS acceleration against the measured drawbar pull "
+                                 f"(m dV/dt follows Fx): {why}"
+                                 + (f"; the wheel-speed reference said {latency.latency_s * 1e3:.1f} ms"
+                                    if latency is not None else ""))
+                    latency, lat_err = alt, ""
+                    lat_ref = "GNSS dV/dt against the measured Fx (vehicle dynamics)"
+                elif coupled and latency is not None:
+                    warns.append("GNSS latency: the front wheels turn with the measured wheel (all wheels driven?); "
+                                 "the estimate from them agrees with the one from the GNSS acceleration against "
+                                 "the measured drawbar pull" if alt is not None else
+                                 "GNSS latency: the front wheels turn with the measured wheel (all wheels "
+                                 "driven?) and may not roll freely; no independent check was possible")
+            if latency is not None and latency.note:
+                warns.append(f"GNSS latency: {latency.note}")
+            if latency is None:
+                warns.append(f"GNSS latency not estimated ({lat_err}); GNSS timestamps used as received")
         else:
             warns.append("GNSS latency not estimated: no free-rolling wheel speed to compare with; "
                          "GNSS timestamps used as received")
         shift = latency.latency_s if latency is not None else 0.0
-        speed = filter_to_grid(g_rel - shift, g_v, g_period, t_grid, min(cutoff, 0.4 / g_period))
+        speed, dspeed = filter_to_grid(g_rel - shift, g_v, g_period, t_grid, min(cutoff, 0.4 / g_period),
+                                       derivative=True)
+
+    # ---- 3c. inertia: Dp = Fx + m_w dV/dt (hardware.md) ----------------------------------
+    dp = fx_f + m_w * dspeed if inertia else fx_f
+    if inertia and np.isfinite(fx_f).any() and not np.isfinite(dspeed).any():
+        warns.append("inertia compensation needs the vehicle speed (dV/dt): drawbar_pull_n is NaN; "
+                     "fx_n has the measured, uncompensated Fx")
+    if inertia:
+        corr_f = m_w * dspeed[np.isfinite(fx_f) & np.isfinite(dspeed)]
+        corr_t = i_w * domega[np.isfinite(my_f) & np.isfinite(domega)]
+        inertia_info = {
+            "applied": True, "wheel_mass_kg": m_w, "wheel_inertia_kgm2": i_w,
+            "max_abs_force_n": float(np.max(np.abs(corr_f))) if corr_f.size else None,
+            "max_abs_torque_nm": float(np.max(np.abs(corr_t))) if corr_t.size else None,
+            "method": "Dp = Fx + m_w dV/dt, T = My - I_w domega/dt; dV/dt and domega/dt are derivatives "
+                      "(cubic spline) of V and omega after the same zero-phase low-pass as Fx and My",
+            "source": cfg_where,
+        }
+    else:
+        inertia_info = {"applied": False, "wheel_mass_kg": m_w, "wheel_inertia_kgm2": i_w,
+                        "max_abs_force_n": None, "max_abs_torque_nm": None,
+                        "reason": "switched off (inertia=False / --no-inertia)", "source": cfg_where}
+        warns.append("inertia not compensated (--no-inertia): drawbar_pull_n and torque_nm include the wheel "
+                     f"assembly's inertia (m_w = {m_w:g} kg, I_w = {i_w:g} kg m^2)")
 
     # ---- 4. slip, phase, cycles, valid --------------------------------------------------------
     rw = r * omega
@@ -501,6 +919,16 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
         warns.append(f"slip undefined (NaN) for {np.count_nonzero(undefined) / rate_hz:.1f} s where "
                      f"r*omega < {MIN_WHEEL_SPEED_MPS} m/s (longest run {longest:.1f} s){why}; "
                      "load, drawbar pull, torque and speed still computed there")
+    for name, m in dec.items():  # every other message read (GNSS time/speed...): against its cycle time
+        if name not in lost_frames and len(m):
+            lost_frames[name] = _time_gaps(name, m.timestamp_ns, *cfg.cycle_time_s(m.bus, name),
+                                           parts=tb_parts.get(name))[0]
+    unknown = sorted(k for k, d in lost_frames.items() if d["lost"] is None)
+    quality["lost_frames"] = {k: d["lost"] for k, d in lost_frames.items()}
+    quality["lost_frames_known_total"] = int(sum(d["lost"] for d in lost_frames.values() if d["lost"] is not None))
+    quality["lost_frames_unknown"] = unknown
+    for k in unknown:
+        warns.append(f"{k}: lost frames unknown ({lost_frames[k]['method']})")
     out_range = np.isfinite(slip) & ~in_range
     if out_range.any():
         warns.append(f"slip outside [-1, 1) in {np.count_nonzero(out_range)} samples: flagged invalid")
@@ -508,6 +936,7 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
     df = pd.DataFrame({
         "t_s": t_grid, "slip": slip, "load_n": load, "drawbar_pull_n": dp, "torque_nm": torque,
         "speed_mps": speed, "omega_radps": omega, "phase": phase.astype(object), "valid": valid,
+        "distance_m": _distance(speed, 1.0 / rate_hz), "fx_n": fx_f, "my_nm": my_f,
     }, columns=list(COLUMNS))
     return ProcessResult(
         signals=df,
@@ -517,4 +946,16 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
         t0_ns=t0_ns, rate_hz=float(rate_hz), cutoff_hz=cutoff, wheel_radius_m=r,
         wheel_width_m=float(cfg.wheel_width_m),
         latency_reference=lat_ref if latency is not None else "", latency_detail=latency,
+        wheel_radius_source=r_source, inertia=inertia_info, excluded=excluded, quality=quality,
     )
+
+
+def _distance(speed: np.ndarray, dt: float) -> np.ndarray:
+    """Travelled distance [m] (N,): trapezoidal integral of V [m/s] (N,) on a grid of step ``dt``
+    [s], from 0 at the first finite V; no distance accrues across NaN; NaN where V is NaN."""
+    v = np.asarray(speed, dtype=np.float64)
+    fin = np.isfinite(v)
+    inc = np.where(fin[1:] & fin[:-1], 0.5 * (np.nan_to_num(v[1:]) + np.nan_to_num(v[:-1])) * dt, 0.0)
+    d = np.concatenate([[0.0], np.cumsum(inc)])
+    d[~fin] = np.nan
+    return d

@@ -54,15 +54,30 @@ def unwrap_counter(timestamp_ns: np.ndarray, counter: np.ndarray, *, modulo: int
     if period_s is None:
         if not np.any(d == 1):
             raise ValueError("counter never advances by one: cannot estimate the sample period")
-        # elapsed time over counter advance in windows of up to 64 frames: host
-        # timestamps of bursty adapters (USB, UDP) put many consecutive frames
-        # microseconds apart, so a per-step median would be far too small
-        w = int(min(64, dt.shape[0]))
+        # elapsed time over counter advance in windows of frames: host timestamps of
+        # bursty adapters (USB, UDP) put many consecutive frames microseconds apart and
+        # the next burst tens of ms later, so a per-step median would be far too small.
+        # A first estimate over 64-frame windows is biased by the burst quantisation
+        # (20 ms bursts: ~6 %, enough to miscount a gap of several wraps), so it is
+        # refined over windows of up to 1024 frames (~2 s at 500 Hz) that contain no
+        # step long enough to hide a counter wrap.
         ct = np.concatenate([[0.0], np.cumsum(dt)])
         cd = np.concatenate([[0], np.cumsum(d)])
-        span_t, span_d = ct[w:] - ct[:-w], cd[w:] - cd[:-w]
-        ok = (span_d > 0) & (span_d <= 2 * w)
-        period_s = float(np.median(span_t[ok] / span_d[ok])) if ok.any() else float(np.median(dt[d == 1]))
+
+        def windowed(w, ok_steps=None):
+            span_t, span_d = ct[w:] - ct[:-w], cd[w:] - cd[:-w]
+            ok = (span_d > 0) & (span_d <= 2 * w)
+            if ok_steps is not None:
+                bad = np.concatenate([[0], np.cumsum(~ok_steps)])
+                ok &= (bad[w:] - bad[:-w]) == 0
+            return float(np.median(span_t[ok] / span_d[ok])) if ok.any() else None
+
+        period_s = windowed(int(min(64, dt.shape[0])))
+        if period_s is None:
+            period_s = float(np.median(dt[d == 1]))
+        elif period_s > 0:
+            fine = windowed(int(min(1024, dt.shape[0])), ok_steps=dt < 0.25 * modulo * period_s)
+            period_s = fine if fine is not None else period_s
         if not period_s > 0:
             raise ValueError("frames with consecutive counters share one timestamp: no sample period")
     expected = dt / period_s

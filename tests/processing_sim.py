@@ -26,6 +26,9 @@ R = 0.47
 FORCE_NOISE_N = 30.0
 MOMENT_NOISE_NM = 5.0
 GPS_EPOCH_UNIX_S = 315_964_800
+#: hardware.md: rim + tyre outboard of the WFT (and dbc/vehicle.toml's [vehicle] values).
+WHEEL_MASS_KG = 80.0
+WHEEL_INERTIA_KGM2 = 11.5
 
 
 @dataclass
@@ -38,6 +41,7 @@ class Truth:
     drawbar_pull_n: np.ndarray
     torque_nm: np.ndarray
     phase: np.ndarray
+    radius_m: float = R
 
 
 def _smooth(u):
@@ -45,7 +49,8 @@ def _smooth(u):
     return u * u * (3 - 2 * u)
 
 
-def truth_profile(n_cycles: int = 3, dt: float = 0.002, *, standstill_s: float = 1.5) -> Truth:
+def truth_profile(n_cycles: int = 3, dt: float = 0.002, *, standstill_s: float = 1.5,
+                  radius_m: float = R) -> Truth:
     """Accelerate-brake cycles: standstill, accel (slip sweep 0.05->0.8->0.1), cruise, brake."""
     v_parts, s_parts, ph = [], [], []
 
@@ -70,27 +75,82 @@ def truth_profile(n_cycles: int = 3, dt: float = 0.002, *, standstill_s: float =
     speed = np.concatenate(v_parts)
     slip = np.concatenate(s_parts)
     t = np.arange(speed.size) * dt
-    omega = np.where(speed > 0, speed / (R * (1 - slip)), 0.0)
+    omega = np.where(speed > 0, speed / (radius_m * (1 - slip)), 0.0)
     load = 11000.0 + 400.0 * np.sin(2 * np.pi * 0.3 * t) + 200.0 * np.sin(2 * np.pi * 1.1 * t)
     dp = load * (0.45 * (1 - np.exp(-np.maximum(slip, -0.5) / 0.15)) - 0.08)
     moving = _smooth(speed / 0.5)  # forces build up smoothly as the wheel starts rolling
     dp = dp * moving
-    torque = R * (dp + 0.1 * load) * moving
-    return Truth(t, speed, slip, omega, load, dp, torque, np.concatenate(ph))
+    torque = radius_m * (dp + 0.1 * load) * moving
+    return Truth(t, speed, slip, omega, load, dp, torque, np.concatenate(ph), radius_m)
+
+
+def truth_dynamic(n_cycles: int = 3, dt: float = 0.002, *, mass_kg: float = 8000.0,
+                  radius_m: float = R) -> Truth:
+    """A run whose vehicle speed follows the soil forces (all wheels alike, as in a 4x4 with
+    locked differentials): ``dV/dt = (4 Dp - 600 N) / mass_kg``; accelerate 6 s (slip sweep
+    0.05 -> 0.5 -> 0.05), brake at slip -0.05 until V < 1.2 m/s, roll 1 s; from V = 1 m/s."""
+    load0 = 11000.0
+    v, t = 1.0, 0.0
+    ts, vs, ss, ph = [], [], [], []
+
+    def dp_of(s, load):
+        return load * (0.45 * (1 - np.exp(-s / 0.15)) - 0.08)
+
+    def step(s, phase):
+        nonlocal v, t
+        load = load0 + 400.0 * np.sin(2 * np.pi * 0.3 * t)
+        ts.append(t), vs.append(v), ss.append(s), ph.append(phase)
+        v = max(v + dt * (4 * dp_of(s, load) - 600.0) / mass_kg, 0.05)
+        t += dt
+
+    for _ in range(n_cycles):
+        for u in np.arange(0, 1, dt / 6.0):
+            step(0.05 + 0.45 * np.sin(np.pi * u) ** 2, "accel")
+        k = 0
+        while v > 1.2 or k < 250:
+            step(-0.05 * min(k / 250, 1.0), "brake")
+            k += 1
+        for _ in range(500):
+            step(0.02, "other")
+    t_s, speed, slip = np.array(ts), np.array(vs), np.array(ss)
+    load = load0 + 400.0 * np.sin(2 * np.pi * 0.3 * t_s)
+    dp = dp_of(slip, load)
+    omega = speed / (radius_m * (1 - slip))
+    torque = radius_m * (dp + 0.1 * load)
+    return Truth(t_s, speed, slip, omega, load, dp, torque, np.array(ph, dtype=object), radius_m)
 
 
 def write_recording(path, truth: Truth, *, latency_s: float = 0.1, seed: int = 0,
                     gps_offset_s: float = 1234.5678, no_gnss: bool = False, no_wheel_speed: bool = False,
                     drop_wft_bursts: int = 0, counter_jumps: int = 0,
-                    wheel_speed_zero: tuple[float, float] | None = None) -> dict:
+                    wheel_speed_zero: tuple[float, float] | None = None,
+                    wheel_mass_kg: float = WHEEL_MASS_KG, wheel_inertia_kgm2: float = WHEEL_INERTIA_KGM2,
+                    config=None, ts_edit=None, drop_wft_runs=(), drop_frames: dict | None = None,
+                    burst_s: float = 0.0, fronts_coupled: bool = False) -> dict:
     """Encode ``truth`` as frames and write an MCAP recording.
-
-    Returns ``{"path", "lost_samples", "start_ns"}`` (WFT samples dropped).
 
     ``drop_wft_bursts``: that many runs of 1..12 lost WFT samples;
     ``counter_jumps``: that many random jumps of the WFT counter (all three
     messages) by 17..200 without lost time; ``wheel_speed_zero`` (t0, t1):
     the measured wheel's speed reads 0 rpm in that window.
+
+    The WFT measures what the wheel assembly transmits (hardware.md):
+    ``Fx = Dp - m_w dV/dt``, ``My = T + I_w domega/dt`` with ``wheel_mass_kg``,
+    ``wheel_inertia_kgm2`` (0 for none); ``truth`` holds the soil's Dp and T.
+    ``config`` the VehicleConfig attached (default: the shipped one);
+    ``ts_edit(bus, ts_ns) -> ts_ns`` edits a bus's int64 timestamps (in
+    file order) before writing, for time-base tests (or returns ``(ts_ns,
+    perm)`` to also reorder the frames: ``perm`` indexes the sorted frames); ``drop_wft_runs``
+    ``[(t_s, n_samples), ...]`` removes runs of WFT samples (all three
+    messages); ``drop_frames`` ``{message name: fraction}`` drops that share
+    of a message's frames at random (no counter tells); ``burst_s`` > 0
+    delivers each bus's frames in bursts: receive times rounded up to the
+    next multiple of ``burst_s`` (as USB/UDP adapters do); ``fronts_coupled``:
+    the front wheels turn with the measured one (all wheels driven, locked
+    differentials) instead of rolling freely.
+
+    Returns ``{"path", "lost_samples", "start_ns", "dropped_frames"}``
+    (``dropped_frames``: message -> frames removed by ``drop_frames``).
     """
     rng = np.random.default_rng(seed)
     wft = cantools.database.load_file(str(DBC / "wft.dbc"))
@@ -106,15 +166,20 @@ def write_recording(path, truth: Truth, *, latency_s: float = 0.1, seed: int = 0
     # ---- WFT, 500 Hz
     angle = np.cumsum(truth.omega_radps) * (t[1] - t[0])
     ca, sa = np.cos(angle), np.sin(angle)
-    fx_w = truth.drawbar_pull_n * ca - truth.load_n * sa + rng.normal(0, FORCE_NOISE_N, n)
-    fz_w = truth.drawbar_pull_n * sa + truth.load_n * ca + rng.normal(0, FORCE_NOISE_N, n)
-    my = truth.torque_nm + rng.normal(0, MOMENT_NOISE_NM, n)
+    fx_hub = truth.drawbar_pull_n - wheel_mass_kg * np.gradient(truth.speed_mps, t)
+    my_hub = truth.torque_nm + wheel_inertia_kgm2 * np.gradient(truth.omega_radps, t)
+    fx_w = fx_hub * ca - truth.load_n * sa + rng.normal(0, FORCE_NOISE_N, n)
+    fz_w = fx_hub * sa + truth.load_n * ca + rng.normal(0, FORCE_NOISE_N, n)
+    my = my_hub + rng.normal(0, MOMENT_NOISE_NM, n)
     counter = np.arange(n) % 256
     for j in rng.integers(100, n - 100, counter_jumps):
         counter[j:] = (counter[j:] + rng.integers(17, 200)) % 256
     keep = np.ones(n, bool)
     for j in rng.integers(100, n - 100, drop_wft_bursts):
         keep[j:j + rng.integers(1, 13)] = False
+    for t_drop, k in drop_wft_runs:
+        j = int(np.searchsorted(t, t_drop))
+        keep[j:j + int(k)] = False
     m_f, m_m, m_a = (wft.get_message_by_name(x) for x in ("WFT_RL_Force", "WFT_RL_Moment", "WFT_RL_Angle"))
     can0 = []
     for i in np.flatnonzero(keep):
@@ -143,10 +208,13 @@ def write_recording(path, truth: Truth, *, latency_s: float = 0.1, seed: int = 0
         for tw in np.arange(0.003, t[-1], 0.01):
             v = np.interp(tw, t, truth.speed_mps)
             om = np.interp(tw, t, truth.omega_radps)
+            if fronts_coupled:
+                v = om * truth.radius_m
             if wheel_speed_zero and wheel_speed_zero[0] <= tw < wheel_speed_zero[1]:
                 om = 0.0
             rpm = lambda w: float(np.clip(abs(w * (1 + rng.normal(0, 0.002))) * 60 / (2 * np.pi), 0, 655))
-            can1.append((tw, m_ws, m_ws.encode({"WheelSpeed_FL": rpm(v / R), "WheelSpeed_FR": rpm(v / R),
+            can1.append((tw, m_ws, m_ws.encode({"WheelSpeed_FL": rpm(v / truth.radius_m),
+                                                 "WheelSpeed_FR": rpm(v / truth.radius_m),
                                                  "WheelSpeed_RL": rpm(om), "WheelSpeed_RR": rpm(om)})))
     # ---- GNSS, 20 Hz fixes on the GPS clock, received latency_s later
     if not no_gnss:
@@ -170,15 +238,27 @@ def write_recording(path, truth: Truth, *, latency_s: float = 0.1, seed: int = 0
             can1.append((rx + 4e-4, m_t, m_t.encode({"GPS_Week": week, "GPS_Time": round(gfix - week * 604800, 3),
                                                       "Accuracy_GPS_Time": 3, "Validity_GPS_Week": 1,
                                                       "Validity_GPS_Time": 1})))
-    cfg = load_vehicle_config()
+    dropped: dict = {}
+    cfg = load_vehicle_config() if config is None else config
     path = Path(path)
     with RecordingWriter(path, config=cfg, metadata={"source": "tests/processing_sim.py"}) as w:
         for bus, frames in (("can0", can0), ("can1", can1)):
             if not frames:
                 continue
             frames.sort(key=lambda f: f[0])
+            if drop_frames:
+                before: dict = {}
+                for f in frames:
+                    before[f[1].name] = before.get(f[1].name, 0) + 1
+                frames = [f for f in frames if rng.random() >= drop_frames.get(f[1].name, 0.0)]
+                for f in frames:
+                    before[f[1].name] -= 1
+                dropped.update({k: v for k, v in before.items() if k in drop_frames})
             ts = np.array([f[0] for f in frames]) + jitter(len(frames))
             ts = np.sort(ts)
+            if burst_s > 0:
+                ts = np.ceil(ts / burst_s) * burst_s + np.arange(ts.size) % 50 * 2e-6
+                ts = np.sort(ts)
             ids = np.array([f[1].frame_id for f in frames], np.uint32)
             ext = np.array([f[1].is_extended_frame for f in frames], np.uint8)
             dlc = np.array([len(f[2]) for f in frames], np.uint8)
@@ -186,7 +266,13 @@ def write_recording(path, truth: Truth, *, latency_s: float = 0.1, seed: int = 0
             for i, f in enumerate(frames):
                 data[i, :len(f[2])] = np.frombuffer(f[2], np.uint8)
             ts_ns = start_ns + np.round(ts * 1e9).astype(np.int64)
+            if ts_edit is not None:
+                edited = ts_edit(bus, ts_ns.copy())
+                if isinstance(edited, tuple):  # (timestamps, permutation of the frames in file order)
+                    edited, perm = edited
+                    ids, ext, dlc, data = ids[perm], ext[perm], dlc[perm], data[perm]
+                ts_ns = np.asarray(edited, dtype=np.int64)
             for a in range(0, len(frames), 2000):
                 w.write_batch(FrameBatch.from_columns(bus, ts_ns[a:a + 2000], ids[a:a + 2000], ext[a:a + 2000],
                                                       dlc[a:a + 2000], data[a:a + 2000]))
-    return {"path": path, "lost_samples": int(n - keep.sum()), "start_ns": start_ns}
+    return {"path": path, "lost_samples": int(n - keep.sum()), "start_ns": start_ns, "dropped_frames": dropped}

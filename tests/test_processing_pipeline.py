@@ -121,7 +121,10 @@ def test_no_wheel_speed(tmp_path, short_truth):
     assert any("no wheel speed" in w for w in res.warnings)
     assert any("latency not estimated" in w for w in res.warnings)
     assert s["omega_radps"].isna().all() and s["slip"].isna().all() and not s["valid"].any()
-    assert s["speed_mps"].notna().mean() > 0.95 and s["drawbar_pull_n"].notna().mean() > 0.99
+    assert s["speed_mps"].notna().mean() > 0.95 and s["fx_n"].notna().mean() > 0.99
+    # Dp = Fx + m_w dV/dt is there wherever V is (the inertia correction needs dV/dt)
+    assert (s["drawbar_pull_n"].notna() == (s["speed_mps"].notna() & s["fx_n"].notna())).mean() > 0.99
+    assert s["torque_nm"].isna().all() and s["my_nm"].notna().mean() > 0.99  # T needs domega/dt
 
 
 def test_jumping_wft_counter(tmp_path, short_truth):

@@ -27,7 +27,7 @@ WFT, WSS, GPS = _db("wft"), _db("wheel_speed"), _db("gps_rt_speedbox")
 
 @pytest.fixture(scope="module")
 def run():
-    return simulate_run(load_terrain("clay"), effect="vasilev", params={"H": 0.05}, seed=11,
+    return simulate_run(load_terrain("clay"), effect="vasilev", params={"H": 0.05}, seed=11, wheel=(0.55, 0.40),
                         duration_s=60.0, gnss_latency_s=0.12, drop_rate=0.02)
 
 
@@ -86,7 +86,7 @@ def test_counter_shared_and_gaps_match_dropped_samples(run):
     assert lost == run.info["lost_wft_samples"]
     n_samples = len(run.truth)
     assert 0.01 < lost / n_samples < 0.03  # drop_rate 0.02
-    clean = simulate_run(load_terrain("clay"), seed=11, duration_s=40.0)
+    clean = simulate_run(load_terrain("clay"), seed=11, duration_s=40.0, wheel=(0.55, 0.40))
     _, data, _ = _frames_of(clean, "can0", 0x120)
     assert np.all(np.diff(data[:, 6].astype(int)) % 256 == 1)
 
@@ -140,7 +140,8 @@ def test_wft_frames_decode_to_truth_in_hub_frame(run):
     assert np.array_equal(cnt, [d["Counter"] for d in angle])
     truth = run.truth.iloc[k_all[sl]]
     # 20 N noise per component -> residual std ~20 N; angle quantisation adds < 1 N
-    for meas, true, sd in ((fx, truth.drawbar_pull_n, 20.0), (fz, truth.load_n, 20.0), (my, truth.torque_nm, 4.0)):
+    # the transducer's hub values: Fx = Dp - m_w dV/dt, My = T + I_w domega/dt (hardware.md)
+    for meas, true, sd in ((fx, truth.fx_n, 20.0), (fz, truth.load_n, 20.0), (my, truth.my_nm, 4.0)):
         res = meas - true.to_numpy()
         assert abs(res.mean()) < 3 * sd / math.sqrt(n) + 1.0
         assert 0.7 * sd < res.std() < 1.4 * sd
@@ -163,12 +164,21 @@ def test_wheel_speed_frames_decode_to_truth(run):
     moving = om_true > 2.0
     rel = (om[moving] - om_true[moving]) / om_true[moving]
     assert np.sqrt(np.mean(rel**2)) < 0.01
-    # front wheels roll freely: r*omega_f ~ V while driving
-    v_true = np.interp(t, (run.truth.t_host_ns - run.truth.t_host_ns.iloc[0]) * 1e-9, run.truth.speed_mps)
+    # 4x4, locked differentials: every wheel turns at the instrumented wheel's omega (tyre tolerance 0.3 %)
+    for name in ("WheelSpeed_FL", "WheelSpeed_FR", "WheelSpeed_RR"):
+        om_o = np.array([d[name] for d in dec]) * 2 * np.pi / 60
+        assert np.median(np.abs(om_o[moving] / om_true[moving] - 1)) < 0.006
+
+
+def test_reference_front_wheels_carry_the_vehicle_speed():
+    r = simulate_run(load_terrain("sand"), seed=12, duration_s=30.0, added_load_n=5000, front_wheels="reference")
+    ts, data, dlc = _frames_of(r, "can1", 0x300)
+    dec = _decode(WSS, 0x300, data[::5], dlc[::5])
+    t = (ts[::5] - r.truth.t_host_ns.iloc[0]) * 1e-9
+    v_true = np.interp(t, (r.truth.t_host_ns - r.truth.t_host_ns.iloc[0]) * 1e-9, r.truth.speed_mps)
     om_f = np.array([d["WheelSpeed_FL"] for d in dec]) * 2 * np.pi / 60
-    drive = (v_true > 1.0) & (np.interp(t, (run.truth.t_host_ns - run.truth.t_host_ns.iloc[0]) * 1e-9,
-                                         np.nan_to_num(run.truth.slip)) > 0)
-    assert np.median(np.abs(0.47 * om_f[drive] - v_true[drive]) / v_true[drive]) < 0.02
+    drive = v_true > 1.0
+    assert np.median(np.abs(0.47 * om_f[drive] - v_true[drive]) / v_true[drive]) < 0.015
 
 
 def test_gnss_latency_and_gps_clock(run):
@@ -194,18 +204,19 @@ def test_gnss_latency_and_gps_clock(run):
 def test_slip_truth_is_eq6_and_sweeps_to_high_slip(run):
     tr = run.truth
     mv = tr.speed_mps > 0.1
-    s = (0.47 * tr.omega_radps[mv] - tr.speed_mps[mv]) / (0.47 * tr.omega_radps[mv])
+    s = (0.55 * tr.omega_radps[mv] - tr.speed_mps[mv]) / (0.55 * tr.omega_radps[mv])
     assert np.allclose(s, tr.slip[mv], atol=1e-9)
     acc = tr[tr.phase == "accel"]
     assert acc.slip.max() > 0.8 and acc.slip.min() < 0.1
     assert (tr[tr.phase == "brake"].slip < 0).mean() > 0.5
-    assert (tr.phase == "standstill").any()
-    assert tr.load_n.mean() == pytest.approx(11000, rel=0.03)
+    # standstills when the vehicle can pull away from rest; else it starts rolling (soft soil)
+    assert (tr.phase == "standstill").any() == run.info["vehicle"]["can_start"]
+    assert tr.load_n.mean() == pytest.approx(11000, rel=0.05)
 
 
 def test_same_seed_same_frames_and_bad_input():
-    a = simulate_run(load_terrain("sand"), effect="ding", seed=5, duration_s=30.0)
-    b = simulate_run(load_terrain("sand"), effect="ding", seed=5, duration_s=30.0)
+    a = simulate_run(load_terrain("sand"), effect="ding", seed=5, duration_s=30.0, size=0.2)
+    b = simulate_run(load_terrain("sand"), effect="ding", seed=5, duration_s=30.0, size=0.2)
     assert a.info == b.info
     assert np.array_equal(a.frames["can0"]["data"], b.frames["can0"]["data"])
     with pytest.raises(ValueError, match="effect"):
@@ -217,13 +228,13 @@ def test_same_seed_same_frames_and_bad_input():
 
 
 def test_usb_batching_stamps_frames_in_bursts():
-    r = simulate_run(load_terrain("clay"), seed=2, duration_s=30.0, usb_batching_s=0.001)
+    r = simulate_run(load_terrain("sand"), seed=2, duration_s=30.0, usb_batching_s=0.001)
     ts = r.frames["can0"]["timestamp_ns"]
     gaps = np.diff(ts) * 1e-9
     assert np.all(gaps >= 0)
-    # a sample's three frames arrive in one burst, microseconds apart; bursts are
-    # whole poll periods apart
-    assert np.mean(gaps < 20e-6) > 0.5
+    # frames of one poll arrive in one burst, microseconds apart (3 frames per 2 ms sample, 2 polls
+    # per sample: at least a third of the gaps); bursts are whole poll periods apart
+    assert np.mean(gaps < 20e-6) > 0.3
     big = gaps[gaps > 200e-6] / 0.001
     assert np.mean(np.abs(big - np.round(big)) < 0.05) > 0.95
     assert r.info["usb_batching_s"] == 0.001

@@ -33,7 +33,7 @@ def _read_table(path: Path):
     return df
 
 
-def load_inputs(inputs, *, progress: bool = False):
+def load_inputs(inputs, *, progress: bool = False, wheel_radius_m: float | None = None):
     """Read every input into one DataFrame for fitting.
 
     Returns ``(df, info)``: ``df`` has the fit columns plus ``run`` (input
@@ -41,13 +41,20 @@ def load_inputs(inputs, *, progress: bool = False):
     dict with ``kinds`` (per input: ``table``/``recording``), ``time_sync`` (per
     input latency values, None for tables), ``wheel_radius_m``/``wheel_width_m``
     from the first recording's vehicle config (None for tables) and ``notes``.
+    ``wheel_radius_m`` [m], when given, is the radius recordings compute slip
+    with (Eq. 6; ``process_recording(wheel_radius_m=...)``), so the fit's radius
+    is the slip radius; radius conflicts (recordings whose configurations
+    disagree, a table's ``wheel_radius_m`` column, or a table's slip of unknown
+    radius) are loud notes. ``processing`` lists per recording what processing
+    did (``wheel_radius_m``/``_source``, ``inertia``, ``excluded``, ``quality``
+    of ``ProcessResult``) for the report.
 
     Raises ValueError (naming the file) for a missing file, an unknown suffix,
     an unreadable table, or a recording processing cannot read.
     """
     import pandas as pd
 
-    frames, kinds, sync, notes = [], [], [], []
+    frames, kinds, sync, notes, processing = [], [], [], [], []
     radius = width = None
     for i, raw in enumerate(inputs):
         path = Path(raw)
@@ -57,7 +64,7 @@ def load_inputs(inputs, *, progress: bool = False):
         if suffix in RECORDING_SUFFIXES:
             from wheelsoil.processing import process_recording
 
-            res = process_recording(path, progress=progress)
+            res = process_recording(path, progress=progress, wheel_radius_m=wheel_radius_m)
             df = res.signals.copy()
             df["cycle"] = res.cycle
             kinds.append("recording")
@@ -68,11 +75,32 @@ def load_inputs(inputs, *, progress: bool = False):
                 "gps_time_mapping": res.gps_time_mapping,
             })
             notes.extend(f"{path.name}: {w}" for w in res.warnings)
+            processing.append({"input": str(path), "wheel_radius_m": res.wheel_radius_m,
+                               "wheel_radius_source": res.wheel_radius_source, "inertia": res.inertia,
+                               "excluded": res.excluded, "quality": res.quality})
             if radius is None:  # the first recording's vehicle configuration
                 radius, width = res.wheel_radius_m, res.wheel_width_m
+            elif abs(res.wheel_radius_m - radius) > 1e-6 * radius:
+                notes.append(f"WHEEL RADIUS CONFLICT: {path.name} computed slip with r = {res.wheel_radius_m:g} m "
+                             f"(its vehicle configuration), the first recording with {radius:g} m; the fit uses "
+                             f"{radius:g} m for all; give --wheel-radius to use one radius for slip and fit")
         elif suffix in TABLE_SUFFIXES:
             df = _read_table(path)
             kinds.append("table")
+            tr = (pd.to_numeric(df["wheel_radius_m"], errors="coerce").dropna().unique()
+                  if "wheel_radius_m" in df.columns else [])
+            if len(tr) > 1 or (len(tr) == 1 and wheel_radius_m is not None
+                               and abs(float(tr[0]) - wheel_radius_m) > 1e-6 * wheel_radius_m):
+                notes.append(f"WHEEL RADIUS CONFLICT: {path.name} states wheel_radius_m = "
+                             f"{', '.join(f'{float(x):g}' for x in tr)} m; the fit uses "
+                             f"{wheel_radius_m if wheel_radius_m is not None else float(tr[0]):g} m while the "
+                             "table's slip was computed with its own radius (Eq. 6)")
+            elif len(tr) == 1 and radius is None:
+                radius = float(tr[0])
+            elif wheel_radius_m is not None:
+                notes.append(f"{path.name}: the table's slip was computed outside wheelsoil with a radius it "
+                             f"does not state; the fit uses r = {wheel_radius_m:g} m: it must be the radius "
+                             "that slip (Eq. 6) was computed with")
             sync.append({"input": str(path), "gnss_latency_s": None})
         else:
             raise ValueError(
@@ -86,7 +114,8 @@ def load_inputs(inputs, *, progress: bool = False):
     df = pd.concat(frames, ignore_index=True, sort=False)
     if "t_s" in df.columns and df["t_s"].isna().any():  # tables mixed with recordings
         df["t_s"] = df["t_s"].fillna(df.groupby("run").cumcount().astype(float))
-    return df, {"kinds": kinds, "time_sync": sync, "wheel_radius_m": radius, "wheel_width_m": width, "notes": notes}
+    return df, {"kinds": kinds, "time_sync": sync, "wheel_radius_m": radius, "wheel_width_m": width, "notes": notes,
+                "processing": processing}
 
 
 def _time_sync_summary(sync: list) -> dict:
@@ -181,15 +210,19 @@ def run_fit(
         raise ValueError("no input given")
     if not 0.0 <= slip_min < 1.0:
         raise ValueError(f"--slip-min must be in [0, 1), got {slip_min}")
+    if wheel_radius is not None:  # the same plausibility check as the slip radius of processing
+        from wheelsoil.processing.pipeline import check_wheel_radius
+
+        wheel_radius = check_wheel_radius(wheel_radius, "--wheel-radius")
     ter = terrain if isinstance(terrain, Terrain) else load_terrain(terrain)
     models = list(models) if models else ["vasilev", "lyasko", "ding", "terrain_mismatch"]
     for m in models:
         if m not in CANDIDATES:
             raise ValueError(f"unknown model {m!r} in --models; choose from {', '.join(CANDIDATES)}")
     out = Path(out_dir)
-    df, info = load_inputs(inputs, progress=progress)
+    df, info = load_inputs(inputs, progress=progress, wheel_radius_m=wheel_radius)
     recording = "recording" in info["kinds"]
-    r = wheel_radius or (info["wheel_radius_m"] if recording and info["wheel_radius_m"] else DEFAULT_WHEEL.radius)
+    r = wheel_radius or (info["wheel_radius_m"] if info["wheel_radius_m"] else DEFAULT_WHEEL.radius)
     b = wheel_width or (info["wheel_width_m"] if recording and info["wheel_width_m"] else DEFAULT_WHEEL.width)
     wheel = Wheel(float(r), float(b))
     source = inputs[0] if len(inputs) == 1 else f"{len(inputs)} inputs"

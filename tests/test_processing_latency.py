@@ -1,0 +1,41 @@
+"""GNSS latency when the front wheels are no free-rolling reference (all wheels driven,
+locked differentials): found from the vehicle dynamics (GNSS dV/dt against the measured Fx),
+not left at the edge of the search range."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from processing_sim import truth_dynamic, write_recording  # noqa: E402
+
+from wheelsoil.processing import process_recording  # noqa: E402
+
+
+@pytest.fixture(scope="module")
+def truth():
+    return truth_dynamic(3)
+
+
+def test_coupled_front_wheels_latency_from_vehicle_dynamics(truth, tmp_path):
+    info = write_recording(tmp_path / "awd.mcap", truth, fronts_coupled=True, latency_s=0.1, seed=7)
+    res = process_recording(info["path"])
+    assert res.gnss_latency_s == pytest.approx(0.1, abs=0.02)
+    assert 0 < res.gnss_latency_stderr_s < 0.02
+    assert "vehicle dynamics" in res.latency_reference
+    assert any("front wheels turn with the measured wheel" in w for w in res.warnings)
+    s = res.signals
+    m = s["valid"].to_numpy() & (s["phase"] == "accel").to_numpy()
+    err = s["slip"].to_numpy()[m] - np.interp(s["t_s"].to_numpy()[m], truth.t_s, truth.slip)
+    assert np.sqrt(np.mean(err ** 2)) < 0.02
+
+
+def test_free_rolling_fronts_still_the_reference(truth, tmp_path):
+    info = write_recording(tmp_path / "rwd.mcap", truth, latency_s=0.1, seed=7)
+    res = process_recording(info["path"])
+    assert res.gnss_latency_s == pytest.approx(0.1, abs=0.005)
+    assert res.latency_reference.startswith("front wheels")

@@ -1,0 +1,90 @@
+"""One wheel radius (issue 10 item 1): the radius slip is computed with (Eq. 6) is the one
+given on the command line / in the call, reported, and the fit uses the same."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from processing_sim import truth_profile, write_recording  # noqa: E402
+
+from wheelsoil.processing import process_recording  # noqa: E402
+
+
+@pytest.fixture(scope="module")
+def small_wheel(tmp_path_factory):
+    """A 0.40 m wheel recorded with the default configuration (0.47 m) attached."""
+    truth = truth_profile(1, radius_m=0.40)
+    info = write_recording(tmp_path_factory.mktemp("radius") / "r40.mcap", truth, seed=2)
+    return truth, info["path"]
+
+
+def _slip_rms(res, truth):
+    s = res.signals
+    m = s["valid"].to_numpy() & (s["phase"] == "accel").to_numpy()
+    err = s["slip"].to_numpy()[m] - np.interp(s["t_s"].to_numpy()[m], truth.t_s, truth.slip)
+    return float(np.sqrt(np.mean(err ** 2)))
+
+
+def test_given_radius_is_the_slip_radius_and_conflict_is_loud(small_wheel):
+    truth, path = small_wheel
+    res = process_recording(path, wheel_radius_m=0.40)
+    assert res.wheel_radius_m == 0.40 and res.wheel_radius_source == "given"
+    assert _slip_rms(res, truth) < 0.01
+    conflict = [w for w in res.warnings if "WHEEL RADIUS CONFLICT" in w]
+    assert conflict and "0.4 m" in conflict[0] and "0.47 m" in conflict[0]
+    assert "wheel radius 0.4 m (given)" in res.summary()
+
+
+def test_config_radius_without_override(small_wheel):
+    truth, path = small_wheel
+    res = process_recording(path)
+    assert res.wheel_radius_m == 0.47 and "configuration" in res.wheel_radius_source
+    assert not any("WHEEL RADIUS CONFLICT" in w for w in res.warnings)
+    assert _slip_rms(res, truth) > 0.05  # the wrong radius gives the wrong slip
+
+
+@pytest.mark.parametrize("bad, match", [(470, "did you give mm"), (float("nan"), "plausible"),
+                                        (float("inf"), "plausible"), (-0.4, "plausible"), ("x", "number")])
+def test_implausible_radius_is_refused(small_wheel, bad, match):
+    _, path = small_wheel
+    with pytest.raises(ValueError, match=match):
+        process_recording(path, wheel_radius_m=bad)
+
+
+def test_fit_passes_its_radius_to_processing(small_wheel, tmp_path):
+    """pipeline.load_inputs (used by run_fit) computes slip with the fit's radius."""
+    import pandas as pd
+
+    from wheelsoil.pipeline import load_inputs
+
+    truth, path = small_wheel
+    df, info = load_inputs([path], wheel_radius_m=0.40)
+    assert info["wheel_radius_m"] == 0.40
+    assert any("WHEEL RADIUS CONFLICT" in n for n in info["notes"])
+    m = df["valid"].to_numpy() & (df["phase"] == "accel").to_numpy()
+    err = df["slip"].to_numpy()[m] - np.interp(df["t_s"].to_numpy()[m], truth.t_s, truth.slip)
+    assert np.sqrt(np.mean(err ** 2)) < 0.01
+    # a table that states another radius than the one given: a loud note
+    tab = tmp_path / "t.csv"
+    pd.DataFrame({"slip": [0.2, 0.3], "load_n": [1e4, 1e4], "drawbar_pull_n": [1e3, 2e3],
+                  "wheel_radius_m": [0.47, 0.47]}).to_csv(tab, index=False)
+    _, info = load_inputs([tab], wheel_radius_m=0.40)
+    assert any("WHEEL RADIUS CONFLICT" in n and "t.csv" in n for n in info["notes"])
+    _, info = load_inputs([tab])
+    assert info["wheel_radius_m"] == 0.47
+
+
+def test_fit_refuses_a_radius_in_mm(tmp_path):
+    import pandas as pd
+
+    from wheelsoil.pipeline import run_fit
+
+    tab = tmp_path / "t.csv"
+    pd.DataFrame({"slip": [0.2, 0.3], "load_n": [1e4, 1e4], "drawbar_pull_n": [1e3, 2e3]}).to_csv(tab, index=False)
+    with pytest.raises(ValueError, match=r"--wheel-radius = 470.*did you give mm"):
+        run_fit([tab], "clay", tmp_path / "out", wheel_radius=470)

@@ -1,0 +1,135 @@
+"""A robust time base (issue 12 item 4): outlier timestamps set aside and reported, logs
+joined out of order sorted (or refused when they overlap), the grid spans the run."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from processing_sim import truth_profile, write_recording  # noqa: E402
+
+from wheelsoil.processing import process_recording  # noqa: E402
+from wheelsoil.processing.timebase import find_time_outliers, split_joined_parts  # noqa: E402
+
+S = 10 ** 9
+DAY = 86400 * S
+I64 = np.iinfo(np.int64)
+
+
+@pytest.fixture(scope="module")
+def truth():
+    return truth_profile(1)
+
+
+@pytest.fixture(scope="module")
+def clean(truth, tmp_path_factory):
+    info = write_recording(tmp_path_factory.mktemp("clean") / "c.mcap", truth)
+    return process_recording(info["path"])
+
+
+def _set(i, value=None, add=0):
+    def edit(bus, ts):
+        if bus == "can0":
+            ts[i] = value if value is not None else ts[i] + add
+        return ts
+    return edit
+
+
+@pytest.mark.parametrize("edit, claim", [
+    (_set(4000, add=DAY), "+1 days"),
+    (_set(4000, value=I64.min), "impossible timestamp"),   # a NaN stored as int64
+    (_set(4000, value=I64.max), "impossible timestamp"),   # 1e20 saturated
+    (_set(0, value=I64.min), "impossible timestamp"),      # the very first frame
+    (_set(-1, add=-DAY), "-24 h"),                         # the very last frame
+])
+def test_one_outlier_timestamp_is_set_aside(truth, clean, tmp_path, edit, claim):
+    info = write_recording(tmp_path / "o.mcap", truth, ts_edit=edit)
+    res = process_recording(info["path"])
+    assert abs(len(res.signals) - len(clean.signals)) <= 1  # the grid spans the run, not the outlier
+    ts = res.quality["timestamps"]
+    assert ts["outlier_frames"] == 1 and sum(ts["outliers_by_message"].values()) == 1
+    ex = [e for e in res.excluded if e["reason"].startswith("outlier timestamp")]
+    assert len(ex) == 1 and claim in ex[0]["reason"] and ex[0]["frames"] == 1
+    assert 0.0 <= ex[0]["t0_s"] <= ex[0]["t1_s"] <= res.signals["t_s"].iloc[-1] + 0.01  # where in the run
+    assert any("set aside" in w and claim in w for w in res.warnings)
+    # the same signals at the same host times as without the outlier
+    t = res.signals["t_s"].to_numpy() + (res.t0_ns - clean.t0_ns) * 1e-9
+    ref = np.interp(t, clean.signals["t_s"], clean.signals["load_n"])
+    got = res.signals["load_n"].to_numpy()
+    m = np.isfinite(got) & np.isfinite(ref) & (t > 0.5) & (t < t[-1] - 0.5)
+    assert m.mean() > 0.9 and np.max(np.abs(got[m] - ref[m])) < 25
+
+
+def test_block_of_frames_days_off_is_set_aside(truth, clean, tmp_path):
+    def edit(bus, ts):
+        ts[1000:1060] += 30 * DAY
+        return ts
+    info = write_recording(tmp_path / "b.mcap", truth, ts_edit=edit)
+    res = process_recording(info["path"])
+    assert abs(len(res.signals) - len(clean.signals)) <= 1
+    q = res.quality["timestamps"]
+    # 60 frames on each bus, less those of messages processing does not read (WFT_RL_Diag, WSS_Status)
+    assert 100 <= q["outlier_frames"] <= 120
+    assert {"WFT_RL_Force", "WSS_WheelSpeeds"} <= set(q["outliers_by_message"])
+    assert res.gnss_latency_s == pytest.approx(clean.gnss_latency_s, abs=0.005)
+
+
+def _join(shift_s):
+    """The second half of each bus first in the file, shifted by ``shift_s`` (two logs joined
+    in the wrong order)."""
+    def edit(bus, ts):
+        n = ts.size // 2
+        perm = np.concatenate([np.arange(n, ts.size), np.arange(n)])
+        return np.concatenate([ts[n:] + int(shift_s * S), ts[:n]]), perm
+    return edit
+
+
+def test_logs_joined_out_of_order_are_sorted(tmp_path):
+    truth = truth_profile(2)
+    info = write_recording(tmp_path / "j.mcap", truth, ts_edit=_join(100.0), drop_wft_bursts=5, latency_s=0.1)
+    res = process_recording(info["path"])
+    assert res.quality["timestamps"]["joined_parts"] == 1
+    assert set(res.quality["timestamps"]["non_monotonic"]) == {"can0", "can1"}
+    assert res.gnss_latency_s == pytest.approx(0.1, abs=0.01)   # not 12.7 ms
+    for name in ("WFT_RL_Force", "WFT_RL_Moment", "WFT_RL_Angle"):
+        assert res.lost_frames[name]["lost"] == info["lost_samples"]  # the 100 s between parts is no loss
+    assert res.lost_frames["WSS_WheelSpeeds"]["lost"] <= 2
+    between = [e for e in res.excluded if "joined out of order" in e["reason"]]
+    assert between and all(99.0 < e["t1_s"] - e["t0_s"] < 101.0 for e in between)
+    assert not any("50000" in e["reason"] for e in res.excluded)
+    assert len(res.signals) == pytest.approx((truth.t_s[-1] + 100.0) * 100, abs=5)
+    assert any("joined out of order" in w and "sorted" in w for w in res.warnings)
+
+
+def test_overlapping_joined_logs_are_refused(tmp_path):
+    info = write_recording(tmp_path / "ov.mcap", truth_profile(1), ts_edit=_join(-5.0))
+    with pytest.raises(ValueError, match=r"ov.mcap: .* on bus can\d: time runs backwards and the parts overlap"):
+        process_recording(info["path"])
+
+
+def test_grid_size_is_capped_with_a_clear_error(tmp_path):
+    def edit(bus, ts):  # the second half 40 days later: two real parts, a grid of 346 million rows
+        ts[ts.size // 2:] += 40 * DAY
+        return ts
+    info = write_recording(tmp_path / "far.mcap", truth_profile(1), ts_edit=edit)
+    with pytest.raises(ValueError, match=r"far.mcap: the run spans .* grid rows .* split the recording"):
+        process_recording(info["path"])
+
+
+def test_find_time_outliers_keeps_real_pauses():
+    rng = np.random.default_rng(0)
+    t = np.concatenate([np.arange(0, 30, 0.01), [150.0], np.arange(270, 300, 0.01)])  # lone frame between pauses
+    ts = (1.7e18 + t * 1e9 + rng.normal(0, 1e5, t.size)).astype(np.int64)
+    keep, runs = find_time_outliers(ts)
+    assert keep.all() and runs == []
+    ts2 = ts.copy()
+    ts2[100] += 7 * 3600 * S
+    ts2[-1] = I64.min
+    keep, runs = find_time_outliers(ts2)
+    assert np.flatnonzero(~keep).tolist() == [100, ts.size - 1]
+    assert runs[0]["before_ns"] == ts[99] and runs[0]["after_ns"] == ts[101] and runs[1]["after_ns"] is None
+    assert split_joined_parts(ts) == [(0, ts.size)]

@@ -1,0 +1,177 @@
+"""Each hidden effect changes the forces (or the transducer's report of them) as intended, and the
+judge scores verdicts by the truth's acceptable list."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from wheelsoil.model import load_terrain
+from wheelsoil.sim.effects import ACCEPTABLE, EFFECTS, OUT_OF_FAMILY, TruthModel, draw_effect
+from wheelsoil.sim.effects import _bulldozing_resistance
+from wheelsoil.sim.terra import soil_dict, wheel_forces
+from wheelsoil.simulate import judge, simulate_run
+
+SOIL = soil_dict(load_terrain("sand"))
+R, B, W0 = 0.47, 0.32, 13000.0
+LOAD = np.full(12, W0)
+SLIP = np.linspace(0.02, 0.92, 12)
+
+
+def _tm(effect, **params):
+    return TruthModel(SOIL, R, B, effect, params, W0)
+
+
+@pytest.fixture(scope="module")
+def wong():
+    return _tm("none").drive_forces(LOAD, SLIP)
+
+
+def test_slip_sinkage_forms_raise_sinkage_with_slip_and_cut_the_pull(wong):
+    v = _tm("vasilev", H=0.05).drive_forces(LOAD, SLIP)
+    np.testing.assert_allclose(v["sinkage_m"], wong["sinkage_m"] + 0.05 * SLIP, rtol=1e-12)
+    ly = _tm("lyasko", m1=0.5, m2=0.05).drive_forces(LOAD, SLIP)
+    np.testing.assert_allclose(ly["sinkage_m"], wong["sinkage_m"] * (1 + 0.5 * SLIP) / (1 - 0.05 * SLIP), rtol=1e-12)
+    di = _tm("ding", n1=0.3).drive_forces(LOAD, SLIP)
+    for f in (v, ly):
+        d = f["drawbar_pull_n"] - wong["drawbar_pull_n"]
+        assert np.all(d[1:] < 0) and d[-1] < d[1]  # less pull, more so at high slip
+    assert not np.allclose(di["drawbar_pull_n"], wong["drawbar_pull_n"], rtol=1e-3)
+
+
+@pytest.mark.parametrize("name,change,expect", [
+    ("phi", {"kind": "delta_deg", "value": 4.0}, "more_pull"),
+    ("c", {"kind": "factor", "value": 2.0}, "more_pull"),
+    ("K", {"kind": "factor", "value": 2.0}, "less_pull_low_slip"),
+    ("k_eq", {"kind": "factor", "value": 1.5}, "less_sinkage"),
+    ("n", {"kind": "delta", "value": 0.1}, "changed"),
+])
+def test_terrain_mismatch_changes_one_soil_value(wong, name, change, expect):
+    tm = _tm("terrain_mismatch", changes={name: change})
+    soil = tm.soil_at()
+    changed = [k for k in SOIL if not np.allclose(soil[k], SOIL[k])]
+    assert changed == (["kc", "kphi"] if name == "k_eq" else [name])
+    f = tm.drive_forces(LOAD, SLIP)
+    d = f["drawbar_pull_n"] - wong["drawbar_pull_n"]
+    if expect == "more_pull":
+        assert np.all(d > 0)
+    elif expect == "less_pull_low_slip":
+        assert d[1] < 0 and abs(d[-1]) < abs(d[1])
+    elif expect == "less_sinkage":
+        assert np.all(f["sinkage_m"] < wong["sinkage_m"])
+    else:
+        assert np.max(np.abs(d)) > 20.0
+
+
+def test_stress_distribution_is_wong_reece():
+    a = _tm("stress_distribution", a1=0.0, a2=0.0).drive_forces(LOAD, SLIP)
+    b = _tm("none").drive_forces(LOAD, SLIP)
+    np.testing.assert_allclose(a["drawbar_pull_n"], b["drawbar_pull_n"], rtol=1e-9)
+    c = _tm("stress_distribution", a1=0.3, a2=0.2).drive_forces(LOAD, SLIP)
+    direct = wheel_forces(SOIL, R, B, LOAD, SLIP, stress=(0.3, 0.2))
+    np.testing.assert_allclose(c["drawbar_pull_n"], direct["drawbar_pull_n"], rtol=1e-6)
+    assert np.max(np.abs(c["drawbar_pull_n"] - b["drawbar_pull_n"])) > 100.0
+
+
+@pytest.mark.parametrize("mode", ["compaction", "patch"])
+def test_terrain_drift_changes_the_soil_along_the_run(mode):
+    tm = _tm("terrain_drift", changes={"k_eq": {"kind": "factor", "value": 1.3}}, mode=mode, change_at=0.4)
+    k0, k_mid, k1 = (float(tm.soil_at(f)["kphi"]) for f in (0.0, 0.5 if mode == "compaction" else 0.4, 1.0))
+    assert k0 < SOIL["kphi"] < k1
+    assert k1 / k0 == pytest.approx(1.3 ** 2, rel=0.02)
+    assert k_mid == pytest.approx(SOIL["kphi"], rel=1e-6)
+    frac = np.linspace(0, 1, 12)
+    f = tm.drive_forces(LOAD, np.full(12, 0.5), frac=frac)
+    assert np.all(np.diff(f["sinkage_m"]) <= 1e-12) and f["sinkage_m"][0] > f["sinkage_m"][-1] * 1.05
+
+
+def test_out_of_family_soil_and_tyre_effects(wong):
+    ty = _tm("tyre_deflection", kappa=0.2).drive_forces(LOAD, SLIP)
+    assert np.all(ty["sinkage_m"] < wong["sinkage_m"])  # a larger equivalent wheel sinks less
+    bu = _tm("bulldozing", factor=0.1).drive_forces(LOAD, SLIP)
+    rb = 0.1 * _bulldozing_resistance(SOIL, B, wong["sinkage_m"])
+    np.testing.assert_allclose(wong["drawbar_pull_n"] - bu["drawbar_pull_n"], rb, rtol=1e-9)
+    np.testing.assert_allclose(bu["torque_nm"], wong["torque_nm"], rtol=1e-12)
+    ld = _tm("load_dependent", beta=2.0)
+    np.testing.assert_allclose(ld.drive_forces(LOAD, SLIP)["drawbar_pull_n"], wong["drawbar_pull_n"], rtol=1e-9)
+    hi = ld.drive_forces(LOAD * 1.2, SLIP)
+    assert np.all(hi["sinkage_m"] < _tm("none").drive_forces(LOAD * 1.2, SLIP)["sinkage_m"])
+    we = _tm("width_error", factor=1.2).drive_forces(LOAD, SLIP)
+    direct = wheel_forces(SOIL, R, B * 1.2, LOAD, SLIP)
+    np.testing.assert_allclose(we["drawbar_pull_n"], direct["drawbar_pull_n"], rtol=1e-6)
+    assert np.all(we["sinkage_m"] < wong["sinkage_m"])  # a wider wheel sinks less
+    vb = _tm("vertical_balance").drive_forces(LOAD, SLIP)
+    np.testing.assert_allclose(vb["load_model_n"], LOAD, rtol=1e-7)
+    assert not np.allclose(vb["sinkage_m"], wong["sinkage_m"], rtol=1e-3)
+
+
+@pytest.fixture(scope="module")
+def base_run():
+    return simulate_run("sand", seed=31, duration_s=30.0, added_load_n=5000.0, soil_variability=0.0)
+
+
+@pytest.mark.parametrize("effect,params", [("fx_gain", {"gain": 1.1}), ("my_gain", {"gain": 0.9}),
+                                           ("load_gain", {"gain": 1.05}), ("angle_offset", {"offset_deg": 1.0})])
+def test_sensor_effects_change_only_what_the_transducer_reports(base_run, effect, params):
+    from wheelsoil.processing.decode import decode_batches
+    from wheelsoil.daq import load_vehicle_config
+
+    r = simulate_run("sand", effect=effect, params=params, seed=31, duration_s=30.0, added_load_n=5000.0,
+                     soil_variability=0.0)
+    a, b = r.truth, base_run.truth
+    np.testing.assert_allclose(a.drawbar_pull_n, b.drawbar_pull_n)  # the soil and the vehicle are the same
+    np.testing.assert_allclose(a.speed_mps, b.speed_mps)
+    if effect == "fx_gain":
+        np.testing.assert_allclose(a.fx_n, 1.1 * b.fx_n)
+    elif effect == "my_gain":
+        np.testing.assert_allclose(a.my_nm, 0.9 * b.my_nm)
+    elif effect == "load_gain":
+        np.testing.assert_allclose(a.load_measured_n, 1.05 * b.load_n)
+    else:  # the encoder's zero error leaks W into the hub Fx: Fx_meas - Fx = W sin(d) (cos d ~ 1)
+        cfg = load_vehicle_config()
+        dec = decode_batches(list(r.frame_batches().values()), cfg.buses,
+                             select={"WFT_RL_Force": None, "WFT_RL_Angle": None})
+        ang = np.radians(dec["WFT_RL_Angle"].signals["WheelAngle"])
+        fxw, fzw = dec["WFT_RL_Force"].signals["Fx_w"], dec["WFT_RL_Force"].signals["Fz_w"]
+        fx = fxw * np.cos(ang) + fzw * np.sin(ang)
+        n = min(len(fx), len(a))
+        off = fx[:n] - a.fx_n.to_numpy()[:n]
+        assert np.mean(off) == pytest.approx(np.mean(a.load_n) * math.sin(math.radians(1.0)), rel=0.05)
+
+
+def test_effect_sizes_span_small_to_large_and_params_are_checked():
+    rng = np.random.default_rng(0)
+    for eff in EFFECTS:
+        if eff in ("none", "vertical_balance"):
+            continue
+        lo = draw_effect(eff, np.random.default_rng(5), size=0.0)
+        hi = draw_effect(eff, np.random.default_rng(5), size=1.0)
+        assert lo != hi, eff
+    with pytest.raises(ValueError, match="no parameter"):
+        draw_effect("vasilev", rng, given={"m1": 0.2})
+    with pytest.raises(ValueError, match="unknown effect"):
+        draw_effect("gremlins", rng)
+
+
+def test_judge_scores_by_the_acceptable_verdicts():
+    def rep(effect, model=None, conf="high"):
+        return {"diagnosis": {"effect": effect, "model": model, "confidence": conf}}
+
+    t_in = {"effect": "lyasko", "family": "in", "acceptable": list(ACCEPTABLE["lyasko"])}
+    j = judge(t_in, rep("slip_sinkage", "lyasko"))
+    assert j["right"] and not j["wrong_cause"] and j["form_ok"]
+    j = judge(t_in, rep("slip_sinkage", "ding"))
+    assert j["right"] and j["form_ok"] is False
+    j = judge(t_in, rep("terrain_mismatch", "terrain"))
+    assert not j["right"] and j["wrong_cause"]
+    j = judge(t_in, rep("none"))
+    assert j["missed"] and not j["wrong_cause"]
+    for eff in OUT_OF_FAMILY:
+        t_out = {"effect": eff, "family": "out", "acceptable": list(ACCEPTABLE[eff])}
+        assert judge(t_out, rep("unexplained"))["right"]
+        assert judge(t_out, rep("slip_sinkage", "ding"))["wrong_cause"]
+    assert judge({"effect": "load_gain", "family": "out", "acceptable": list(ACCEPTABLE["load_gain"])},
+                 rep("terrain_mismatch"))["right"]
+    assert judge({"effect": "none", "family": "in", "acceptable": ["none"]}, rep("unexplained"))["false_alarm"]

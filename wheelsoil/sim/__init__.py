@@ -1,0 +1,1 @@
+"""Independent physical field-test simulator (issue 11): reference terramechanics, vehicle dynamics, effects."""

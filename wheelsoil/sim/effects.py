@@ -1,0 +1,321 @@
+"""Hidden effects of the simulator: what the true soil / wheel / sensor does differently from the lab model.
+
+Each effect has a *family*: ``in`` (a cause the diagnosis has a hypothesis
+for: the verdict should name it) or ``out`` (a cause no hypothesis models: the
+honest verdict is ``unexplained``), and the list of verdicts (report.json
+``diagnosis.effect``) that are *acceptable* for it (contract F). Effect sizes
+are drawn from a ``size`` in [0, 1]: 0 is barely above the noise, 1 large.
+
+In family
+  ``none``                 Wong's model (paper Eqs. 1-10) on the lab soil.
+  ``vasilev``              z = z0 + H s (Eq. 11).
+  ``lyasko``               z = z0 (1 + m1 s)/(1 - m2 s) (Eq. 12).
+  ``ding``                 N = n + n1 s (Eq. 13).
+  ``terrain_mismatch``     one or two lab soil values wrong: k_eq = kc/b + kphi (kc and
+                           kphi scaled together), n, c, phi or K.
+  ``stress_distribution``  Wong-Reece normal stress, maximum at theta_m = (a1 + a2 s) theta1.
+  ``terrain_drift``        a soil value changes along the run: ``compaction`` (linear in the
+                           travelled distance: repeated passes) or ``patch`` (another patch of
+                           ground from ``change_at`` x the distance on, tanh transition over 2 %
+                           of it). The change runs from lab/f to lab*f (a factor f) or lab - d to
+                           lab + d (a delta d): the lab value mid-run (compaction) or at the
+                           patch boundary.
+
+Out of family (``unexplained`` always acceptable)
+  ``fx_gain``          the transducer's hub Fx reads g x the true value (calibration).
+  ``my_gain``          its My reads g x the true value.
+  ``load_gain``        its Fz (the load W) reads g x the true value. With Eq. (10) the model
+                       depends on W only through W/k_eq: a load gain g is *exactly* a
+                       k_eq of k_eq/g, so ``terrain_mismatch`` is acceptable too.
+  ``angle_offset``     the WheelAngle encoder's zero is off by delta: the hub rotation mixes
+                       W into Fx (Fx_meas = Fx cos d + W sin d): a load-proportional Dp offset.
+  ``tyre_deflection``  a flexible tyre: the soil sees Wong's equivalent rigid wheel of
+                       radius r_e = r (1 + kappa W / W_ref) (Wong, Theory of Ground
+                       Vehicles, 4th ed., sec. 2.x, flexible tyre in the elastic mode), while
+                       slip is still r omega based.
+  ``bulldozing``       soil pushed ahead of the sunk wheel: Bekker's bulldozing resistance
+                       R_b = f b (0.67 c z K_pc + 0.5 z^2 gamma K_pgamma) subtracted from Dp,
+                       torque unchanged (Bekker 1969; Wong, Theory of Ground Vehicles, ch. 2).
+  ``load_dependent``   the soil stiffens/softens with the wheel load (plate-size / pressure
+                       effect): k_eq(W) = k_eq (W / W_static)^beta; the lab value holds at
+                       the static load, so the mean soil is the lab's.
+  ``width_error``      the tyre's effective contact width is b_e = f b, not the configured b
+                       (bulging sidewalls, a lab/setup error in a wheel value no hypothesis
+                       re-fits): Eqs. (2), (7)-(10) with b_e.
+  ``vertical_balance`` the true static sinkage satisfies the vertical balance Eq. (7) = W
+                       (with the shear term, at the sample's slip) instead of Eq. (10)'s
+                       small-angle formula the models use.
+
+Sensor effects (``fx_gain``, ``my_gain``, ``load_gain``, ``angle_offset``) change only
+what the transducer reports; the soil forces (and the vehicle) are Wong's.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any, Mapping
+
+import numpy as np
+
+from .terra import sinkage_eq10, wheel_forces
+
+__all__ = ["EFFECTS", "IN_FAMILY", "OUT_OF_FAMILY", "ACCEPTABLE", "VERDICTS", "SENSOR_EFFECTS",
+           "draw_effect", "TruthModel", "family_of"]
+
+#: The verdicts a report can give (report.json ``diagnosis.effect``).
+VERDICTS = ("none", "slip_sinkage", "terrain_mismatch", "stress_distribution", "terrain_drift", "unexplained")
+
+IN_FAMILY = ("none", "vasilev", "lyasko", "ding", "terrain_mismatch", "stress_distribution", "terrain_drift")
+OUT_OF_FAMILY = ("fx_gain", "my_gain", "load_gain", "angle_offset", "tyre_deflection", "bulldozing",
+                 "load_dependent", "vertical_balance", "width_error")
+EFFECTS = IN_FAMILY + OUT_OF_FAMILY
+SENSOR_EFFECTS = ("fx_gain", "my_gain", "load_gain", "angle_offset")
+
+#: Acceptable verdicts per effect (contract F). See the module docstring for the one
+#: out-of-family effect with an in-family equivalent (load_gain).
+ACCEPTABLE: dict[str, tuple[str, ...]] = {
+    "none": ("none",),
+    "vasilev": ("slip_sinkage",),
+    "lyasko": ("slip_sinkage",),
+    "ding": ("slip_sinkage",),
+    "terrain_mismatch": ("terrain_mismatch",),
+    "stress_distribution": ("stress_distribution",),
+    "terrain_drift": ("terrain_drift",),
+    "fx_gain": ("unexplained",),
+    "my_gain": ("unexplained",),
+    "load_gain": ("unexplained", "terrain_mismatch"),
+    "angle_offset": ("unexplained",),
+    "tyre_deflection": ("unexplained",),
+    "bulldozing": ("unexplained",),
+    "load_dependent": ("unexplained",),
+    "vertical_balance": ("unexplained",),
+    "width_error": ("unexplained",),
+}
+
+#: Terrain parameters a mismatch / drift may change, with the relative (or absolute) range
+#: of the change at size 0 and size 1.
+_MISMATCH = {  # name: (kind, small, large)
+    "k_eq": ("rel", 0.10, 0.60),
+    "n": ("abs", 0.04, 0.20),
+    "c": ("rel", 0.15, 0.70),
+    "phi": ("abs_deg", 1.5, 7.0),
+    "K": ("rel", 0.20, 1.20),
+}
+
+
+#: Parameter names each effect takes (``size`` always allowed).
+PARAM_NAMES: dict[str, tuple[str, ...]] = {
+    "none": (), "vasilev": ("H",), "lyasko": ("m1", "m2"), "ding": ("n1",),
+    "terrain_mismatch": ("changes",), "terrain_drift": ("changes", "mode", "change_at"),
+    "stress_distribution": ("a1", "a2"), "fx_gain": ("gain",), "my_gain": ("gain",), "load_gain": ("gain",),
+    "angle_offset": ("offset_deg",), "tyre_deflection": ("kappa",), "bulldozing": ("factor",),
+    "load_dependent": ("beta",), "vertical_balance": (), "width_error": ("factor",),
+}
+
+
+def family_of(effect: str) -> str:
+    """``"in"`` or ``"out"``; ValueError for an unknown effect."""
+    if effect in IN_FAMILY:
+        return "in"
+    if effect in OUT_OF_FAMILY:
+        return "out"
+    raise ValueError(f"unknown effect {effect!r}; choose one of {', '.join(EFFECTS)}")
+
+
+def _mag(size, lo, hi, log=False):
+    if log:
+        return float(math.exp(math.log(lo) + size * (math.log(hi) - math.log(lo))))
+    return float(lo + size * (hi - lo))
+
+
+def draw_effect(effect: str, rng: np.random.Generator, *, size: float | None = None,
+                given: Mapping[str, Any] | None = None) -> dict[str, Any]:
+    """Random parameters of ``effect`` at effect ``size`` in [0, 1] (drawn uniform when None).
+
+    Returns the params dict (JSON-serialisable, SI with unit suffixes where ambiguous), plus
+    ``size``. Values in ``given`` override the drawn ones. Raises ValueError for an unknown effect.
+    """
+    family_of(effect)
+    given = dict(given or {})
+    bad = set(given) - set(PARAM_NAMES[effect]) - {"size"}
+    if bad:
+        raise ValueError(f"effect {effect!r} has no parameter(s) {sorted(bad)}; known: "
+                         f"{', '.join(PARAM_NAMES[effect]) or 'none'}")
+    for name, ch in (given.get("changes") or {}).items():
+        if name not in _MISMATCH or not isinstance(ch, Mapping) or ch.get("kind") not in ("factor", "delta", "delta_deg"):
+            raise ValueError(f"{effect}: change {name!r}: {ch!r}; expected one of {', '.join(_MISMATCH)} with "
+                             "{'kind': factor|delta|delta_deg, 'value': ...}")
+    u = float(rng.uniform(0.0, 1.0)) if size is None else float(size)
+    if not 0.0 <= u <= 1.0:
+        raise ValueError(f"effect size {u} outside [0, 1]")
+    sign = 1.0 if rng.random() < 0.5 else -1.0
+    p: dict[str, Any] = {}
+    if effect == "none":
+        return {**given, "size": 0.0}
+    if effect == "vasilev":
+        p = {"H": _mag(u, 0.01, 0.10, log=True)}
+    elif effect == "lyasko":
+        p = {"m1": _mag(u, 0.08, 0.8, log=True), "m2": float(rng.uniform(0.0, 0.08))}
+    elif effect == "ding":
+        p = {"n1": _mag(u, 0.06, 0.6, log=True)}
+    elif effect in ("terrain_mismatch", "terrain_drift"):
+        names = list(_MISMATCH)
+        k = 1 if (effect == "terrain_drift" or rng.random() < 0.7) else 2
+        chosen = [str(x) for x in rng.choice(names, size=k, replace=False)]
+        changes = {}
+        for name in chosen:
+            kind, lo, hi = _MISMATCH[name]
+            mag = _mag(u, lo, hi)
+            s = 1.0 if rng.random() < 0.5 else -1.0
+            if kind == "rel":
+                changes[name] = {"kind": "factor", "value": float(1.0 + mag) if s > 0 else float(1.0 / (1.0 + mag))}
+            elif kind == "abs":
+                changes[name] = {"kind": "delta", "value": s * mag}
+            else:
+                changes[name] = {"kind": "delta_deg", "value": s * mag}
+        p = {"changes": changes}
+        if effect == "terrain_drift":
+            p["mode"] = "compaction" if rng.random() < 0.5 else "patch"
+            p["change_at"] = float(rng.uniform(0.3, 0.7))  # fraction of the distance (patch)
+    elif effect == "stress_distribution":
+        p = {"a1": _mag(u, 0.08, 0.45), "a2": float(rng.uniform(0.0, 0.3))}
+    elif effect == "fx_gain":
+        p = {"gain": 1.0 + sign * _mag(u, 0.03, 0.20)}
+    elif effect == "my_gain":
+        p = {"gain": 1.0 + sign * _mag(u, 0.03, 0.20)}
+    elif effect == "load_gain":
+        p = {"gain": 1.0 + sign * _mag(u, 0.02, 0.12)}
+    elif effect == "angle_offset":
+        p = {"offset_deg": sign * _mag(u, 0.15, 2.0, log=True)}
+    elif effect == "tyre_deflection":
+        p = {"kappa": _mag(u, 0.04, 0.40, log=True)}
+    elif effect == "bulldozing":
+        p = {"factor": _mag(u, 0.02, 0.30, log=True)}
+    elif effect == "load_dependent":
+        p = {"beta": sign * _mag(u, 0.5, 3.0)}
+    elif effect == "vertical_balance":
+        p = {}
+    elif effect == "width_error":
+        p = {"factor": 1.0 + sign * _mag(u, 0.05, 0.30)}
+    p.update(given)
+    p["size"] = u
+    return p
+
+
+def _apply_change(soil: dict, wheel_width_m: float, name: str, kind: str, value: float, frac=1.0) -> dict:
+    """Soil with one value changed by ``frac`` x the change (frac (N,) or scalar; 1 = the full change)."""
+    out = dict(soil)
+    frac = np.asarray(frac, float)
+    if name == "k_eq":  # kc and kphi scaled together: k_eq = kc/b + kphi scales by the factor
+        f = value ** frac if kind == "factor" else 1.0 + frac * value
+        out["kc"] = soil["kc"] * f
+        out["kphi"] = soil["kphi"] * f
+    elif name == "phi":
+        out["phi"] = soil["phi"] + np.radians(value) * frac
+    elif name == "n":
+        out["n"] = soil["n"] + value * frac
+    else:  # c, K
+        out[name] = soil[name] * (value ** frac if kind == "factor" else 1.0 + frac * value)
+    return out
+
+
+def _bulldozing_resistance(soil, width_m, z, gamma_n_m3=16000.0):
+    """Bekker's bulldozing resistance [N] of a wheel of width b sunk z (N,), soil dict.
+
+    R_b = b (0.67 c z K_pc + 0.5 z^2 gamma K_pgamma), K_pc = (N_c - tan phi) cos^2 phi,
+    K_pgamma = (2 N_gamma / tan phi + 1) cos^2 phi; bearing factors N_q = e^(pi tan phi)
+    tan^2(45 deg + phi/2), N_c = (N_q - 1) cot phi, N_gamma = 2 (N_q + 1) tan phi (Vesic).
+    Source: Bekker, Introduction to Terrain-Vehicle Systems (1969); Wong, Theory of Ground
+    Vehicles, ch. 2.
+    """
+    phi = np.maximum(np.asarray(soil["phi"], float), math.radians(1.0))
+    tp = np.tan(phi)
+    nq = np.exp(math.pi * tp) * np.tan(math.pi / 4 + phi / 2) ** 2
+    nc = (nq - 1.0) / tp
+    ng = 2.0 * (nq + 1.0) * tp
+    kpc = (nc - tp) * np.cos(phi) ** 2
+    kpg = (2.0 * ng / tp + 1.0) * np.cos(phi) ** 2
+    return width_m * (0.67 * np.asarray(soil["c"], float) * z * kpc + 0.5 * z * z * gamma_n_m3 * kpg)
+
+
+@dataclass
+class TruthModel:
+    """The true soil-wheel physics of a run: lab soil + hidden effect.
+
+    ``soil`` (SI dict, the lab values), ``radius_m``/``width_m`` the wheel, ``effect``,
+    ``params`` (from :func:`draw_effect`), ``static_load_n`` (the instrumented wheel's
+    static load, reference of load-dependent effects). All wheels of the vehicle run on
+    the same soil with the same soil/tyre effects; sensor effects only touch the transducer.
+    """
+
+    soil: dict
+    radius_m: float
+    width_m: float
+    effect: str = "none"
+    params: dict = field(default_factory=dict)
+    static_load_n: float = 11000.0
+    epsrel: float = 1e-8  # quadrature tolerance of the truth (the sensor noise is ~1e-3 of the forces)
+
+    def soil_at(self, frac=0.5, variability=None) -> dict:
+        """The true soil at distance fraction ``frac`` (0..1, (N,) or scalar) of the run, with the
+        relative soil variability factor ``variability`` (N,) on c, kc, kphi (None: none)."""
+        soil = {k: np.asarray(v, float) for k, v in self.soil.items()}
+        if self.effect == "terrain_mismatch":
+            for name, ch in self.params["changes"].items():
+                soil = _apply_change(soil, self.width_m, name, ch["kind"], ch["value"])
+        elif self.effect == "terrain_drift":
+            frac = np.asarray(frac, float)
+            if self.params["mode"] == "compaction":
+                g = frac - 0.5  # linear in distance, centred: the lab value mid-run
+            else:  # another patch of ground from change_at on (2 % of the run transition)
+                x = (frac - float(self.params["change_at"])) / 0.02
+                g = 0.5 * np.tanh(x)
+            for name, ch in self.params["changes"].items():
+                soil = _apply_change(soil, self.width_m, name, ch["kind"], ch["value"], frac=2.0 * g)
+        if variability is not None:
+            v = np.asarray(variability, float)
+            soil["c"] = soil["c"] * v
+            soil["kc"] = soil["kc"] * v
+            soil["kphi"] = soil["kphi"] * v
+        return soil
+
+    def drive_forces(self, load_n, slip, frac=0.5, variability=None) -> dict[str, np.ndarray]:
+        """True soil forces of a driven wheel, 0 <= s < 1: dict of (N,) ``drawbar_pull_n``,
+        ``torque_nm``, ``sinkage_m`` (soil/tyre effects applied, not sensor effects).
+        Raises ValueError when the wheel buries itself (sinkage >= r)."""
+        w = np.atleast_1d(np.asarray(load_n, float))
+        s = np.broadcast_to(np.atleast_1d(np.asarray(slip, float)), w.shape)
+        soil = self.soil_at(frac, variability)
+        e, p = self.effect, self.params
+        kw: dict[str, Any] = {}
+        r = self.radius_m
+        b = self.width_m
+        if e == "vasilev":
+            kw["H"] = p["H"]
+        elif e == "lyasko":
+            kw["m1"], kw["m2"] = p["m1"], p["m2"]
+        elif e == "ding":
+            kw["n1"] = p["n1"]
+        elif e == "stress_distribution":
+            kw["stress"] = (p["a1"], p["a2"])
+        elif e == "vertical_balance":
+            kw["sinkage"] = "balance"
+        elif e == "width_error":
+            b = self.width_m * p["factor"]
+        elif e == "tyre_deflection":
+            r = self.radius_m * (1.0 + p["kappa"] * w / self.static_load_n)
+        elif e == "load_dependent":
+            f = (w / self.static_load_n) ** p["beta"]
+            soil = dict(soil)
+            soil["kc"] = soil["kc"] * f
+            soil["kphi"] = soil["kphi"] * f
+        out = wheel_forces(soil, r, b, w, s, epsrel=self.epsrel, **kw)
+        if e == "bulldozing":
+            out["drawbar_pull_n"] = out["drawbar_pull_n"] - p["factor"] * _bulldozing_resistance(
+                soil, b, out["sinkage_m"])
+        return out
+
+    def static_sinkage(self, load_n) -> np.ndarray:
+        """Eq. (10) sinkage of the lab soil [m] for ``load_n`` (N,) (for messages and checks)."""
+        return sinkage_eq10(self.soil, self.radius_m, self.width_m, load_n)
