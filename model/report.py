@@ -1170,7 +1170,8 @@ def _quality_rows(q: dict) -> list:
                      + (": " + " | ".join(dmg) if dmg else "")])
     else:
         rows.append(["damaged chunks", "none" if not dmg else f"{len(dmg)}: " + " | ".join(dmg)])
-    rows.append(["recording complete", {True: "yes", False: "no (truncated)", None: "n/a"}[q.get("complete")]])
+    rows.append(["recording read to its end (MCAP footer)", {True: "yes", False: "no (truncated or damaged: see "
+                                                              "above and the warnings)", None: "n/a"}[q.get("complete")]])
     rx = q.get("kernel_rx_dropped")
     if rx:
         rows.append(["kernel receive drops", ", ".join(f"{b}: {'unknown' if n is None else n}" for b, n in sorted(rx.items()))])
@@ -1365,6 +1366,12 @@ def _html(rep: dict, figs: list, overviews: list) -> str:
                      + " was made by <code>wheelsoil simulate</code>, not measured on a vehicle: it tests the pipeline. "
                      "The effect hidden in it is not recorded in the file; check the verdict against the simulator's "
                      "truth (<code>wheelsoil simulate ... --truth truth.json</code>).</p></div>")
+    damaged = [q for q in rep.get("data_quality") or [] if q.get("damaged_chunks")]
+    if damaged:
+        parts.append("<div class='warn'><p><b>Damaged input.</b> "
+                     + _e(" ".join(w for q in damaged for w in q["damaged_chunks"]))
+                     + " The frames of a damaged part are left out, never used altered; the overview shows the "
+                     "gap.</p></div>")
     eff = d.get("effect")
     parts.append(
         f"<div class='verdict'><div class='effect'>Effect: {_e(eff)} &nbsp;·&nbsp; model: "
