@@ -253,3 +253,13 @@ def test_data_quality_rows_say_unknown_and_damaged():
     assert rows["lost frames GPS"].startswith("unknown") and rows["lost frames WFT"].startswith("5 of 1000")
     assert rows["damaged chunks"].startswith("1 skipped, 869 frames lost") and "CRC" in rows["damaged chunks"]
     assert rows["rejected frames (import)"] == "3" and rows["GNSS latency found and removed"].startswith("100 ms")
+
+
+def test_a_damaged_input_is_said_at_the_top(table_report, tmp_path):
+    _, _, diag = table_report
+    msg = "x.mcap: chunk at byte 4096 of 9000 fails its CRC check and is skipped; frames lost: 869"
+    write_report(diag, tmp_path, terrain=SAND, wheel=DEFAULT_WHEEL, inputs=["x.mcap"],
+                 input_details=[{"path": "x.mcap", "quality": {"kind": "recording", "damaged_chunks": [msg]}}])
+    text = (tmp_path / "report.html").read_text()
+    check_html(text)
+    assert text.index("Damaged input.") < text.index("class='verdict'") and html.escape(msg, quote=True) in text
