@@ -79,14 +79,15 @@ def main(argv=None) -> int:
                 return f"{v['estimate_s'] * 1e3:8.1f}{'' if v.get('usable') else 'x'}" + (" " if v.get("usable") else "")
 
             err = r["err_ms"]
+            est_txt = "-" if r["est"] is None else f"{r['est'] * 1e3:7.1f}"
+            err_txt = "-" if err is None else f"{err:+7.1f}"
             ok = (err is not None and abs(err) <= 20.0) or not q.get("reliable", False)
             silent_bad = err is not None and abs(err) > 20.0 and q.get("reliable", False)
             n_ok += ok
             if err is not None and q.get("reliable"):
                 errs.append(abs(err))
             print(f"{c[0]:7} {c[1]:9} {c[2] * 1e3:7.0f} {c[3]:4d} {c[4]:5d} | "
-                  f"{'-' if r['est'] is None else f'{r['est'] * 1e3:7.1f}':>7} "
-                  f"{'-' if err is None else f'{err:+7.1f}':>7} "
+                  f"{est_txt:>7} {err_txt:>7} "
                   f"{(q.get('stderr_s') or float('nan')) * 1e3:6.1f} {str(q.get('reliable')):8} "
                   f"{str(q.get('method')):18} | {cs('wheel_reference')}{cs('traction')}{cs('dynamics')} | "
                   f"{'ok' if ok else 'WRONG AND NOT FLAGGED' if silent_bad else 'no'}", flush=True)
