@@ -170,6 +170,9 @@ def estimate_latency(t_gnss_s: np.ndarray, v_gnss: np.ndarray, t_ref_s: np.ndarr
 
 #: Slip range [-] used by :func:`estimate_latency_traction` (outside: locked or spinning wheel).
 TRACTION_SLIP_RANGE = (-0.5, 0.95)
+#: An estimate within this [s] (or two standard errors) of either end of the search range is
+#: an edge hit (the profile may still fall beyond it).
+TRACTION_EDGE_S = 0.010
 
 
 def _traction_sse(tau: float, t_g: np.ndarray, v_g: np.ndarray, t_ref: np.ndarray, w_ref: np.ndarray,
@@ -233,7 +236,7 @@ def estimate_latency_traction(t_gnss_s: np.ndarray, v_gnss: np.ndarray, t_ref_s:
 
     Returns :class:`LatencyEstimate` (``gain`` 1, ``offset_mps`` 0,
     ``residual_rms_mps`` holds the RMS of ``x - g(s)`` [-]; ``note`` names an
-    edge hit). Raises ``ValueError`` when too few samples overlap or the
+    edge hit: within :data:`TRACTION_EDGE_S` or two standard errors of an end). Raises ``ValueError`` when too few samples overlap or the
     traction coefficient does not vary.
     """
     t_g = np.asarray(t_gnss_s, dtype=np.float64)
@@ -272,6 +275,7 @@ def estimate_latency_traction(t_gnss_s: np.ndarray, v_gnss: np.ndarray, t_ref_s:
     rho = min(max(rho, 0.0), 0.95) if np.isfinite(rho) else 0.0
     stderr = float(np.sqrt(2 * s2 / curv * (1 + rho) / (1 - rho))) if curv > 0 else float("inf")
     note = ""
-    if tau <= 0.004 or tau >= max_latency_s - 0.004:
+    edge = max(TRACTION_EDGE_S, 2 * stderr) if np.isfinite(stderr) else TRACTION_EDGE_S
+    if tau <= edge or tau >= max_latency_s - edge:
         note = f"latency at the edge of the search range 0..{max_latency_s:g} s"
     return LatencyEstimate(tau, stderr, 1.0, 0.0, float(np.sqrt(s0 / max(n, 1))), n, note)
