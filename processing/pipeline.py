@@ -1018,7 +1018,7 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
             with np.errstate(invalid="ignore", divide="ignore"):
                 coeff = np.where(load > LATENCY_MIN_LOAD_N, torque / (r * load), np.nan)
             try:
-                cands["traction"] = estimate_latency_traction(g_rel, g_v, t_grid, r * omega, coeff,
+                cands["traction"] = estimate_latency_traction(g_rel, g_v, t_grid, r * omega, coeff, load_n=load,
                                                               max_latency_s=LATENCY_MAX_S)
             except ValueError as exc:
                 errs["traction"] = str(exc)

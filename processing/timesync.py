@@ -176,12 +176,14 @@ TRACTION_EDGE_S = 0.010
 
 
 def _traction_sse(tau: float, t_g: np.ndarray, v_g: np.ndarray, t_ref: np.ndarray, w_ref: np.ndarray,
-                  x_ref: np.ndarray, keep_ref: np.ndarray, n_knots: int, min_speed_mps: float):
-    """Least-squares cubic spline of the traction coefficient on slip at lag ``tau``.
+                  x_ref: np.ndarray, keep_ref: np.ndarray, n_knots: int, min_speed_mps: float,
+                  dw_ref: np.ndarray | None = None):
+    """Least-squares cubic spline of the traction coefficient on slip at lag ``tau``
+    (plus a second spline times the relative load change ``dw_ref``, if given).
 
     Returns ``(sse, n, resid, mask)``: ``sse`` sum of squared residuals of
-    ``x - g(s)`` [-] over the usable GNSS samples (inf when the fit is impossible)."""
-    from scipy.interpolate import make_lsq_spline
+    ``x - g(s) - h(s) dW`` [-] over the usable GNSS samples (inf when the fit is impossible)."""
+    from scipy.interpolate import BSpline
 
     tq = t_g - tau
     w = np.interp(tq, t_ref, w_ref, left=np.nan, right=np.nan)
@@ -194,23 +196,26 @@ def _traction_sse(tau: float, t_g: np.ndarray, v_g: np.ndarray, t_ref: np.ndarra
     n = int(np.count_nonzero(m))
     if n < 10 * (n_knots + 4):
         return np.inf, n, None, m
-    order = np.argsort(s[m], kind="stable")
-    ss, xs = s[m][order], x[m][order]
-    inner = np.quantile(ss, np.linspace(0.0, 1.0, n_knots + 2)[1:-1])
-    knots = np.concatenate([[ss[0]] * 4, inner, [ss[-1]] * 4])
+    sm, xm = s[m], x[m]
+    inner = np.quantile(sm, np.linspace(0.0, 1.0, n_knots + 2)[1:-1])
+    knots = np.concatenate([[sm.min()] * 4, inner, [sm.max()] * 4])
     try:
-        spl = make_lsq_spline(ss, xs, knots, k=3)
-    except (ValueError, np.linalg.LinAlgError):
+        B = BSpline.design_matrix(sm, knots, 3).toarray()
+    except ValueError:
         return np.inf, n, None, m
-    r = np.empty(n)
-    r[order] = xs - spl(ss)
+    if dw_ref is not None:
+        dw = np.interp(tq, t_ref, dw_ref)[m]
+        B = np.column_stack([B, B * dw[:, None]])
+    coef, *_ = np.linalg.lstsq(B, xm, rcond=None)
+    r = xm - B @ coef
     return float(r @ r), n, r, m
 
 
 def estimate_latency_traction(t_gnss_s: np.ndarray, v_gnss: np.ndarray, t_ref_s: np.ndarray,
                               wheel_speed_mps: np.ndarray, traction_coeff: np.ndarray, *,
-                              usable_ref: np.ndarray | None = None, max_latency_s: float = 0.5,
-                              min_speed_mps: float = 1.0, n_knots: int = 10) -> LatencyEstimate:
+                              load_n: np.ndarray | None = None, usable_ref: np.ndarray | None = None,
+                              max_latency_s: float = 0.5, min_speed_mps: float = 1.0,
+                              n_knots: int = 10) -> LatencyEstimate:
     """GNSS latency from slip-traction consistency: needs no free-rolling wheel.
 
     A wheel's torque at a given load is a function of its slip (the paper's
@@ -223,14 +228,18 @@ def estimate_latency_traction(t_gnss_s: np.ndarray, v_gnss: np.ndarray, t_ref_s:
     ``sum (x - g(s))^2`` of the traction coefficient ``x = T/(r W)`` about a
     cubic least-squares spline ``g`` of slip (``n_knots`` interior knots at
     quantiles of s), on a 2 ms grid over ``0..max_latency_s`` refined by a
-    bounded scalar minimisation. Slips outside :data:`TRACTION_SLIP_RANGE` and
+    bounded scalar minimisation. With ``load_n`` the model is ``g(s) + h(s)
+    (W/mean(W) - 1)`` (a second spline ``h``): the load transfer onto the wheel
+    while accelerating changes ``T/(rW)`` at a given slip (``T`` is not
+    proportional to ``W``, Eq. 10's sinkage grows with ``W``), in step with
+    ``dV/dt``, which would otherwise read as a lag. Slips outside :data:`TRACTION_SLIP_RANGE` and
     speeds ``r omega < min_speed_mps`` are not used.
 
     Parameters: ``t_gnss_s`` (N,) host receive times [s] of the GNSS speed and
     ``v_gnss`` (N,) [m/s]; ``t_ref_s`` (M,) sorted host times [s] of the
     measured wheel's ``wheel_speed_mps`` (M,) ``r omega`` [m/s] and
-    ``traction_coeff`` (M,) ``T/(r W)`` [-] (filtered, undelayed);
-    ``usable_ref`` (M,) bool. Standard error: ``2 sigma^2 / SSE''`` (curvature
+    ``traction_coeff`` (M,) ``T/(r W)`` [-] (filtered, undelayed); ``load_n``
+    (M,) W [N] or None; ``usable_ref`` (M,) bool. Standard error: ``2 sigma^2 / SSE''`` (curvature
     of the profile, ``sigma^2 = SSE/(n - p)``) inflated by ``(1 + rho)/(1 -
     rho)`` for the lag-1 autocorrelation ``rho`` of the residuals.
 
@@ -250,13 +259,23 @@ def estimate_latency_traction(t_gnss_s: np.ndarray, v_gnss: np.ndarray, t_ref_s:
     if np.count_nonzero(keep) < 200:
         raise ValueError(f"only {np.count_nonzero(keep)} wheel samples with torque and load above "
                          f"{min_speed_mps:g} m/s (need 200)")
+    dw_r = None
+    if load_n is not None:
+        ld = np.asarray(load_n, dtype=np.float64)
+        keep &= np.isfinite(ld)
+        mean_w = float(np.mean(ld[keep])) if keep.any() else float("nan")
+        if mean_w > 0:
+            dw_r = np.where(np.isfinite(ld), ld / mean_w - 1.0, 0.0)
+    if np.count_nonzero(keep) < 200:
+        raise ValueError(f"only {np.count_nonzero(keep)} wheel samples with torque and load above "
+                         f"{min_speed_mps:g} m/s (need 200)")
     lo, hi = np.percentile(x_r[keep], [1, 99])
     if not hi - lo > 0.05:
         raise ValueError(f"the traction coefficient T/(rW) hardly varies ({lo:.3f}..{hi:.3f}): "
                          "no slip sweep to align")
 
     def sse(t):
-        return _traction_sse(t, t_g, v_g, t_r, w_r, x_r, keep, n_knots, min_speed_mps)[0]
+        return _traction_sse(t, t_g, v_g, t_r, w_r, x_r, keep, n_knots, min_speed_mps, dw_r)[0]
 
     taus = np.arange(0.0, max_latency_s + 1e-9, 0.002)
     prof = np.array([sse(t) for t in taus])
@@ -266,8 +285,8 @@ def estimate_latency_traction(t_gnss_s: np.ndarray, v_gnss: np.ndarray, t_ref_s:
     a, b = taus[max(i - 2, 0)], taus[min(i + 2, taus.size - 1)]
     res = optimize.minimize_scalar(sse, bounds=(a, b), method="bounded", options={"xatol": 1e-5})
     tau = float(res.x)
-    s0, n, r, _ = _traction_sse(tau, t_g, v_g, t_r, w_r, x_r, keep, n_knots, min_speed_mps)
-    p = n_knots + 4 + 1
+    s0, n, r, _ = _traction_sse(tau, t_g, v_g, t_r, w_r, x_r, keep, n_knots, min_speed_mps, dw_r)
+    p = (n_knots + 4) * (1 if dw_r is None else 2) + 1
     s2 = s0 / max(n - p, 1)
     h = 0.006
     curv = (sse(tau + h) - 2 * s0 + sse(tau - h)) / h**2
