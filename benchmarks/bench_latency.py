@@ -39,8 +39,8 @@ DEFAULT = [  # terrain, fronts, latency_s, seed, duration_s
 QUICK = DEFAULT[:2] + DEFAULT[4:5] + DEFAULT[8:9]
 #: --effects: driven fronts with hidden effects that change the traction curve with load or time
 EFFECTS = [("clay", "driven", 0.12, 11, 180, "tyre_deflection"), ("clay", "driven", 0.06, 12, 180, "terrain_drift"),
-           ("sand", "driven", 0.15, 13, 180, "load_dependent"), ("sand", "driven", 0.09, 14, 180, "bulldozing"),
-           ("clay", "driven", 0.18, 15, 180, "lyasko"), ("sand", "reference", 0.09, 16, 180, "stress_distribution")]
+           ("sand", "driven", 0.15, 13, 180, "vasilev"), ("sand", "driven", 0.09, 14, 180, "ding"),
+           ("clay", "driven", 0.18, 15, 180, "lyasko"), ("clay", "reference", 0.09, 16, 180, "stress_distribution")]
 
 
 def run_case(terrain, fronts, lat, seed, dur, effect="none", tmp: Path = Path(".")) -> dict:

@@ -8,11 +8,16 @@ Steps (each in its own module):
    one sample, report lost frames, rotate to the hub frame (:mod:`.wft`);
    lost runs of at most ``MAX_FILL_SAMPLES`` samples are interpolated,
    longer ones split the data into segments;
-3. clocks: host->GPS time mapping, GNSS latency from the free-rolling front
-   wheels (or the measured wheel when it is nearly unloaded; or, when the
-   front wheels turn with the measured one (all wheels driven) or that
-   reference fails, from the vehicle dynamics: GNSS dV/dt against the
-   measured Fx), removed from the GNSS timestamps (:mod:`.timesync`);
+3. clocks: host->GPS time mapping, and the GNSS latency (:mod:`.timesync`)
+   from up to three estimators: the free-rolling front wheels' r*omega (or
+   the measured wheel where it is nearly unloaded), the measured wheel's
+   slip-traction consistency (T/(rW) a single function of slip: needs no
+   free-rolling wheel) and the vehicle dynamics (GNSS dV/dt against the
+   measured Fx); front wheels that turn with the measured one or disagree
+   with the traction estimate are driven and not used; the choice, its total
+   standard error and a ``reliable`` flag go to ``quality["latency"]``
+   (:func:`_choose_latency`), an unreliable one is applied only when best
+   supported and is stated in the warnings; removed from the GNSS timestamps;
 4. per source and per contiguous segment: uniform resampling at the source's
    own rate, zero-phase Butterworth low-pass (:mod:`.filters`), linear
    interpolation onto the output grid (``rate_hz``, from the first frame);
@@ -114,7 +119,13 @@ class ProcessResult:
     damaged parts of the file as the reader reports them; ``t0_s``/``t1_s`` None
     when the time is unknown).
     ``quality`` dict: frames with outlier timestamps, non-monotonic parts, lost
-    frames per message (None = unknown), grid size.
+    frames per message (None = unknown), grid size, and ``quality["latency"]``:
+    ``estimate_s`` (applied, None if none), ``stderr_s`` (total: statistical and
+    systematic), ``method`` (``wheel_reference`` | ``traction`` |
+    ``traction+dynamics`` | None), ``reliable`` bool (False: slip and what is built
+    on it are less certain), ``reasons`` (why not reliable), ``fronts_driven``,
+    ``candidates`` {name: {estimate_s, stderr_s, stderr_stat_s, systematic_s,
+    usable, note, n, method}}, ``search_range_s`` (see :func:`_choose_latency`).
     """
 
     signals: pd.DataFrame
@@ -152,9 +163,12 @@ class ProcessResult:
         elif ine:
             lines.append("inertia NOT compensated: drawbar_pull_n = Fx and torque_nm = My as measured "
                          f"({ine.get('reason', 'switched off')})")
+        lq = (self.quality or {}).get("latency") or {}
         if self.gnss_latency_s is not None:
             lines.append(f"GNSS latency: {self.gnss_latency_s * 1e3:.1f} ms +- "
-                         f"{self.gnss_latency_stderr_s * 1e3:.1f} ms (reference: {self.latency_reference}; removed)")
+                         f"{self.gnss_latency_stderr_s * 1e3:.1f} ms (reference: {self.latency_reference}; removed)"
+                         + ("" if lq.get("reliable", True) else
+                            " UNRELIABLE: " + "; ".join(lq.get("reasons") or [])))
         else:
             lines.append("GNSS latency: not estimated (see warnings); GNSS timestamps used as received")
         g = self.gps_time_mapping
