@@ -29,7 +29,10 @@ def register(subparsers) -> None:
         "  wheelsoil log --bus can0=virtual:ch0 -o sim.mcap --vehicle my_vehicle.toml\n"
         "systemd unit example: daq/wheelsoil-logger.service")
     p.add_argument("--bus", action="append", required=True, metavar="SPEC", help=_BUS_HELP)
-    p.add_argument("-o", "--output", required=True, help="output .mcap file (overwritten)")
+    p.add_argument("-o", "--output", required=True,
+                   help="output .mcap file; if it exists the recording goes to OUTPUT-001.mcap, -002, ... "
+                   "(never over an existing file) unless --overwrite")
+    p.add_argument("--overwrite", action="store_true", help="replace OUTPUT if it exists")
     p.add_argument("--duration", type=float, default=None, metavar="S", help="stop after S seconds (default: until SIGINT/SIGTERM)")
     p.add_argument("--split-minutes", type=float, default=None, metavar="M",
                    help="start a new file every M minutes: OUTPUT_0001.mcap, OUTPUT_0002.mcap, ...")
@@ -54,6 +57,7 @@ def register(subparsers) -> None:
     p.add_argument("--map", action="append", default=[], metavar="SRC=BUS",
                    help="name bus BUS what the file calls SRC (python-can channel or default bus name); repeatable")
     p.add_argument("--vehicle", default=None, metavar="TOML", help="vehicle configuration to attach (default: shipped)")
+    p.add_argument("--overwrite", action="store_true", help="replace OUTPUT if it exists (default: keep it, refuse)")
     p.set_defaults(func=_cmd_import)
 
     p = subparsers.add_parser(
@@ -68,6 +72,7 @@ def register(subparsers) -> None:
     p.add_argument("--bus", action="append", default=None, metavar="NAME", help="only these buses (repeatable)")
     p.add_argument("--map", action="append", default=[], metavar="BUS=CHANNEL",
                    help="channel name written for BUS (default: the bus name); repeatable")
+    p.add_argument("--overwrite", action="store_true", help="replace OUTPUT if it exists (default: keep it, refuse)")
     p.set_defaults(func=_cmd_export)
 
     p = subparsers.add_parser(
@@ -105,15 +110,18 @@ def register(subparsers) -> None:
     p.add_argument("-o", "--output", required=True)
     p.add_argument("--bus", action="append", default=None, metavar="NAME", help="only decode these buses (repeatable)")
     p.add_argument("--vehicle", default=None, metavar="TOML", help="use this vehicle configuration's DBCs")
+    p.add_argument("--overwrite", action="store_true", help="replace OUTPUT if it exists (default: keep it, refuse)")
     p.set_defaults(func=_cmd_decode)
 
     p = subparsers.add_parser(
         "recover", formatter_class=_RAW, help="rewrite a truncated/damaged recording into a clean one",
         description="Rewrite a recording cut short (power loss, SIGKILL) into a complete, indexed MCAP\n"
-        "file with every complete chunk, its metadata and attachments.",
+        "file with every verified chunk (CRC checked), its metadata and attachments; what was\n"
+        "dropped is recorded in the metadata record wheelsoil.recovered.",
         epilog="example:\n  wheelsoil recover field_0003.mcap -o field_0003.fixed.mcap")
     p.add_argument("recording")
     p.add_argument("-o", "--output", required=True)
+    p.add_argument("--overwrite", action="store_true", help="replace OUTPUT if it exists (default: keep it, refuse)")
     p.set_defaults(func=_cmd_recover)
 
 
@@ -150,27 +158,59 @@ def _cmd_log(args) -> int:
     res = log_buses(specs, args.output, config=config, duration_s=args.duration,
                     split_minutes=args.split_minutes, max_frames=args.max_frames,
                     rcvbuf_bytes=args.rcvbuf_bytes, on_status=show, handle_signals=True,
-                    metadata={"command": " ".join(sys.argv)})
+                    metadata={"command": " ".join(sys.argv)}, overwrite=args.overwrite,
+                    command=["wheelsoil", *sys.argv[1:]] if sys.argv else None)
     if tty and not args.quiet:
         print(file=sys.stderr)
     st = res.status
+    from pathlib import Path
+
+    if res.files and not args.split_minutes and Path(res.files[0]) != Path(args.output):
+        print(f"note: {args.output} exists and is kept; recorded into {res.files[0]} "
+              "(--overwrite replaces it)", file=sys.stderr)
     print(f"recorded {sum(res.frames.values())} frames ({_counts(res.frames)}) "
           f"into {', '.join(map(str, res.files))}; stop: {res.stop_reason}")
     lost = sum(b["lost_wft_frames"] for b in st["buses"].values())
-    drops = sum(b["rx_dropped"] or 0 for b in st["buses"].values())
-    if lost or drops or st.get("bad_frames"):
-        print(f"warning: lost WFT frames {lost}, kernel rx drops {drops}, unrecordable frames {st.get('bad_frames', 0)}",
+    est = sum(b.get("lost_frames_estimated") or 0 for b in st["buses"].values())
+    drops = [b["rx_dropped"] for b in st["buses"].values()]
+    unknown = [name for name, b in st["buses"].items() if b["rx_dropped"] is None]
+    known = sum(d for d in drops if d is not None)
+    if lost or est or known or unknown or st.get("bad_frames"):
+        parts = [f"{b['rx_dropped']} on {name}" for name, b in st["buses"].items() if b["rx_dropped"] is not None]
+        if unknown:
+            parts.append(f"unknown on {', '.join(unknown)} (the interface cannot report drops)")
+        drop_txt = ", ".join(parts)
+        print(_safe(f"warning: lost WFT frames {lost} (counter gaps), frames missing by cycle time {est}, "
+                    f"kernel rx drops {drop_txt}, unrecordable frames {st.get('bad_frames', 0)}"),
               file=sys.stderr)
     return 0
+
+
+def _overwrite_kw(fn, args) -> dict:
+    """``{"overwrite": ...}`` for library writers that take it (import/export do their own
+    atomic write and output check), else {} (the CLI checked the output itself)."""
+    import inspect
+
+    try:
+        return {"overwrite": args.overwrite} if "overwrite" in inspect.signature(fn).parameters else {}
+    except (TypeError, ValueError):
+        return {}
 
 
 def _counts(d: dict) -> str:
     return ", ".join(f"{b} {n}" for b, n in d.items()) or "no bus"
 
 
+def _safe(text: str) -> str:
+    """``text`` with control characters (terminal escape sequences) shown as escapes."""
+    from .recording import _printable
+
+    return "\n".join(_printable(line) for line in str(text).split("\n"))
+
+
 def _print_warnings(ws, limit=20):
     for w in ws[:limit]:
-        print(f"warning: {w}", file=sys.stderr)
+        print(_safe(f"warning: {w}"), file=sys.stderr)
     if len(ws) > limit:
         print(f"warning: ... and {len(ws) - limit} more", file=sys.stderr)
 
@@ -179,42 +219,66 @@ def _cmd_import(args) -> int:
     import warnings
 
     from .convert import import_log, parse_channel_map
+    from .recording import check_output
 
+    check_output(args.output, args.inputs, overwrite=args.overwrite)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
         res = import_log(args.inputs, args.output, channel_map=parse_channel_map(args.map),
-                         config=_config(args.vehicle))
+                         config=_config(args.vehicle), **_overwrite_kw(import_log, args))
     _print_warnings(res.warnings)
-    print(f"imported {res.total} frames ({_counts(res.frames)}) into "
-          f"{res.output}" + (f"; skipped {res.skipped} unparsable line(s)" if res.skipped else ""))
+    print(_safe(f"imported {res.total} frames ({_counts(res.frames)}) into "
+                f"{res.output}" + (f"; skipped {res.skipped} unparsable line(s)" if res.skipped else "")))
     return 0
 
 
 def _cmd_export(args) -> int:
-    from .convert import export_recording, parse_channel_map
+    import os
+    import secrets
+    from pathlib import Path
 
-    res = export_recording(args.recording, args.output, channel_map=parse_channel_map(args.map), buses=args.bus)
-    _print_warnings(res.warnings)
-    print(f"exported {res.total} frames ({_counts(res.frames)}) to {res.output}")
+    from .convert import export_recording, parse_channel_map
+    from .recording import check_output
+
+    out = check_output(args.output, [args.recording], overwrite=args.overwrite)
+    kw = _overwrite_kw(export_recording, args)
+    if kw:  # export_recording writes atomically itself
+        tmp = out
+        res = export_recording(args.recording, out, channel_map=parse_channel_map(args.map), buses=args.bus, **kw)
+    else:  # write a temporary file next to the output, rename it into place only on success
+        tmp = out.with_name(f".{out.stem}.tmp-{secrets.token_hex(4)}{out.suffix}")
+        try:
+            res = export_recording(args.recording, tmp, channel_map=parse_channel_map(args.map), buses=args.bus)
+            os.replace(tmp, out)
+        finally:
+            if tmp.exists():
+                tmp.unlink()
+    res.output = Path(out)
+    _print_warnings([w.replace(str(tmp), str(out)) for w in res.warnings])
+    print(_safe(f"exported {res.total} frames ({_counts(res.frames)}) to {out}"))
     return 0
 
 
 def _cmd_decode(args) -> int:
     from .decode_json import decode_recording
+    from .recording import check_output
 
+    check_output(args.output, [args.recording], overwrite=args.overwrite)
     res = decode_recording(args.recording, args.output, buses=args.bus,
                            config=_config(args.vehicle) if args.vehicle else None)
     _print_warnings(res.warnings)
-    print(f"decoded {res.decoded} of {res.total} frames into JSON channels of {res.output}")
+    print(_safe(f"decoded {res.decoded} of {res.total} frames into JSON channels of {res.output}"))
     return 0
 
 
 def _cmd_recover(args) -> int:
     from .convert import recover_recording
+    from .recording import check_output
 
+    check_output(args.output, [args.recording], overwrite=args.overwrite)
     res = recover_recording(args.recording, args.output)
     _print_warnings(res.warnings)
-    print(f"recovered {res.total} frames ({_counts(res.frames)}) into {res.output}")
+    print(_safe(f"recovered {res.total} frames ({_counts(res.frames)}) into {res.output}"))
     return 0
 
 
@@ -247,19 +311,53 @@ def _cmd_info(args) -> int:
 
 
 def format_info(info) -> str:
-    """Human-readable text of a :class:`~wheelsoil.daq.info.RecordingInfo`."""
-    import time
-
+    """Human-readable text of a :class:`~wheelsoil.daq.info.RecordingInfo` (control
+    characters and terminal escape sequences from the file are shown escaped, never raw)."""
     d = info.to_dict()
-    out = [f"{info.path}: {info.size_bytes / 1e6:.2f} MB, "
-           f"{'complete' if info.complete else 'INCOMPLETE (no footer: truncated; run wheelsoil recover)'}"]
+    if info.complete:
+        state = "complete"
+    elif info.damage and info.footer:
+        state = "DAMAGED (damaged parts skipped, see below; wheelsoil recover writes a clean copy)"
+    else:
+        state = "INCOMPLETE (no footer: truncated; run wheelsoil recover)"
+    out = [f"{info.path}: {info.size_bytes / 1e6:.2f} MB, {state}"]
     rec = info.metadata.get("wheelsoil.recording", {})
     if info.start_ns is not None:
-        out.append(f"  frames from {time.strftime('%Y-%m-%d %H:%M:%S', time.gmtime(info.start_ns / 1e9))} UTC, "
+        out.append(f"  frames from {_utc(info.start_ns)} to {_utc(info.end_ns)} UTC, "
                    f"duration {info.duration_s:.3f} s")
-    if rec:
+    if info.outlier_frames:
+        tb = info.time.get("outliers", {})
+        ex = "; ".join(f"{e['bus']} frame {e['frame']} at {_utc(e['t_ns'])}" for e in tb.get("examples", [])[:3])
+        out.append(f"  OUTLIER TIMESTAMPS: {info.outlier_frames} frame(s) far outside the run ({ex}); "
+                   "not counted in the first/last time and duration")
+    if info.time.get("gaps_s"):
+        out.append("  gaps of more than an hour inside the run: "
+                   + ", ".join(f"{g / 3600:.2f} h" for g in info.time["gaps_s"]))
+    for bus, n in sorted(info.non_monotonic.items()):
+        back = info.time.get("max_backward_s", {}).get(bus, 0.0)
+        out.append(f"  NON-MONOTONIC TIME on {bus}: {n} backward step(s), largest {back:.6g} s "
+                   "(logs joined out of order?)")
+    prov = info.provenance
+    if prov:
+        kind = prov.get("kind", "?")
+        line = f"  provenance: {kind}, written by wheelsoil {prov.get('wheelsoil_version', '?')} on " \
+               f"{prov.get('host', '?')} at {prov.get('created_utc', '?')}"
+        if kind == "recorded":
+            line += f"; adapters: {', '.join(map(str, prov.get('adapters') or [])) or '?'}"
+        elif kind == "imported":
+            srcs = prov.get("sources") or []
+            line += "; from " + ", ".join(
+                f"{s.get('path', '?')} (sha256 {str(s.get('sha256', '?'))[:16]}..., {s.get('size_bytes', '?')} B)"
+                if isinstance(s, dict) else str(s) for s in srcs)
+        elif kind == "simulated":
+            line += f"; simulator {prov.get('simulator', '?')}, seed {prov.get('seed', '?')}"
+        if prov.get("command"):
+            cmd = prov["command"]
+            line += f"; command: {' '.join(map(str, cmd)) if isinstance(cmd, list) else cmd}"
+        out.append(line)
+    elif rec:
         out.append(f"  recorded on {rec.get('host', '?')} with wheelsoil {rec.get('version.wheelsoil', '?')}, "
-                   f"started {rec.get('start_time_utc', '?')}")
+                   f"started {rec.get('start_time_utc', '?')} (no provenance record)")
     out.append(f"  DBC source: {info.config_source}; attachments: {', '.join(info.attachments) or 'none'}")
     out.append("  channels:")
     for c in info.channels:
@@ -276,8 +374,21 @@ def format_info(info) -> str:
     s = info.stats
     out.append(f"  lost frames (counter gaps): {s.total('lost_frames')}"
                + (f" ({', '.join(f'{k} {v}' for k, v in sorted(s.lost_frames.items()))})" if s.lost_frames else ""))
+    if s.lost_frames_estimated:
+        out.append(f"  frames missing by nominal cycle time (estimate): {s.total('lost_frames_estimated')} ("
+                   + ", ".join(f"{k} {v}" for k, v in sorted(s.lost_frames_estimated.items())) + ")")
     out.append(f"  unknown-id frames: {s.total('unknown_ids')}, DLC mismatches: {s.total('dlc_mismatch')}, "
                f"error frames: {s.total('error_frames')}")
+    if info.damage:
+        lost = info.frames_lost_to_damage
+        out.append(f"  DAMAGE: {len(info.damage)} damaged place(s) skipped, frames lost "
+                   f"{'unknown' if lost is None else lost}")
     for w in info.warnings:
         out.append(f"  warning: {w}")
-    return "\n".join(out)
+    return _safe("\n".join(out))
+
+
+def _utc(t_ns) -> str:
+    from .info import _fmt_ns
+
+    return _fmt_ns(int(t_ns))

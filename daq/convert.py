@@ -1108,11 +1108,14 @@ def rewrite_recording(path, output, *, on_batch=None, note: tuple[str, dict] | N
             w.write_status(st, time_ns=t)
         if note is not None:
             w.add_metadata(note[0], dict(note[1], source_file=str(path), source_complete=str(state.complete),
-                                         damage="; ".join(state.warnings) or "none"))
+                                         damage="; ".join(state.warnings) or "none",
+                                         damage_json=json.dumps(getattr(state, "damage", []))))
         if "wheelsoil.summary" in state.metadata:
             w.summary.update(state.metadata["wheelsoil.summary"])
-    finally:
-        w.close()
+    except BaseException:
+        w.abort()  # the temporary file goes; an existing output stays as it was
+        raise
+    w.close()
     res.frames = dict(w.frame_counts)
     return res
 

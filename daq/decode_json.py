@@ -46,8 +46,15 @@ def decode_recording(path, output, *, config=None, buses=None):
     from .convert import rewrite_recording
     from .info import load_recording_config
 
+    fallback = None
     if config is None:
-        config = load_recording_config(path) or load_vehicle_config()
+        try:
+            config = load_recording_config(path)
+        except ValueError as exc:  # a malformed attached configuration: say so, use the default
+            fallback = (f"{path}: the vehicle configuration attached to the recording is unusable ({exc}); "
+                        "decoded with the default vehicle.toml instead")
+            config = None
+        config = config or load_vehicle_config()
     channels: dict[tuple, int] = {}
     errors: dict[tuple, int] = {}
     unknown: dict[tuple, int] = {}
@@ -92,6 +99,8 @@ def decode_recording(path, output, *, config=None, buses=None):
     for (bus, fid, ext), c in sorted(unknown.items()):
         res.warnings.append(f"{path}: bus {bus}: {c} frame(s) with id 0x{fid:X}{' (ext)' if ext else ''} "
                             "not in the DBCs; raw frames kept")
+    if fallback:
+        res.warnings.insert(0, fallback)
     res.skipped = sum(errors.values())
     res.output = Path(output)
     res.decoded = decoded[0]

@@ -22,7 +22,7 @@ from pathlib import Path
 from typing import Callable, Mapping
 
 from .frames import FrameBatch
-from .recording import RecordingWriter
+from .recording import RecordingWriter, numbered_path
 from .stats import StatsAccumulator
 
 #: How often the logger hands received frames to the writer (one MCAP message per bus) [s].
@@ -100,11 +100,19 @@ class CanLogger:
         batch_interval_s: how often received frames are handed to the writer [s].
         flush_interval_s: chunk close + fsync interval of the writer [s].
         status_interval_s: status record/callback interval [s].
+        overwrite: replace an existing output file. Default False: a file that
+            exists is never touched; the recording goes to the first free
+            ``<stem>-001.mcap``, ``-002``... instead (the logger writes straight
+            into its file, fsynced every flush, so a power cut keeps what was recorded).
+        provenance: the ``recorded`` provenance record
+            (:func:`~wheelsoil.daq.provenance.make_provenance`) written to every file
+            (None: one made here, adapters from ``bus_meta``).
     """
 
     def __init__(self, buses: Mapping[str, object], output, *, config=None, split_minutes: float | None = None,
                  metadata: Mapping | None = None, bus_meta: Mapping[str, Mapping] | None = None,
-                 batch_interval_s: float = BATCH_INTERVAL_S, flush_interval_s: float = 0.5, status_interval_s: float = 1.0):
+                 batch_interval_s: float = BATCH_INTERVAL_S, flush_interval_s: float = 0.5, status_interval_s: float = 1.0,
+                 overwrite: bool = False, provenance: Mapping | None = None):
         if not buses:
             raise ValueError("no bus to log: give at least one --bus INTERFACE:CHANNEL")
         self.buses = dict(buses)
@@ -118,6 +126,15 @@ class CanLogger:
         self.batch_interval_s = batch_interval_s
         self.flush_interval_s = flush_interval_s
         self.status_interval_s = status_interval_s
+        self.overwrite = bool(overwrite)
+        if provenance is None:  # a library caller: recorded, adapters from the channel metadata
+            from .provenance import make_provenance
+
+            adapters = [f"{name}={self.bus_meta[name]['interface']}:{self.bus_meta[name]['channel']}"
+                        if {"interface", "channel"} <= set(self.bus_meta.get(name, {})) else name
+                        for name in self.buses]
+            provenance = make_provenance("recorded", adapters=adapters)
+        self.provenance = dict(provenance)
         # a plain flag, not threading.Event: Event.set() from a signal handler can
         # deadlock on the Event's lock when the handler interrupts Event.wait()
         self._stop_requested = False
@@ -139,14 +156,24 @@ class CanLogger:
 
     def _file_name(self) -> Path:
         if self.split_s is None:
-            return self.output
-        return self.output.with_name(f"{self.output.stem}_{len(self._files) + 1:04d}{self.output.suffix or '.mcap'}")
+            p = self.output
+        else:
+            p = self.output.with_name(f"{self.output.stem}_{len(self._files) + 1:04d}{self.output.suffix or '.mcap'}")
+        return p if self.overwrite else numbered_path(p)
 
     def _open_writer(self) -> None:
-        path = self._file_name()
         meta = dict(self.metadata, file_index=len(self._files) + 1)
-        self._writer = RecordingWriter(path, config=self.config, metadata=meta,
-                                       flush_interval_s=self.flush_interval_s)
+        for _attempt in range(100):
+            path = self._file_name()
+            try:  # written in place (durable every flush), never over a file that exists
+                self._writer = RecordingWriter(path, config=self.config, metadata=meta,
+                                               flush_interval_s=self.flush_interval_s, atomic=False,
+                                               overwrite=self.overwrite, provenance=self.provenance)
+                break
+            except FileExistsError:  # created meanwhile by someone else: take the next number
+                continue
+        else:
+            raise OSError(f"{self.output}: no free file name to record into")
         for name in self.buses:
             self._writer.add_bus(name, **self.bus_meta.get(name, {}))
         self._files.append(path)
@@ -157,6 +184,7 @@ class CanLogger:
         st = self.status()
         self._writer.summary.update({
             "lost_frames": self._stats.stats.lost_frames,
+            "lost_frames_estimated": self._stats.stats.lost_frames_estimated,
             "rx_dropped": {b: v["rx_dropped"] for b, v in st["buses"].items()},
             "error_frames": self._stats.stats.error_frames,
             "bus_errors": {b: r.bus_errors for b, r in self._readers.items()},
@@ -212,12 +240,21 @@ class CanLogger:
                 for name in ids.values():
                     if name in s.lost_frames:
                         lost_by_bus[bus] = lost_by_bus.get(bus, 0) + s.lost_frames[name]
+        est_by_bus: dict[str, int] = {}
+        for bus, ids in s.names.items():
+            for name in ids.values():
+                if name in s.lost_frames_estimated:
+                    est_by_bus[bus] = est_by_bus.get(bus, 0) + s.lost_frames_estimated[name]
         for name, r in self._readers.items():
             n = s.frames.get(name, 0)
-            drops = getattr(r.bus, "rx_dropped", None)
+            try:  # None: the interface cannot report drops (udp_multicast, virtual, ...): unknown, not 0
+                drops = getattr(r.bus, "rx_dropped", None)
+            except Exception:
+                drops = None
             buses[name] = {
                 "frames": n, "fps": round((n - self._prev_counts.get(name, 0)) / dt, 1),
                 "lost_wft_frames": lost_by_bus.get(name, 0),
+                "lost_frames_estimated": est_by_bus.get(name, 0),
                 "error_frames": s.error_frames.get(name, 0), "bus_errors": r.bus_errors,
                 "rx_dropped": None if drops is None else int(drops),
                 "unknown_id_frames": sum(s.unknown_ids.get(name, {}).values()),
@@ -295,14 +332,18 @@ class CanLogger:
 
 
 def format_status(st: dict) -> str:
-    """One status line: ``12.0 s | can0 8801 fr/s lost 0 errfr 0 buserr 0 drop 0 | ... | 3.40 MB run.mcap``
+    """One status line: ``12.0 s | can0 8801 fr/s lost 0 unk 0 errfr 0 buserr 0 drop ? | ... | 3.40 MB run.mcap``
 
-    (lost: WFT frames missing by Counter gaps; errfr: CAN error frames; buserr:
-    driver/adapter errors; drop: kernel receive-queue drops, ``-`` when unknown)."""
+    (lost: frames missing by counter gaps (WFT) plus those missing by nominal
+    cycle time (``+N~``, an estimate); unk: frames with ids not in the bus's DBCs;
+    errfr: CAN error frames; buserr: driver/adapter errors; drop: kernel
+    receive-queue drops, ``?`` when the interface cannot tell (udp_multicast, virtual))."""
     parts = [f"{st['elapsed_s']:7.1f} s"]
     for name, b in st["buses"].items():
-        drop = "-" if b["rx_dropped"] is None else str(b["rx_dropped"])
-        parts.append(f"{name} {b['fps']:7.0f} fr/s lost {b['lost_wft_frames']} errfr {b['error_frames']}"
+        drop = "?" if b["rx_dropped"] is None else str(b["rx_dropped"])
+        est = b.get("lost_frames_estimated") or 0
+        parts.append(f"{name} {b['fps']:7.0f} fr/s lost {b['lost_wft_frames']}" + (f"+{est}~" if est else "")
+                     + f" unk {b.get('unknown_id_frames', 0)} errfr {b['error_frames']}"
                      f" buserr {b['bus_errors']} drop {drop}")
     parts.append(f"{st['file_bytes'] / 1e6:8.2f} MB {Path(st['file']).name}")
     return " | ".join(parts)
@@ -311,8 +352,14 @@ def format_status(st: dict) -> str:
 def log_buses(specs, output, *, config=None, duration_s: float | None = None,
               split_minutes: float | None = None, max_frames: int | None = None,
               rcvbuf_bytes: int | None = None, on_status: Callable[[dict], None] | None = None,
-              handle_signals: bool = False, metadata: Mapping | None = None) -> LogResult:
+              handle_signals: bool = False, metadata: Mapping | None = None, overwrite: bool = False,
+              command=None) -> LogResult:
     """Open the buses of ``specs`` (``BusSpec`` or ``"[NAME=]INTERFACE:CHANNEL"``) and log them.
+
+    Every file carries the provenance ``recorded`` with ``adapters`` = the bus
+    specs and ``command`` (default: ``sys.argv`` of the wheelsoil CLI). Without
+    ``overwrite`` an existing output is kept and a numbered file is used (see
+    :class:`CanLogger`).
 
     With ``handle_signals`` SIGINT and SIGTERM stop the logger cleanly (file
     closed with summary and footer); the previous handlers are restored after.
@@ -331,9 +378,14 @@ def log_buses(specs, output, *, config=None, duration_s: float | None = None,
         for s in specs:
             buses[s.name] = open_bus(s, rcvbuf_bytes=rcvbuf_bytes or DEFAULT_RCVBUF_BYTES)
         meta = dict(metadata or {})
-        meta["bus_specs"] = " ".join(f"{s.name}={s.interface}:{s.channel}" for s in specs)
+        adapters = [f"{s.name}={s.interface}:{s.channel}" for s in specs]
+        meta["bus_specs"] = " ".join(adapters)
+        from .provenance import make_provenance
+
+        prov = make_provenance("recorded", command=command, adapters=adapters)
         logger = CanLogger(buses, output, config=config, split_minutes=split_minutes, metadata=meta,
-                           bus_meta={s.name: {"interface": s.interface, "channel": s.channel} for s in specs})
+                           bus_meta={s.name: {"interface": s.interface, "channel": s.channel} for s in specs},
+                           overwrite=overwrite, provenance=prov)
         old = {}
         if handle_signals:
             for sig in (signal.SIGINT, signal.SIGTERM):

@@ -5,6 +5,13 @@ Public API (docs/architecture.md)::
     from wheelsoil.model import Terrain, Wheel, load_terrain, TERRAINS, DEFAULT_WHEEL
     from wheelsoil.model import wong_forces, WheelForces, MODELS, get_model, SinkageModel, Param
     from wheelsoil.model import m0_pct, r0, r2
+    from wheelsoil.model import HYPOTHESES, get_hypothesis      # the causes the diagnosis tries
+
+Fitting and diagnosis (import the submodules; they pull in scipy)::
+
+    from wheelsoil.model.data import prepare_data            # selection, cells, model-free noise
+    from wheelsoil.model.crossval import fit_hypothesis      # penalised Gauss-Newton, CV
+    from wheelsoil.model.diagnosis import diagnose           # the verdict; .to_dict() = contract D
 
 Example::
 
@@ -16,6 +23,7 @@ Example::
 """
 
 from .metrics import m0_pct, r0, r2
+from .hypotheses import HYPOTHESES, get_hypothesis
 from .slip_sinkage import MODELS, Param, SinkageModel, get_model
 from .terrain import DEFAULT_WHEEL, TERRAINS, Terrain, Wheel, load_terrain, load_terrain_file
 from .wong import WheelForces, sinkage_eq10, wong_forces
@@ -37,4 +45,6 @@ __all__ = [
     "m0_pct",
     "r0",
     "r2",
+    "HYPOTHESES",
+    "get_hypothesis",
 ]

@@ -28,9 +28,16 @@ from .diagnosis import CHANNEL_TITLES, TITLES, Diagnosis
 __all__ = ["write_report", "report_dict", "SCHEMA", "ALL_MODELS"]
 
 SCHEMA = "wheelsoil.report/1"
-ALL_MODELS = ("wong", "vasilev", "lyasko", "ding", "terrain_mismatch")
+ALL_MODELS = ("wong", "vasilev", "lyasko", "ding", "terrain_mismatch", "vasilev+terrain", "ding+terrain",
+              "wong_reece", "drift_linear")
 COLORS = {"wong": "#444444", "vasilev": "#1f77b4", "lyasko": "#d62728", "ding": "#2ca02c",
-          "terrain_mismatch": "#9467bd"}
+          "terrain_mismatch": "#9467bd", "vasilev+terrain": "#17becf", "ding+terrain": "#bcbd22",
+          "wong_reece": "#8c564b", "drift_linear": "#e377c2"}
+
+
+def _fit_of(diag, name):
+    """The fit shown under ``name`` (``terrain_mismatch`` is the ``terrain`` hypothesis)."""
+    return diag.fits.get(name) or (diag.fits.get("terrain") if name == "terrain_mismatch" else None)
 
 
 def _clean(obj):
@@ -95,7 +102,7 @@ def report_dict(diag: Diagnosis, *, terrain, wheel, inputs, time_sync: dict | No
     data = diag.data
     models = {}
     for name in ALL_MODELS:
-        f = diag.fits.get(name)
+        f = _fit_of(diag, name)
         if f is None:
             why = "not fitted"
             for msg in diag.failures + diag.notes:
@@ -151,6 +158,7 @@ def report_dict(diag: Diagnosis, *, terrain, wheel, inputs, time_sync: dict | No
         "time_sync": dict(time_sync) if time_sync else {"gnss_latency_s": None},
         "models": models,
         "diagnosis": {
+            **diag.to_dict(),
             "effect": diag.effect,
             "model": diag.model,
             "confidence": diag.confidence,
@@ -186,9 +194,13 @@ def _model_curves(diag: Diagnosis, wheel, slip_grid, load):
 
     out = {}
     for k, f in diag.fits.items():
-        mp = {p: v for p, v in f.params.items() if p in {q.name for q in get_model(f.model).params}}
+        key = "terrain_mismatch" if k == "terrain" else k
         try:
-            out[k] = get_model(f.model).predict(f.terrain, wheel, np.full(slip_grid.size, load), slip_grid, mp)
+            if hasattr(f, "curve"):
+                out[key] = f.curve(np.full(slip_grid.size, load), slip_grid)
+                continue
+            mp = {p: v for p, v in f.params.items() if p in {q.name for q in get_model(f.model).params}}
+            out[key] = get_model(f.model).predict(f.terrain, wheel, np.full(slip_grid.size, load), slip_grid, mp)
         except ValueError:
             continue
     return out
@@ -210,12 +222,12 @@ def _figures(diag: Diagnosis, wheel, out_dir: Path) -> list:
     files = []
 
     # 1. Dp vs slip, one panel per model (paper Figs. 4-5)
-    names = [k for k in ALL_MODELS if k in diag.fits]
+    names = [k for k in ALL_MODELS if _fit_of(diag, k) is not None]
     ncol = 3 if len(names) > 2 else len(names)
     nrow = int(math.ceil(len(names) / ncol))
     fig, axes = plt.subplots(nrow, ncol, figsize=(4.2 * ncol, 3.3 * nrow), squeeze=False, sharey=True)
     for ax, k in zip(axes.flat, names):
-        f = diag.fits[k]
+        f = _fit_of(diag, k)
         ax.scatter(s, dp, label="measured", **pt)
         order = np.argsort(s)
         if big:
@@ -336,7 +348,7 @@ def _html(rep: dict, figs: list) -> str:
     parts.append("<p>Input: " + ", ".join(f"<code>{html.escape(str(i))}</code>" for i in rep["input"]) + "</p>")
     parts.append(
         f"<div class='verdict'><div class='effect'>Effect: {html.escape(d['effect'])} &nbsp;·&nbsp; model: "
-        f"{html.escape(TITLES.get(d['model'], d['model']))} &nbsp;·&nbsp; confidence: {html.escape(d['confidence'])}</div>"
+        f"{html.escape(TITLES.get(d['model'], d['model'] or 'none'))} &nbsp;·&nbsp; confidence: {html.escape(d['confidence'])}</div>"
         f"<p>{html.escape(d['summary'])}</p></div>"
     )
     if rep["not_done"]:

@@ -1,19 +1,14 @@
-"""fit_model on the wheel-soil models: recovery, agreement with scipy, data checks."""
+"""Fitting hypotheses to cell means: recovery, agreement with scipy, noise, standard errors, data checks."""
 
 import numpy as np
 import pandas as pd
 import pytest
 from scipy.optimize import least_squares
 
-from wheelsoil.model import DEFAULT_WHEEL, get_model, load_terrain
-from wheelsoil.model.fit import (
-    _Problem,
-    cross_validate,
-    estimate_noise,
-    fit_model,
-    prepare_data,
-    synthetic_data,
-)
+from wheelsoil.model import DEFAULT_WHEEL, load_terrain
+from wheelsoil.model.crossval import _Problem, fit_hypothesis
+from wheelsoil.model.fit import fit_model, prepare_data, synthetic_data
+from wheelsoil.model.hypotheses import Context, get_hypothesis, lab_prior
 
 SAND = load_terrain("sand")
 TRUTH = {"m1": 0.6, "m2": 0.03}
@@ -24,68 +19,94 @@ def _table(seed, n=60, **kw):
                           seed=seed, **kw)
 
 
-def test_lyasko_recovered_within_two_stderr_in_90_percent_of_seeds():
+def _ctx():
+    return Context(SAND, DEFAULT_WHEEL, "eq10", lab_prior(SAND, DEFAULT_WHEEL))
+
+
+def test_vasilev_recovered_within_two_stderr_in_90_percent_of_seeds():
     hits = total = 0
-    for seed in range(15):
-        f = fit_model(_table(seed), SAND, DEFAULT_WHEEL, "lyasko")
+    for seed in range(12):
+        df = synthetic_data(SAND, DEFAULT_WHEEL, "vasilev", {"H": 0.05}, kind="table", n_rows=60, load_n=13000.0,
+                            seed=seed)
+        f = fit_model(df, SAND, DEFAULT_WHEEL, "vasilev")
         assert f.success, f.message
-        for p, v in TRUTH.items():
-            total += 1
-            hits += abs(f.params[p] - v) <= 2 * f.stderr[p]
+        total += 1
+        hits += abs(f.params["H"] - 0.05) <= 2 * f.stderr["H"]
     assert hits / total >= 0.9, f"{hits}/{total}"
 
 
-def test_gauss_newton_matches_least_squares_on_the_model():
-    df = _table(3)
-    f = fit_model(df, SAND, DEFAULT_WHEEL, "lyasko")
-    prob = _Problem(get_model("lyasko"), SAND, DEFAULT_WHEEL, prepare_data(df), [], {}, "eq10")
-    ls = least_squares(lambda u: prob.fun(u) / prob.sig, prob.x0, bounds=(prob.lo, prob.hi), x_scale=prob.sc,
-                       xtol=1e-12, ftol=1e-12, gtol=1e-12)
-    np.testing.assert_allclose(f.result.x, ls.x, rtol=1e-4, atol=1e-6)
+def test_gauss_newton_matches_least_squares_on_the_penalised_problem():
+    data = prepare_data(_table(3))
+    ctx = _ctx()
+    h = get_hypothesis("ding+terrain")
+    f = fit_hypothesis(h, ctx, data.cells)
+    prob = _Problem(h, ctx, data.cells)
+    # scipy's trust-region reflective solver, started from our optimum, finds nothing better
+    x0 = np.clip(f.result.x, prob.lo, prob.hi)
+    ls = least_squares(lambda u: np.nan_to_num(prob.fun(u), posinf=1e6), x0, bounds=(prob.lo, prob.hi),
+                       x_scale=prob.sc, xtol=1e-12, ftol=1e-12, gtol=1e-12)
+    assert 0.5 * float(ls.fun @ ls.fun) >= f.result.cost * (1 - 1e-6)  # no better optimum than ours
+    np.testing.assert_allclose(f.result.x, ls.x, rtol=1e-3, atol=1e-3)
 
 
 def test_torque_and_sinkage_are_used_and_tighten_the_estimate():
     df = _table(5, noise_z_m=0.005)
-    only_dp = fit_model(df[["slip", "load_n", "drawbar_pull_n"]], SAND, DEFAULT_WHEEL, "vasilev")
-    joint = fit_model(df, SAND, DEFAULT_WHEEL, "vasilev")
+    only_dp = fit_model(df[["slip", "load_n", "drawbar_pull_n"]], SAND, DEFAULT_WHEEL, "vasilev", cv=False)
+    joint = fit_model(df, SAND, DEFAULT_WHEEL, "vasilev", cv=False)
     assert set(prepare_data(df).channels) == {"drawbar_pull_n", "torque_nm", "sinkage_m"}
-    assert joint.stderr["H"] < only_dp.stderr["H"]
+    assert joint.stderr_fit["H"] < only_dp.stderr_fit["H"]
     assert "sinkage_m" in joint.channel_metrics and "torque_nm" in joint.channel_metrics
 
 
-def test_fit_terrain_fits_k_eq_not_kc_and_kphi_and_names_what_it_fixed():
+def test_fit_terrain_fits_k_eq_not_kc_and_kphi():
     truth = SAND.replace(kc=0.0, kphi=SAND.k_eq(DEFAULT_WHEEL.width) * 1.6, phi=np.radians(28))
     df = synthetic_data(SAND, DEFAULT_WHEEL, "wong", kind="table", n_rows=80, load_n=13000.0,
                         noise_z_m=0.003, terrain_truth=truth, seed=2)
     f = fit_model(df, SAND, DEFAULT_WHEEL, "wong", terrain_params=("k_eq", "n", "c", "phi", "K"))
     assert "kc" not in f.params and "kphi" not in f.params
-    assert "k_eq" in f.params and "phi" in f.params
-    k_true = truth.k_eq(DEFAULT_WHEEL.width)
-    assert abs(f.params["k_eq"] - k_true) <= 3 * f.stderr["k_eq"] + 0.05 * k_true
     assert abs(f.params["phi"] - truth.phi) <= 3 * f.stderr["phi"] + 0.01
-    # one load level: n is not separable from k_eq; it must be reported as held fixed
-    assert "n" in f.fixed_terrain
     assert f.terrain.kc == 0.0 and f.terrain.kphi == pytest.approx(f.params["k_eq"])
 
 
-def test_linear_cross_validation_is_close_to_refitting():
+def test_standard_errors_include_the_lab_prior_uncertainty():
+    """A model that holds the lab terrain fixed: its SE grows by the terrain's prior variance
+    propagated through the fit; a re-fitted terrain parameter's SE is at most its prior sd."""
+    data = prepare_data(_table(4))
+    f = fit_hypothesis(get_hypothesis("vasilev"), _ctx(), data.cells)
+    assert f.stderr["H"] > 1.5 * f.stderr_fit["H"]
+    t = fit_hypothesis(get_hypothesis("terrain"), _ctx(), data.cells)
+    assert t.stderr_fit["n"] <= lab_prior(SAND, DEFAULT_WHEEL)["n"][1] * 1.0001
+
+
+def test_cross_validation_is_out_of_sample_and_per_cycle():
     df = synthetic_data(SAND, DEFAULT_WHEEL, "vasilev", {"H": 0.08}, duration_s=30.0, load_n=13000.0, seed=4)
     data = prepare_data(df)
     f = fit_model(data, SAND, DEFAULT_WHEEL, "vasilev")
-    lin = cross_validate(data, f, SAND, DEFAULT_WHEEL)
-    ref = cross_validate(data, f, SAND, DEFAULT_WHEEL, method="refit")
-    assert lin.cv["n_groups"] == 3 and lin.cv["group_kind"] == "accelerate cycles"
-    assert lin.cv_R0_n == pytest.approx(ref.cv_R0_n, rel=0.02)
-    assert lin.cv_R0_n >= f.metrics["R0_n"] * 0.99  # out of sample is not better than in sample
+    assert f.cv["n_groups"] == 3 and f.cv["group_kind"] == "accelerate cycles"
+    e_in = data.cells.channels["drawbar_pull_n"] - f.cell_pred["drawbar_pull_n"]
+    assert f.cv_R0_n >= np.sqrt(np.mean(e_in**2)) * 0.99  # out of sample is not better than in sample
 
 
-def test_noise_estimate_is_near_the_truth_for_autocorrelated_runs():
+def test_noise_estimate_is_near_the_truth_and_not_inflated_by_a_drift():
+    """Cell noise from a smooth in slip, load and distance: a Dp drift of 300 N over the run
+    (an effect varying with time) must not raise it, and a table's noise is the row noise."""
     df = synthetic_data(SAND, DEFAULT_WHEEL, "wong", duration_s=60.0, noise_dp_n=40.0, seed=6)
+    base = prepare_data(df).cells.sigma["drawbar_pull_n"]
+    drifted = df.copy()
+    drifted["drawbar_pull_n"] += 300.0 * df["t_s"] / df["t_s"].max()
+    assert prepare_data(drifted).cells.sigma["drawbar_pull_n"] == pytest.approx(base, rel=0.1)
+    tab = prepare_data(synthetic_data(SAND, DEFAULT_WHEEL, "lyasko", TRUTH, kind="table", n_rows=120,
+                                      load_n=13000.0, noise_dp_n=40.0, seed=1))
+    assert 30.0 < tab.cells.sigma["drawbar_pull_n"] < 50.0
+
+
+def test_cells_aggregate_cycles_and_slip_bins():
+    df = synthetic_data(SAND, DEFAULT_WHEEL, "wong", duration_s=60.0, seed=1)
     data = prepare_data(df)
-    assert 30.0 < data.sigma["drawbar_pull_n"] < 55.0
-    # neighbours taken inside one cycle would see mostly the filter's smoothness
-    same = estimate_noise(data.channels["drawbar_pull_n"], data.slip, data.load_n)
-    assert same < data.sigma["drawbar_pull_n"]
+    c = data.cells
+    assert 50 <= c.n <= 6 * 12 and np.all(c.count >= 3)
+    assert c.x is not None and c.x.min() == pytest.approx(-0.5) and c.x.max() == pytest.approx(0.5)
+    assert c.x_kind == "distance"
 
 
 def test_prepare_data_excludes_skid_and_zero_slip_with_notes():
@@ -121,5 +142,5 @@ def test_nan_rows_are_dropped_with_a_note():
 
 
 def test_non_convergence_is_reported_not_hidden():
-    f = fit_model(_table(8), SAND, DEFAULT_WHEEL, "lyasko", max_iter=1)
+    f = fit_model(_table(8), SAND, DEFAULT_WHEEL, "lyasko", max_iter=1, cv=False)
     assert not f.success and "maximum" in f.message

@@ -1,0 +1,712 @@
+"""Measured data prepared for fitting: selection, cells, noise that no effect can inflate.
+
+* :func:`prepare_data` selects the driving samples (``slip_min < s < 1``),
+  defines the cross-validation groups (accelerate cycles of a time series;
+  interleaved slip-rank folds of a table) and aggregates the samples into
+  **cells** (:class:`Cells`): accelerate cycle x slip bin x load bin for a
+  time series, one row per cell for a table.  The models are fitted to the
+  cell means: 100 Hz samples filtered at 5 Hz are strongly autocorrelated,
+  so a cycle x slip-bin mean is the independent unit of information, and the
+  fit is ~80x cheaper than on the raw samples.
+* :func:`cell_noise` estimates each channel's noise of one cell mean from
+  what no smooth function of slip, load and time explains: second differences
+  between *consecutive accelerate cycles in the same slip bin* (a linear drift
+  in time, whatever its cause, cancels exactly; slip dependence does not enter
+  because the slip bin is the same), and, as a second, within-cycle view,
+  second differences along slip inside one cycle (a smooth slip dependence
+  cancels to second order).  Never from a model's residuals, so an effect
+  cannot inflate its own noise.  The between-cycle (unit-level) scatter is the
+  floor that an out-of-sample error can reach.
+
+Sources: von Neumann et al. (1941) and Rice (1984) for difference-based noise
+estimators; Gasser, Sroka & Jennen-Steinmetz (1986) for the three-point
+pseudo-residual; Cameron & Miller (2015) for clustered data.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+__all__ = [
+    "FitData",
+    "Cells",
+    "prepare_data",
+    "estimate_noise",
+    "cell_noise",
+    "make_cells",
+    "synthetic_data",
+    "CHANNELS",
+    "dataclasses_replace",
+]
+
+#: Measured channels a model is fitted against, in order: data column -> WheelForces field.
+CHANNELS: dict[str, str] = {
+    "drawbar_pull_n": "drawbar_pull_n",
+    "torque_nm": "torque_nm",
+    "sinkage_m": "sinkage_m",
+}
+
+#: Slip bins per accelerate cycle (cells).  With slip in (0.1, 0.9) a bin is ~0.067 wide: the
+#: error of predicting a cell at its mean slip instead of averaging the model over the bin is
+#: 0.5 f'' var(s) ~ 1e-3 of Dp, far below the noise of a cell mean.
+N_SLIP_BINS = 12
+#: Load bins when the load varies (coefficient of variation above LOAD_CV_BINS): tertiles.
+LOAD_CV_BINS = 0.10
+#: Cells with fewer samples than this are merged into nothing (dropped from the cell fit):
+#: their mean is dominated by the filter's autocorrelation (a 5 Hz low-pass has ~10 correlated
+#: samples at 100 Hz).
+MIN_CELL_SAMPLES = 3
+
+_ZERO_SLIP = 0.02  # |s| below this counts as "s ~ 0" in the exclusion notes
+
+
+def estimate_noise(values: np.ndarray, slip: np.ndarray, load_n: np.ndarray | None = None,
+                   groups: np.ndarray | None = None) -> float:
+    """Noise standard deviation of one measured channel, model-free.
+
+    Nearest-neighbour local-difference estimator (von Neumann / Rice, in the
+    model's input space): for every sample take its nearest neighbour in
+    standardised (slip, load) and ``sigma = 1.4826 * MAD(y_i - y_nn(i)) / sqrt(2)``.
+    With ``groups`` (time series) the neighbour must come from another group
+    (accelerate cycle / block), so the autocorrelation of filtered 100 Hz data
+    does not shrink the estimate.  It contains measurement noise plus any
+    variation the inputs (s, W) do not explain.  Used for the relative weights
+    of the channels (Dp, T, z); parameter standard errors use the fitted
+    residual variance instead (reduced chi-square scaling), so a misestimated
+    level does not make them over-confident.
+
+    values, slip, load_n, groups : (N,) arrays; NaNs in ``values`` are ignored.
+    Returns a positive float (falls back to the std of the differences, then to
+    ``1e-6 * max|values|``).  Raises ValueError with fewer than 2 finite values.
+    """
+    from scipy.spatial import cKDTree
+
+    v = np.asarray(values, dtype=float)
+    cols = [np.asarray(slip, dtype=float)]
+    if load_n is not None:
+        cols.append(np.asarray(load_n, dtype=float))
+    ok = np.isfinite(v)
+    for c in cols:
+        ok &= np.isfinite(c)
+    if ok.sum() < 2:
+        raise ValueError("estimate_noise: fewer than 2 finite values")
+    X = []
+    for c in cols:
+        c = c[ok]
+        sd = np.std(c)
+        if sd > 1e-9 * max(1.0, np.max(np.abs(c))):
+            X.append((c - c.mean()) / sd)
+    X = np.column_stack(X) if X else np.zeros((int(ok.sum()), 1))
+    y = v[ok]
+    X = X + 1e-12 * np.arange(len(y))[:, None]  # break exact ties deterministically
+    if groups is not None and np.unique(np.asarray(groups)[ok]).size >= 2:
+        g = np.asarray(groups)[ok]
+        if len(y) > 5000:  # plenty for a noise level; keeps long recordings fast
+            pick = np.random.default_rng(0).choice(len(y), 5000, replace=False)
+            X, y, g = X[pick], y[pick], g[pick]
+        nn = np.empty(len(y), int)
+        idx_all = np.arange(len(y))
+        for gv in np.unique(g):
+            inside = g == gv
+            others = idx_all[~inside]
+            _, j = cKDTree(X[others]).query(X[inside], k=1)
+            nn[inside] = others[j]
+    else:
+        _, nb = cKDTree(X).query(X, k=min(len(y), 2))
+        nn = nb.reshape(len(y), -1)[:, -1]
+    dv = y - y[nn]
+    s = 1.4826 * np.median(np.abs(dv - np.median(dv))) / math.sqrt(2)
+    if not (np.isfinite(s) and s > 0):
+        s = float(np.std(dv)) / math.sqrt(2)
+    if not (np.isfinite(s) and s > 0):
+        s = 1e-6 * max(float(np.max(np.abs(y))), 1e-9)
+    return float(s)
+
+
+
+
+@dataclass(frozen=True)
+class FitData:
+    """Measured samples prepared for fitting (the rows actually used).
+
+    slip, load_n : (N,) arrays.
+    channels : data column -> (N,) measured values (``drawbar_pull_n`` always;
+        ``torque_nm``/``sinkage_m`` when measured), NaN where missing.
+    sigma : data column -> noise std of one sample (:func:`estimate_noise`; for
+        reporting and sample-level metrics; the fits use ``cells.sigma``).
+    groups : (N,) int cross-validation groups (accelerate cycles, or contiguous blocks).
+    units : (N,) int "independent units" for aggregation: table rows, or
+        (group, slip-decile) cells of a time series.
+    run : (N,) int input index (0 when one input).
+    t_s : (N,) time or None (tables).
+    kind : "table" or "timeseries".
+    notes : list of plain-English notes on excluded rows and choices.
+    n_input : rows before filtering; slip_min : threshold used.
+    distance_m : (N,) travelled distance (contract C) or None.
+    cells : the :class:`Cells` the models are fitted to.
+    """
+
+    slip: np.ndarray
+    load_n: np.ndarray
+    channels: dict
+    sigma: dict
+    groups: np.ndarray
+    units: np.ndarray
+    run: np.ndarray
+    t_s: np.ndarray | None
+    kind: str
+    notes: list
+    n_input: int
+    slip_min: float
+    group_kind: str = "blocks"
+    distance_m: np.ndarray | None = None
+    cells: "Cells | None" = field(default=None, repr=False)
+
+    @property
+    def n(self) -> int:
+        """Number of samples used."""
+        return int(self.slip.size)
+
+    @property
+    def x_raw(self) -> np.ndarray | None:
+        """(N,) the drift coordinate of each sample: distance_m, else t_s (None for tables)."""
+        if self.kind == "table":
+            return None
+        return self.distance_m if self.distance_m is not None else self.t_s
+
+    @property
+    def n_units(self) -> int:
+        """Number of independent units: the cells (rows of a table, cycle x slip cells of a time series)."""
+        if self.cells is not None:
+            return self.cells.n
+        return int(np.unique(self.units).size)
+
+    def subset(self, mask: np.ndarray) -> "FitData":
+        """The samples where ``mask`` (N,) bool is True (same noise levels)."""
+        return dataclasses_replace(
+            self,
+            slip=self.slip[mask],
+            load_n=self.load_n[mask],
+            channels={k: v[mask] for k, v in self.channels.items()},
+            groups=self.groups[mask],
+            units=self.units[mask],
+            run=self.run[mask],
+            t_s=None if self.t_s is None else self.t_s[mask],
+            distance_m=None if self.distance_m is None else self.distance_m[mask],
+            cells=None,
+        )
+
+
+def dataclasses_replace(obj, **kw):
+    """``dataclasses.replace`` (kept local to avoid shadowing the field name)."""
+    import dataclasses
+
+    return dataclasses.replace(obj, **kw)
+
+
+def prepare_data(df, *, slip_min: float = 0.1, source: str = "data", n_blocks: int | None = None) -> FitData:
+    """Select and check the samples a driving model is fitted to.
+
+    ``df``: pandas DataFrame with columns ``slip``, ``load_n``, ``drawbar_pull_n``
+    and optionally ``torque_nm``, ``sinkage_m``, ``valid`` (bool), ``cycle``
+    (accelerate-cycle id, -1 outside), ``run`` (input index), ``t_s`` (time; its
+    presence marks a time series).  Kept: rows marked valid, with finite slip,
+    load and drawbar pull, ``slip_min < s < 1`` and ``W > 0``.  Skid rows
+    (s < 0) and rows with s ~ 0 are excluded from a driving model with a note.
+
+    Cross-validation groups: accelerate cycles (``cycle >= 0``; samples outside a
+    cycle join the previous one), else for a table interleaved folds by slip rank
+    (leave-one-out up to 20 rows, else 10 folds, each spanning the slip range, so
+    the held-out error measures interpolation, not extrapolation to unseen slips),
+    and for a time series without cycles 5 contiguous blocks per run.
+    The samples are then aggregated into :class:`Cells` (:func:`make_cells`).
+
+    Raises
+    ------
+    ValueError
+        (naming ``source``) for a missing column, an empty table, no rows left
+        after the selection, or only one distinct slip value (no slip
+        dependence can be fitted).
+    """
+    import pandas as pd
+
+    if not isinstance(df, pd.DataFrame):
+        raise ValueError(f"{source}: expected a pandas DataFrame, got {type(df).__name__}")
+    missing = [c for c in ("slip", "load_n", "drawbar_pull_n") if c not in df.columns]
+    if missing:
+        raise ValueError(
+            f"{source}: missing column(s) {', '.join(missing)}; a table needs slip, load_n, "
+            "drawbar_pull_n (optional torque_nm, sinkage_m)"
+        )
+    n_input = len(df)
+    if n_input == 0:
+        raise ValueError(f"{source}: the table is empty (no rows)")
+    notes: list[str] = []
+    s = pd.to_numeric(df["slip"], errors="coerce").to_numpy(float)
+    w = pd.to_numeric(df["load_n"], errors="coerce").to_numpy(float)
+    dp = pd.to_numeric(df["drawbar_pull_n"], errors="coerce").to_numpy(float)
+    keep = np.ones(n_input, bool)
+    if "valid" in df.columns:
+        valid = df["valid"].fillna(False).astype(bool).to_numpy()
+        if (~valid).any():
+            notes.append(f"{int((~valid).sum())} of {n_input} samples marked invalid by processing were excluded.")
+        keep &= valid
+    bad = ~(np.isfinite(s) & np.isfinite(w) & np.isfinite(dp))
+    if (bad & keep).any():
+        rows = np.flatnonzero(bad & keep)
+        notes.append(
+            f"{rows.size} row(s) with NaN or non-numeric slip/load_n/drawbar_pull_n excluded "
+            f"(first at row {int(rows[0])})."
+        )
+    keep &= ~bad
+    if not keep.any():
+        raise ValueError(f"{source}: no row has finite slip, load_n and drawbar_pull_n")
+    with np.errstate(invalid="ignore"):
+        skid = keep & (s < -_ZERO_SLIP)
+        zero = keep & (np.abs(s) <= _ZERO_SLIP)
+        low = keep & (s > _ZERO_SLIP) & (s <= slip_min)
+        high = keep & (s >= 1.0)
+        noload = keep & (w <= 0)
+    if skid.any():
+        notes.append(f"{int(skid.sum())} skid row(s) (s < 0, braked or locked wheel) excluded: the models are for a driven wheel.")
+    if zero.any():
+        notes.append(f"{int(zero.sum())} row(s) with s ~ 0 (|s| <= {_ZERO_SLIP}) excluded.")
+    if low.any():
+        notes.append(f"{int(low.sum())} row(s) with 0 < s <= slip_min = {slip_min:g} excluded (small Dp is dominated by measurement uncertainty, paper §3).")
+    if high.any():
+        notes.append(f"{int(high.sum())} row(s) with s >= 1 excluded (slip must be < 1).")
+    if noload.any():
+        notes.append(f"{int(noload.sum())} row(s) with load_n <= 0 excluded.")
+    keep &= (s > slip_min) & (s < 1.0) & (w > 0)
+    if "cycle" in df.columns and keep.any():
+        # a time series with accelerate cycles: the steady-state model is fitted to the accelerate
+        # phases processing identified; driving samples outside them (wheel spin-up, transitions,
+        # braking with the slip still positive) are transients the model does not describe
+        cyc_all = pd.to_numeric(df["cycle"], errors="coerce").to_numpy(float)
+        in_cycle = np.isfinite(cyc_all) & (cyc_all >= 0)
+        if np.unique(cyc_all[keep & in_cycle]).size >= 2 and (keep & ~in_cycle).any():
+            notes.append(f"{int((keep & ~in_cycle).sum())} driving sample(s) outside the accelerate cycles excluded "
+                         "(transients: the model is a steady-state one).")
+            keep &= in_cycle
+    n = int(keep.sum())
+    if n == 0:
+        raise ValueError(
+            f"{source}: no sample with slip_min = {slip_min:g} < s < 1, a finite positive load and a "
+            f"finite drawbar pull ({n_input} rows read); lower --slip-min or check the slip column"
+        )
+    if np.unique(np.round(s[keep], 4)).size < 2:
+        raise ValueError(
+            f"{source}: only one slip value (s = {s[keep][0]:.4g}) above slip_min = {slip_min:g}; "
+            "a slip dependence cannot be fitted from one slip"
+        )
+    channels = {"drawbar_pull_n": dp[keep]}
+    for col in ("torque_nm", "sinkage_m"):
+        if col in df.columns:
+            v = pd.to_numeric(df[col], errors="coerce").to_numpy(float)[keep]
+            n_ok = int(np.isfinite(v).sum())
+            if n_ok >= max(3, n // 2):
+                channels[col] = v
+                if n_ok < n:
+                    notes.append(f"{col}: {n - n_ok} of {n} used rows have no value; fitted where present.")
+            elif n_ok:
+                notes.append(f"{col}: only {n_ok} of {n} used rows have a value; channel not used.")
+    slip = s[keep]
+    run = (
+        pd.to_numeric(df["run"], errors="coerce").fillna(0).to_numpy(int)[keep]
+        if "run" in df.columns
+        else np.zeros(n, int)
+    )
+    t_s = pd.to_numeric(df["t_s"], errors="coerce").to_numpy(float)[keep] if "t_s" in df.columns else None
+    dist = pd.to_numeric(df["distance_m"], errors="coerce").to_numpy(float)[keep] if "distance_m" in df.columns else None
+    if dist is not None and not np.all(np.isfinite(dist)):
+        notes.append("distance_m has NaN values; time is used as the drift coordinate instead.")
+        dist = None
+    kind = "timeseries" if t_s is not None else "table"
+    groups, group_kind = _cv_groups(df, keep, run, kind, n_blocks)
+    sigma = {
+        c: estimate_noise(v, slip, w[keep], groups if kind == "timeseries" else None)
+        for c, v in channels.items()
+    }
+    if kind == "table":
+        units = np.arange(n)
+    else:
+        edges = np.quantile(slip, np.linspace(0, 1, 11)[1:-1])
+        units = groups * 16 + np.searchsorted(edges, slip)
+        _, units = np.unique(units, return_inverse=True)
+    data = FitData(
+        slip=slip,
+        load_n=w[keep],
+        channels=channels,
+        sigma=sigma,
+        groups=groups,
+        units=units,
+        run=run,
+        t_s=t_s,
+        kind=kind,
+        notes=notes,
+        n_input=n_input,
+        slip_min=float(slip_min),
+        group_kind=group_kind,
+        distance_m=dist,
+    )
+    return dataclasses_replace(data, cells=make_cells(data))
+
+
+def _cv_groups(df, keep, run, kind, n_blocks):
+    """Cross-validation groups for the kept rows: (groups (N,), description)."""
+    n = int(keep.sum())
+    if "cycle" in df.columns:
+        cyc = np.asarray(df["cycle"].to_numpy(), dtype=float)[keep]
+        cyc = np.where(np.isfinite(cyc), cyc, -1).astype(int)
+        key = run * 1_000_000 + cyc
+        ok = cyc >= 0
+        if np.unique(key[ok]).size >= 2:
+            # samples outside a cycle join the previous cycle (row order)
+            filled = np.where(ok, key, -1)
+            last = -1
+            for i in range(n):
+                if filled[i] < 0:
+                    filled[i] = last if last >= 0 else key[ok][0]
+                last = filled[i]
+            _, g = np.unique(filled, return_inverse=True)
+            return g, "accelerate cycles"
+    if kind == "table" and n_blocks is None:
+        k = n if n <= 20 else 10
+        rank = np.empty(n, int)
+        rank[np.argsort(np.asarray(df["slip"], dtype=float)[keep], kind="stable")] = np.arange(n)
+        return rank % k, "leave-one-out" if k == n else f"{k} interleaved slip-rank folds"
+    k = n_blocks or (max(2, min(5, n // 3)) if kind == "table" else 5)
+    k = max(1, min(k, n))
+    g = np.zeros(n, int)
+    nxt = 0
+    for r in np.unique(run):
+        idx = np.flatnonzero(run == r)
+        kr = k if np.unique(run).size == 1 else max(1, min(k, idx.size // 2))
+        g[idx] = nxt + (np.arange(idx.size) * kr) // idx.size
+        nxt += kr
+    return g, "contiguous blocks"
+
+
+
+@dataclass(frozen=True)
+class Cells:
+    """Cell means of the used samples: what the models are fitted to.
+
+    All arrays have shape (C,): ``slip``, ``load_n`` (cell means), ``t_s``
+    (mean time, or the row index for tables), ``x`` (drift coordinate: mean
+    travelled distance, else time, normalised to [-0.5, 0.5] over the data;
+    None for tables), ``group`` (cross-validation fold), ``count`` (samples),
+    ``channels`` (column -> (C,) cell means, NaN where not measured),
+    ``var`` (column -> (C,) variance of each cell mean: ``sigma^2 *
+    max(1, median count / count)``), ``sigma`` (column -> noise std of a cell
+    mean, :func:`cell_noise`), ``sigma_within`` (the within-cycle view),
+    ``index`` (N,) the cell of each sample, ``x_kind`` ("distance", "time" or None),
+    ``bin`` (C,) slip-bin index (time series) or the row's slip rank.
+    """
+
+    slip: np.ndarray
+    load_n: np.ndarray
+    t_s: np.ndarray
+    x: np.ndarray | None
+    group: np.ndarray
+    count: np.ndarray
+    channels: dict
+    var: dict
+    sigma: dict
+    sigma_within: dict
+    index: np.ndarray
+    x_kind: str | None
+    bin: np.ndarray
+    noise_method: str = ""
+    x_ref: tuple = (0.0, 1.0)
+
+    def x_of(self, raw) -> np.ndarray | None:
+        """The normalised drift coordinate of raw distance/time values (N,), as for the cells."""
+        if self.x is None or raw is None:
+            return None
+        lo, rng = self.x_ref
+        return (np.asarray(raw, float) - lo) / rng - 0.5 if rng > 0 else np.zeros(len(raw))
+
+    @property
+    def n(self) -> int:
+        """Number of cells."""
+        return int(self.slip.size)
+
+    def subset(self, mask: np.ndarray) -> "Cells":
+        """The cells where ``mask`` (C,) is True (same noise levels; ``index`` is dropped)."""
+        return dataclasses_replace(
+            self, slip=self.slip[mask], load_n=self.load_n[mask], t_s=self.t_s[mask],
+            x=None if self.x is None else self.x[mask], group=self.group[mask], count=self.count[mask],
+            channels={k: v[mask] for k, v in self.channels.items()},
+            var={k: v[mask] for k, v in self.var.items()}, index=np.zeros(0, int), bin=self.bin[mask])
+
+
+def make_cells(data: "FitData") -> Cells:
+    """Aggregate the samples of ``data`` into cells (see module doc).
+
+    Time series: cell = CV group (accelerate cycle) x slip bin (``N_SLIP_BINS``
+    quantile bins over all used samples) x load bin (tertiles when the load's
+    coefficient of variation exceeds ``LOAD_CV_BINS``); cells with fewer than
+    ``MIN_CELL_SAMPLES`` samples are dropped.  Tables: one cell per row.
+    Returns :class:`Cells` with the noise of each channel from :func:`cell_noise`.
+    Raises ValueError when fewer than 3 cells remain.
+    """
+    n = data.n
+    if data.kind == "table":
+        key = np.arange(n)
+        sbin = np.empty(n, int)
+        sbin[np.argsort(data.slip, kind="stable")] = np.arange(n)
+        lbin = np.zeros(n, int)
+    else:
+        edges = np.quantile(data.slip, np.linspace(0, 1, N_SLIP_BINS + 1)[1:-1])
+        sbin = np.searchsorted(edges, data.slip)
+        w = data.load_n
+        if np.std(w) > LOAD_CV_BINS * abs(np.mean(w)):
+            lbin = np.searchsorted(np.quantile(w, [1 / 3, 2 / 3]), w)
+        else:
+            lbin = np.zeros(n, int)
+        key = (data.groups.astype(np.int64) * 64 + sbin) * 4 + lbin
+    uniq, inv, cnt = np.unique(key, return_inverse=True, return_counts=True)
+    keep_cell = cnt >= (MIN_CELL_SAMPLES if data.kind != "table" else 1)
+    cnt = cnt.astype(float)
+
+    def mean(v):
+        ok = np.isfinite(v)
+        s = np.bincount(inv, weights=np.where(ok, v, 0.0), minlength=uniq.size)
+        c = np.bincount(inv, weights=ok.astype(float), minlength=uniq.size)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            return np.where(c > 0, s / np.maximum(c, 1), np.nan)
+
+    t = data.t_s if data.t_s is not None else np.arange(n, dtype=float)
+    xs, x_kind = None, None
+    if data.kind != "table":
+        if data.distance_m is not None:
+            xs, x_kind = data.distance_m, "distance"
+        elif data.t_s is not None:
+            xs, x_kind = data.t_s, "time"
+    first = np.zeros(uniq.size, int)
+    first[inv[::-1]] = np.arange(n)[::-1]
+    group = data.groups[first]
+    sb = sbin[first]
+    chans = {c: mean(v) for c, v in data.channels.items()}
+    ch_cnt = {c: np.bincount(inv, weights=np.isfinite(v).astype(float), minlength=uniq.size)
+              for c, v in data.channels.items()}
+    x = None
+    x_ref = (0.0, 1.0)
+    if xs is not None:
+        xm = mean(xs)
+        rng = float(np.nanmax(xm[keep_cell]) - np.nanmin(xm[keep_cell]))
+        x_ref = (float(np.nanmin(xm[keep_cell])), rng)
+        x = (xm - x_ref[0]) / rng - 0.5 if rng > 0 else np.zeros_like(xm)
+    sel = keep_cell
+    if sel.sum() < 3:
+        raise ValueError(f"only {int(sel.sum())} cells with >= {MIN_CELL_SAMPLES} samples: too little data to fit")
+    index = np.full(uniq.size, -1)
+    index[sel] = np.arange(int(sel.sum()))
+    cells_idx = index[inv]
+    slip_c, load_c, t_c = mean(data.slip)[sel], mean(data.load_n)[sel], mean(t)[sel]
+    chans = {c: v[sel] for c, v in chans.items()}
+    cntc = {c: v[sel] for c, v in ch_cnt.items()}
+    group, sb = group[sel], sb[sel]
+    x = None if x is None else x[sel]
+    sigma, within, method = cell_noise(chans, slip_c, load_c, t_c, group, sb, data.kind, x)
+    var = {}
+    for c, v in chans.items():
+        ref = float(np.median(cntc[c][cntc[c] > 0])) if np.any(cntc[c] > 0) else 1.0
+        var[c] = sigma[c] ** 2 * np.maximum(1.0, ref / np.maximum(cntc[c], 1.0))
+    return Cells(slip=slip_c, load_n=load_c, t_s=t_c, x=x, group=group, count=cnt[sel], channels=chans,
+                 var=var, sigma=sigma, sigma_within=within, index=cells_idx, x_kind=x_kind, bin=sb,
+                 noise_method=method, x_ref=x_ref)
+
+
+#: Median of a chi-square variable with one degree of freedom: a robust variance from squares.
+_CHI2_1_MEDIAN = 0.454936
+
+
+def _pseudo_residuals(s, y):
+    """Three-point pseudo-residuals along an ordered coordinate s (Gasser et al. 1986):
+    ``(e_i - a e_{i-1} - b e_{i+1}) / sqrt(1 + a^2 + b^2)`` with the linear-interpolation
+    weights a, b; each has the noise variance when the mean is locally linear."""
+    if y.size < 3:
+        return np.zeros(0)
+    s0, s1, s2 = s[:-2], s[1:-1], s[2:]
+    h = s2 - s0
+    ok = h > 0
+    a = np.where(ok, (s2 - s1) / np.where(ok, h, 1), 0.5)
+    b = 1 - a
+    r = (y[1:-1] - a * y[:-2] - b * y[2:]) / np.sqrt(1 + a**2 + b**2)
+    return r[np.isfinite(r)]
+
+
+def _robust_sd(r: np.ndarray) -> float:
+    """sqrt(median(r^2) / 0.4549): the sd of Gaussian pseudo-residuals, robust to a few large ones."""
+    return float(math.sqrt(np.median(r**2) / _CHI2_1_MEDIAN)) if r.size else float("nan")
+
+
+def _smooth_basis(slip, load_n, x, n_cells):
+    """Design matrix of a flexible smooth in (slip, load, drift coordinate): a cubic B-spline in
+    slip (4..8 functions, interior knots at slip quantiles), its product with the centred load
+    (when the load varies), and x, x^2 in the drift coordinate (time series)."""
+    from scipy.interpolate import BSpline
+
+    s = np.asarray(slip, float)
+    nb = int(np.clip(n_cells // 6, 4, 8))
+    inner = np.quantile(s, np.linspace(0, 1, nb - 2)[1:-1]) if nb > 4 else np.zeros(0)
+    lo, hi = float(s.min()) - 1e-9, float(s.max()) + 1e-9
+    t = np.concatenate([[lo] * 4, inner, [hi] * 4])
+    B = BSpline.design_matrix(np.clip(s, lo, hi), t, 3).toarray()
+    cols = [B]
+    w = np.asarray(load_n, float)
+    if np.std(w) > 0.01 * abs(np.mean(w)):
+        wc = (w - w.mean()) / np.std(w)
+        sc = (s - s.mean()) / (np.std(s) or 1.0)
+        cols.append(np.column_stack([wc, wc * sc]))
+    if x is not None and np.std(x) > 0:
+        cols.append(np.column_stack([x, x**2 - np.mean(x**2)]))
+    return np.column_stack(cols)
+
+
+def cell_noise(channels: dict, slip, load_n, t_s, group, sbin, kind: str, x=None):
+    """Noise std of one cell mean per channel, model-free (module doc).
+
+    ``channels`` column -> (C,) cell means; ``slip``, ``load_n``, ``t_s``,
+    ``group`` (accelerate cycle), ``sbin`` (slip bin), ``x`` drift coordinate or None (C,).
+    The cell means are regressed on a flexible smooth of slip, load and the
+    drift coordinate (:func:`_smooth_basis`: cubic B-spline in slip, load x
+    (1, slip), x and x^2); sigma^2 = RSS / (C - p).  Whatever is a smooth
+    function of slip, load or time/distance (any effect, modelled or not) is
+    absorbed by the smooth, so it cannot inflate the noise; what remains is
+    measurement noise plus cycle-to-cycle (unit-level) scatter, the floor an
+    out-of-sample error can reach.  When C - p < 4 (tiny tables) the
+    three-point pseudo-residuals along slip are used instead.  Also returned,
+    for the report: the within-cycle view (pseudo-residuals along slip inside
+    each accelerate cycle; tables: along slip).
+    Returns ``(sigma, sigma_within, method)``: dicts column -> float (> 0) and a description.
+    """
+    sigma, within = {}, {}
+    method = ""
+    for c, y in channels.items():
+        ok = np.isfinite(y)
+        rw = []
+        if kind == "table":
+            o = np.argsort(slip[ok], kind="stable")
+            rw.append(_pseudo_residuals(slip[ok][o], y[ok][o]))
+        else:
+            for g in np.unique(group[ok]):
+                m = ok & (group == g)
+                o = np.argsort(slip[m], kind="stable")
+                rw.append(_pseudo_residuals(slip[m][o], y[m][o]))
+        rw = np.concatenate(rw) if rw else np.zeros(0)
+        within[c] = _robust_sd(rw)
+        sd = float("nan")
+        C = int(ok.sum())
+        if C >= 8:
+            X = _smooth_basis(slip[ok], load_n[ok], None if x is None else x[ok], C)
+            rank = np.linalg.matrix_rank(X)
+            if C - rank >= 4:
+                coef, *_ = np.linalg.lstsq(X, y[ok], rcond=None)
+                e = y[ok] - X @ coef
+                sd = float(math.sqrt(float(e @ e) / (C - rank)))
+                method = (f"residual scatter of the cell means about a smooth in slip, load"
+                          + (" and the drift coordinate" if x is not None else "") + " (cubic B-spline, RSS/(C - p))")
+        if not np.isfinite(sd):
+            sd = within[c]
+            method = "three-point pseudo-residuals along slip"
+        if not (np.isfinite(sd) and sd > 0):
+            yy = y[ok]
+            sd = float(np.std(yy)) if yy.size > 1 and np.std(yy) > 0 else 1e-6 * max(float(np.max(np.abs(yy))) if yy.size else 1.0, 1e-9)
+        sigma[c] = float(sd)
+    return sigma, within, method
+
+
+
+def synthetic_data(
+    terrain,
+    wheel,
+    model: str = "wong",
+    params: Mapping[str, float] | None = None,
+    *,
+    kind: str = "timeseries",
+    duration_s: float = 60.0,
+    rate_hz: float = 100.0,
+    n_rows: int = 60,
+    load_n: float = 11000.0,
+    noise_dp_n: float = 40.0,
+    noise_t_nm: float = 20.0,
+    noise_z_m: float | None = None,
+    cycle_s: float = 10.0,
+    cutoff_hz: float = 5.0,
+    terrain_truth=None,
+    seed: int = 0,
+):
+    """Synthetic measured data from the model core plus noise (for tests, benchmarks
+    and power studies).
+
+    ``kind="timeseries"``: ``duration_s`` at ``rate_hz`` of repeated
+    accelerate-brake cycles (``cycle_s`` long: slip ramps 0 -> 0.9 and back, then
+    a skid phase), load ``load_n`` +/- 5 % slow variation, noise low-pass
+    filtered at ``cutoff_hz`` (so it is autocorrelated like processed data);
+    columns ``t_s, slip, load_n, drawbar_pull_n, torque_nm, valid, cycle, distance_m``
+    (the distance at a constant 1 m/s).
+    ``kind="table"``: ``n_rows`` independent rows, slip uniform in [0.05, 0.9],
+    white noise; columns ``slip, load_n, drawbar_pull_n, torque_nm``.
+    ``noise_z_m`` adds a ``sinkage_m`` column.  The data follow ``model`` with
+    ``params`` on ``terrain_truth`` (default ``terrain``).
+
+    Returns a pandas DataFrame.  Raises ValueError for an unknown kind/model.
+    """
+    import pandas as pd
+    from scipy.signal import butter, sosfiltfilt
+
+    from .slip_sinkage import get_model
+
+    rng = np.random.default_rng(seed)
+    truth = terrain_truth or terrain
+    m = get_model(model)
+    if kind == "timeseries":
+        n = int(round(duration_s * rate_hz))
+        t = np.arange(n) / rate_hz
+        ph = (t % cycle_s) / cycle_s
+        up = np.clip(ph / 0.4, 0, 1)
+        down = np.clip((0.7 - ph) / 0.3, 0, 1)
+        slip = np.where(ph < 0.4, 0.9 * up, np.where(ph < 0.7, 0.9 * down, -0.3 * np.sin(np.pi * (ph - 0.7) / 0.3)))
+        cycle = np.where(ph < 0.4, (t // cycle_s).astype(int), -1)
+        w = load_n * (1 + 0.05 * np.sin(2 * np.pi * t / 7.3) + 0.02 * np.sin(2 * np.pi * t / 2.1))
+        sos = butter(2, cutoff_hz, fs=rate_hz, output="sos")
+
+        def noise(sd):
+            e = sosfiltfilt(sos, rng.normal(0, 1, n))
+            return sd * e / np.std(e)
+    elif kind == "table":
+        n = int(n_rows)
+        t = None
+        slip = rng.uniform(0.05, 0.9, n)
+        cycle = None
+        w = load_n * (1 + 0.05 * rng.uniform(-1, 1, n))
+
+        def noise(sd):
+            return rng.normal(0, sd, n)
+    else:
+        raise ValueError(f"kind must be 'timeseries' or 'table', got {kind!r}")
+    drive = (slip > 0) & (slip < 1)
+    dp = np.zeros(n)
+    tq = np.zeros(n)
+    z = np.zeros(n)
+    f = m.predict(truth, wheel, w[drive], slip[drive], dict(params or {}))
+    dp[drive], tq[drive], z[drive] = f.drawbar_pull_n, f.torque_nm, f.sinkage_m
+    # skid samples: a crude braking-force placeholder (excluded from the driving fit)
+    dp[~drive] = slip[~drive] * 0.5 * w[~drive]
+    cols = {"slip": slip, "load_n": w, "drawbar_pull_n": dp + noise(noise_dp_n), "torque_nm": tq + noise(noise_t_nm)}
+    if noise_z_m is not None:
+        cols["sinkage_m"] = z + noise(noise_z_m)
+    df = pd.DataFrame(cols)
+    if kind == "timeseries":
+        df.insert(0, "t_s", t)
+        df["valid"] = True
+        df["cycle"] = cycle
+        df["distance_m"] = t * 1.0
+    return df
+

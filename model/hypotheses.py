@@ -1,0 +1,503 @@
+"""The causes the diagnosis tries: one registry, one small class per hypothesis.
+
+Every hypothesis is a :class:`Hypothesis` subclass with a ``name`` (the model
+form reported as ``diagnosis.model``), the ``effect`` it stands for
+(``none``, ``slip_sinkage``, ``terrain_mismatch``, ``stress_distribution``,
+``terrain_drift``), named parameters (:class:`HParam`: default, bounds, unit,
+optional Gaussian prior, log scale), and one ``predict``.  Adding a cause is
+one class here plus its entry in :data:`HYPOTHESES`; the fitter
+(:mod:`wheelsoil.model.crossval`) and the verdict (:mod:`wheelsoil.model.diagnosis`)
+need no change.
+
+The hypotheses (paper numbering for Eqs.; Wong = *Theory of Ground Vehicles*, 4th ed.):
+
+* ``wong``: the paper's model, Eqs. (1)-(10), lab terrain.
+* ``vasilev``, ``lyasko``, ``ding``: slip sinkage, Eqs. (11)-(13)
+  (:mod:`wheelsoil.model.slip_sinkage`).
+* ``terrain``: terrain mismatch.  The identifiable subset of the lab terrain,
+  k_eq = kc/b + kphi (one wheel width cannot separate kc and kphi), n, c,
+  phi, K, re-fitted as penalised least squares with the lab values as
+  Gaussian priors (the prior enters as extra residuals ``(theta - lab)/sd``;
+  :func:`lab_prior`).  Cohesion enters only with phi through tau (Eq. 4), so
+  the prior is what keeps c, phi and K apart when the data cannot.
+* ``vasilev+terrain``, ``ding+terrain``: slip sinkage with the terrain
+  re-fitted against the same priors (a lab value is never exact; the combined
+  model asks whether slip sinkage is still needed once it is allowed to move).
+* ``wong_reece``: stress distribution.  Wong & Reece (1967): the normal stress
+  peaks at theta_m = (a1 + a2 s) theta1 with a rear region behind it (kernel
+  ``wong_forces(..., stress=(a1, a2))``); a1 = a2 = 0 is the paper's model.
+* ``dp_resistance``: not a listed cause but the generic alternative "something
+  acts on the drawbar pull alone" (bulldozing, a tyre's rolling resistance, an
+  Fx offset): effect ``unexplained``.  A listed cause that this explains as well
+  is not named.
+* ``radius``: not a listed cause either: the soil sees another wheel radius than
+  the one slip was computed with (a deflecting tyre, a radius error): effect
+  ``unexplained``.
+* ``sensor_gain``: not a listed cause: the transducer's Fx and My read with a
+  gain error: effect ``unexplained``.
+* ``balance``: not a listed cause: the static sinkage from the vertical balance
+  Eq. (7) instead of Eq. (10) (no parameters): effect ``unexplained``.
+* ``drift_linear``: terrain drift.  The terrain changes along the run:
+  repeated passes compact the soil (k_eq, c and phi grow with the number of
+  passes, Wong ch. 2 on repetitive loading), or the wheel reaches another patch
+  of ground.  ln k_eq, phi, c and ln K vary linearly with the normalised travelled
+  distance x in [-0.5, 0.5] (time when no distance is recorded) around a
+  mid-run terrain that is itself re-fitted against the lab priors.  The forces
+  at x are the linear interpolation of the exact forces of the start (x = -0.5)
+  and end (x = 0.5) terrain (two kernel calls instead of one per cell; exact at
+  the ends, the interpolation error is second order in the drift).
+
+Units: SI throughout (phi in rad, c in Pa, k_eq in N/m^(n+2)).
+"""
+
+from __future__ import annotations
+
+import inspect
+import math
+from dataclasses import dataclass
+from typing import ClassVar, Mapping
+
+import numpy as np
+
+from .slip_sinkage import get_model
+from .wong import WheelForces, wong_forces
+
+__all__ = [
+    "HParam",
+    "Context",
+    "Hypothesis",
+    "HYPOTHESES",
+    "EFFECTS",
+    "get_hypothesis",
+    "lab_prior",
+    "TERRAIN_NAMES",
+    "apply_terrain",
+]
+
+#: The verdicts ``diagnosis.effect`` can take (contract D).
+EFFECTS = ("none", "slip_sinkage", "terrain_mismatch", "stress_distribution", "terrain_drift", "unexplained")
+
+#: The identifiable terrain parameters (one wheel width: kc and kphi only as k_eq = kc/b + kphi).
+TERRAIN_NAMES = ("k_eq", "n", "c", "phi", "K")
+
+#: Lab uncertainty used when the kernel's ``terrain_prior`` is not available: standard deviations
+#: of the plate-sinkage / shear-box values as they are usually quoted (Wong 2008 ch. 2; Bekker
+#: 1969): ln k_eq 0.3 (k within ~30 %), n 0.1, c 30 % or 0.5 kPa, phi 2 deg, ln K 0.5 (K is
+#: the least reproducible of the five).
+FALLBACK_PRIOR_SD = {"k_eq": 0.3, "n": 0.1, "c": (0.3, 500.0), "phi": math.radians(2.0), "K": 0.5}
+#: With ``--fit-terrain`` the terrain is a library entry, not a lab measurement of this soil:
+#: its prior is this many times wider.
+LIBRARY_PRIOR_WIDEN = 3.0
+
+
+@dataclass(frozen=True)
+class HParam:
+    """One parameter of a hypothesis.
+
+    ``name``; ``default`` (start value, SI); ``lower``/``upper`` the search box
+    (SI); ``unit``; ``doc``; ``prior`` ``(mean, sd)`` of a Gaussian prior or
+    None (flat inside the bounds); ``log``: the fitter works with ln(value)
+    (then bounds are of the value, the prior's mean and sd of ln(value)).
+    """
+
+    name: str
+    default: float
+    lower: float
+    upper: float
+    unit: str
+    doc: str
+    prior: tuple | None = None
+    log: bool = False
+
+
+@dataclass(frozen=True)
+class Context:
+    """What every prediction needs: the lab (or library) ``terrain``, the ``wheel``,
+    the ``sinkage`` mode (``eq10`` | ``balance``), the terrain ``prior``
+    (name -> (mean, sd, log)), ``fit_terrain`` (the terrain is fitted in every
+    hypothesis, as a nuisance) and ``w_ref`` a reference load of the data [N]."""
+
+    terrain: object
+    wheel: object
+    sinkage: str = "eq10"
+    prior: Mapping | None = None
+    fit_terrain: bool = False
+    w_ref: float | None = None
+
+
+def lab_prior(terrain, wheel, *, widen: float = 1.0) -> dict:
+    """Gaussian priors of the identifiable terrain parameters, centred on ``terrain``.
+
+    Uses the kernel's ``terrain_prior(terrain, wheel)`` when it exists
+    (``wheelsoil.model.terrain``, contract E: standard deviations from the
+    terrain TOML), else :data:`FALLBACK_PRIOR_SD`.  Returns name -> ``(mean,
+    sd, log)``: for ``log`` parameters (k_eq, K) mean and sd are of ln(value).
+    ``widen`` multiplies every sd.
+    """
+    sd = None
+    try:  # the kernel's priors (contract E), when merged
+        from . import terrain as _t
+
+        fn = getattr(_t, "terrain_prior", None)
+        if fn is not None:
+            sd = dict(fn(terrain, wheel))
+    except Exception:  # noqa: BLE001 - an incompatible kernel version: fall back, stated in the doc
+        sd = None
+    k = terrain.k_eq(wheel.width)
+    out = {}
+    fb = FALLBACK_PRIOR_SD
+    sd_k = fb["k_eq"]
+    sd_n, sd_phi, sd_K = fb["n"], fb["phi"], fb["K"]
+    sd_c = max(fb["c"][0] * terrain.c, fb["c"][1])
+    if sd:
+        def pick(name, default):
+            v = sd.get(name)
+            if isinstance(v, (tuple, list)):
+                v = v[-1]
+            return float(v) if v is not None and np.isfinite(v) and v > 0 else default
+
+        # the kernel gives absolute sds; k_eq and K are used on the log scale here
+        sd_k = pick("k_eq", sd_k * k) / max(k, 1e-300) if "k_eq" in sd else sd_k
+        sd_n = pick("n", sd_n)
+        sd_c = pick("c", sd_c)
+        sd_phi = pick("phi", sd_phi)
+        sd_K = pick("K", sd_K * terrain.K) / terrain.K if "K" in sd else sd_K
+    out["k_eq"] = (math.log(max(k, 1e-300)), widen * sd_k, True)
+    out["n"] = (terrain.n, widen * sd_n, False)
+    out["c"] = (terrain.c, widen * sd_c, False)
+    out["phi"] = (terrain.phi, widen * sd_phi, False)
+    out["K"] = (math.log(terrain.K), widen * sd_K, True)
+    return out
+
+
+def terrain_params(ctx: Context) -> tuple[HParam, ...]:
+    """The terrain block k_eq, n, c, phi, K with the context's priors (see :func:`lab_prior`)."""
+    t, w = ctx.terrain, ctx.wheel
+    pr = ctx.prior or lab_prior(t, w)
+    k = t.k_eq(w.width)
+    k = k if k > 0 else 1e5
+    return (
+        HParam("k_eq", k, k / 1e3, k * 1e3, "N/m^(n+2)", "pressure-sinkage modulus kc/b + kphi (Eq. 2)",
+               pr["k_eq"][:2], True),
+        HParam("n", t.n, 0.2, 2.5, "-", "sinkage exponent (Eq. 2)", pr["n"][:2]),
+        HParam("c", t.c, 0.0, 100e3, "Pa", "cohesion (Eq. 4)", pr["c"][:2]),
+        HParam("phi", t.phi, math.radians(1.0), math.radians(60.0), "rad", "friction angle (Eq. 4)", pr["phi"][:2]),
+        HParam("K", t.K, 1e-4, 0.3, "m", "shear deformation modulus (Eq. 4)", pr["K"][:2], True),
+    )
+
+
+def apply_terrain(terrain, p: Mapping[str, float]):
+    """``terrain`` with the fitted terrain values of ``p`` substituted (k_eq -> kc = 0, kphi = k_eq).
+
+    Raises ValueError (from ``Terrain``) for an invalid combination."""
+    kw = {k: float(p[k]) for k in ("n", "c", "phi", "K") if k in p}
+    if "k_eq" in p:
+        kw["kc"] = 0.0
+        kw["kphi"] = float(p["k_eq"])
+    return terrain.replace(**kw) if kw else terrain
+
+
+class Hypothesis:
+    """Base class.  Subclasses set ``name``, ``effect``, ``title``, ``source`` and
+    implement ``own_params(ctx)`` and ``forces(ctx, terrain, load_n, slip, x, p)``.
+
+    ``terrain_block``: the hypothesis re-fits the terrain (k_eq, n, c, phi, K)
+    against the priors.  With ``ctx.fit_terrain`` every hypothesis does.
+    ``needs_x``: needs a drift coordinate (time series only).
+    ``core``: the slip-sinkage model core (``wheelsoil.model.get_model``) for
+    the report's curves.
+    """
+
+    name: ClassVar[str] = ""
+    effect: ClassVar[str] = ""
+    title: ClassVar[str] = ""
+    source: ClassVar[str] = ""
+    core: ClassVar[str] = "wong"
+    terrain_block: ClassVar[bool] = False
+    needs_x: ClassVar[bool] = False
+
+    def own_params(self, ctx: Context) -> tuple[HParam, ...]:
+        """The hypothesis' own parameters (besides the terrain block)."""
+        return ()
+
+    def parameters(self, ctx: Context) -> tuple[HParam, ...]:
+        """All fitted parameters: own, then the terrain block when re-fitted."""
+        own = self.own_params(ctx)
+        if self.terrain_block or ctx.fit_terrain:
+            return own + terrain_params(ctx)
+        return own
+
+    def available(self, ctx: Context, has_x: bool) -> str | None:
+        """None when the hypothesis can be fitted, else the reason it cannot."""
+        if self.needs_x and not has_x:
+            return "needs a time series (time or distance along the run); a table has neither"
+        return None
+
+    def predict(self, ctx: Context, load_n, slip, x, p: Mapping[str, float]) -> WheelForces:
+        """Forces at each cell/sample: ``load_n`` W [N], ``slip`` s, ``x`` normalised drift
+        coordinate (or None), all (N,); ``p`` parameter values by name (SI).
+        Returns ``WheelForces`` of (N,) arrays.  Raises ValueError outside the model's domain."""
+        terrain = apply_terrain(ctx.terrain, p) if (self.terrain_block or ctx.fit_terrain) else ctx.terrain
+        return self.forces(ctx, terrain, np.asarray(load_n, float), np.asarray(slip, float), x, p)
+
+    def forces(self, ctx, terrain, load_n, slip, x, p) -> WheelForces:  # pragma: no cover - abstract
+        raise NotImplementedError
+
+    def __repr__(self) -> str:
+        return f"<{type(self).__name__} {self.name!r} effect={self.effect!r}>"
+
+
+class Wong(Hypothesis):
+    """Wong's model with the lab terrain (paper Eqs. 1-10): the baseline, effect ``none``."""
+
+    name, effect, title = "wong", "none", "Wong"
+    source = "Wong (2008); paper Eqs. (1)-(10)"
+
+    def forces(self, ctx, terrain, load_n, slip, x, p):
+        return wong_forces(terrain, ctx.wheel, load_n, slip, sinkage=ctx.sinkage)
+
+
+class _SlipSinkage(Hypothesis):
+    """A slip-sinkage form of :mod:`wheelsoil.model.slip_sinkage` (paper Eqs. 11-13)."""
+
+    effect = "slip_sinkage"
+
+    def own_params(self, ctx):
+        return tuple(HParam(q.name, q.default, q.lower, q.upper, q.unit, q.doc) for q in get_model(self.core).params)
+
+    def forces(self, ctx, terrain, load_n, slip, x, p):
+        m = get_model(self.core)
+        mp = {q.name: p[q.name] for q in m.params}
+        return m.predict(terrain, ctx.wheel, load_n, slip, mp, sinkage=ctx.sinkage)
+
+
+class Vasilev(_SlipSinkage):
+    """Vasil'ev: z = z0 + H s (paper Eq. 11)."""
+
+    name = core = "vasilev"
+    title = "Vasil'ev"
+    source = "Vasil'ev et al. (1969); paper Eq. (11)"
+
+
+class Lyasko(_SlipSinkage):
+    """Lyasko: z = (1 + m1 s)/(1 - m2 s) z0 (paper Eq. 12)."""
+
+    name = core = "lyasko"
+    title = "Lyasko"
+    source = "Lyasko (2010); paper Eq. (12)"
+
+
+class Ding(_SlipSinkage):
+    """Ding: N = n + n1 s in Eqs. (2) and (10) (paper Eq. 13)."""
+
+    name = core = "ding"
+    title = "Ding"
+    source = "Ding et al. (2010); paper Eq. (13)"
+
+
+class TerrainMismatch(Wong):
+    """Wong's structure, the lab terrain (k_eq, n, c, phi, K) re-fitted against its priors."""
+
+    name, effect, title = "terrain", "terrain_mismatch", "terrain mismatch (k_eq, n, c, phi, K re-fitted)"
+    source = "Wong (2008) ch. 2; lab values as Gaussian priors (penalised least squares)"
+    terrain_block = True
+
+
+class VasilevTerrain(Vasilev):
+    """Vasil'ev's slip sinkage with the terrain re-fitted against its priors."""
+
+    name, title = "vasilev+terrain", "Vasil'ev + terrain re-fitted"
+    terrain_block = True
+
+
+class DingTerrain(Ding):
+    """Ding's slip sinkage with the terrain re-fitted against its priors."""
+
+    name, title = "ding+terrain", "Ding + terrain re-fitted"
+    terrain_block = True
+
+
+def kernel_has_stress() -> bool:
+    """True when the kernel's ``wong_forces`` takes ``stress=(a1, a2)`` (contract E)."""
+    try:
+        return "stress" in inspect.signature(wong_forces).parameters
+    except (TypeError, ValueError):  # pragma: no cover
+        return False
+
+
+class WongReece(Hypothesis):
+    """Stress distribution: Wong-Reece normal stress with its maximum at theta_m = (a1 + a2 s) theta1.
+
+    a1 in [0, 0.7], a2 in [0, 0.3] (Wong & Reece 1967 measured c1 ~ 0.4, c2 ~ 0.15-0.3;
+    theta_m stays below theta1 for s < 1); a1 = a2 = 0 is the paper's distribution."""
+
+    name, effect, title = "wong_reece", "stress_distribution", "Wong-Reece stress distribution"
+    source = "Wong & Reece (1967); Wong (2008) ch. 2; kernel wong_forces(stress=(a1, a2))"
+
+    def own_params(self, ctx):
+        return (
+            HParam("a1", 0.0, 0.0, 0.7, "-", "theta_m / theta1 at s = 0"),
+            HParam("a2", 0.0, 0.0, 0.3, "-", "slope of theta_m / theta1 with slip"),
+        )
+
+    def available(self, ctx, has_x):
+        if not kernel_has_stress():
+            return "the kernel's wong_forces has no stress= option yet (contract E)"
+        return super().available(ctx, has_x)
+
+    def forces(self, ctx, terrain, load_n, slip, x, p):
+        return wong_forces(terrain, ctx.wheel, load_n, slip, sinkage=ctx.sinkage, stress=(p["a1"], p["a2"]))
+
+
+class DriftLinear(Hypothesis):
+    """Terrain drift: ln k_eq, phi, c and ln K linear in the normalised distance x (module doc)."""
+
+    name, effect, title = "drift_linear", "terrain_drift", "terrain drifting along the run"
+    source = "repeated passes compact the soil (Wong 2008 ch. 2); linear drift in travelled distance"
+    terrain_block = True
+    needs_x = True
+
+    def own_params(self, ctx):
+        return (
+            HParam("g_lnk", 0.0, -1.5, 1.5, "-", "change of ln k_eq over the run (end - start)"),
+            HParam("g_phi", 0.0, -0.35, 0.35, "rad", "change of phi over the run (end - start)"),
+            HParam("g_c", 0.0, -20e3, 20e3, "Pa", "change of cohesion over the run (end - start)"),
+            HParam("g_lnK", 0.0, -1.5, 1.5, "-", "change of ln K over the run (end - start)"),
+        )
+
+    def predict(self, ctx, load_n, slip, x, p):
+        base = dict(p)
+        out = []
+        if x is None:
+            x = np.zeros(np.size(load_n))
+        for xe in (-0.5, 0.5):
+            q = dict(base)
+            q["k_eq"] = base["k_eq"] * math.exp(xe * base["g_lnk"])
+            q["phi"] = base["phi"] + xe * base["g_phi"]
+            q["c"] = max(base["c"] + xe * base["g_c"], 0.0)
+            q["K"] = base["K"] * math.exp(xe * base["g_lnK"])
+            terrain = apply_terrain(ctx.terrain, q)
+            out.append(wong_forces(terrain, ctx.wheel, load_n, slip, sinkage=ctx.sinkage))
+        x = np.asarray(x, float)
+        wa, wb = 0.5 - x, 0.5 + x  # linear interpolation between the start and end terrain
+        fa, fb = out
+
+        def mix(field):
+            return wa * getattr(fa, field) + wb * getattr(fb, field)
+
+        return WheelForces(sinkage_m=mix("sinkage_m"), theta1_rad=mix("theta1_rad"),
+                           load_model_n=mix("load_model_n"), drawbar_pull_n=mix("drawbar_pull_n"),
+                           torque_nm=mix("torque_nm"))
+
+
+class DrawbarResistance(Hypothesis):
+    """An extra resistance on the drawbar pull only (torque and sinkage as Wong's): Dp - (R0 + R1 (W/W_ref - 1)).
+
+    Not a cause on our list: it stands for every error that acts on Dp alone, without the
+    torque and sinkage a soil change would bring (soil pushed ahead of the wheel, rolling
+    resistance of a deflecting tyre, an offset in the transducer's Fx).  Its effect is
+    ``unexplained``: when it explains the data as well as a listed cause, that cause is not named.
+    W_ref is the data's median load (fixed from the data, so R0 is the resistance at a typical load).
+    """
+
+    name, effect, title = "dp_resistance", "unexplained", "an extra Dp-only resistance (no listed cause)"
+    source = "generic alternative: Bekker (1969) bulldozing / any Fx-only error; not a listed cause"
+
+    def own_params(self, ctx):
+        return (
+            HParam("R0", 0.0, -1e6, 1e6, "N", "extra resistance at the median load (negative: extra pull)"),
+            HParam("R1", 0.0, -1e6, 1e6, "N", "its change per unit relative load, R1 (W/W_ref - 1)"),
+        )
+
+    def forces(self, ctx, terrain, load_n, slip, x, p):
+        f = wong_forces(terrain, ctx.wheel, load_n, slip, sinkage=ctx.sinkage)
+        w_ref = float(np.median(load_n)) if ctx.w_ref is None else ctx.w_ref
+        r = p["R0"] + p["R1"] * (np.asarray(load_n, float) / w_ref - 1.0)
+        return WheelForces(sinkage_m=f.sinkage_m, theta1_rad=f.theta1_rad, load_model_n=f.load_model_n,
+                           drawbar_pull_n=f.drawbar_pull_n - r, torque_nm=f.torque_nm)
+
+
+class WheelRadius(Hypothesis):
+    """The soil sees a wheel of radius r (1 + rho), while slip was computed with r (Eq. 6).
+
+    Not a cause on our list: it stands for a deflecting tyre (Wong's equivalent rigid wheel
+    is larger than the tyre's radius) or a wrong radius in the configuration.  The forces are
+    Wong's for the radius r_e = r (1 + rho) at the slip the soil sees,
+    s_e = 1 - (1 - s) / (1 + rho) (the same V and omega, Eq. 6 with r_e), clipped at 0.
+    Effect ``unexplained``: a listed cause it explains as well is not named.
+    """
+
+    name, effect, title = "radius", "unexplained", "a wheel radius other than the slip radius (no listed cause)"
+    source = "generic alternative: tyre deflection (Wong 2008 ch. 2 equivalent rigid wheel) or a radius error"
+
+    def own_params(self, ctx):
+        return (HParam("rho", 0.0, -0.3, 0.5, "-", "relative change of the radius the soil sees"),)
+
+    def forces(self, ctx, terrain, load_n, slip, x, p):
+        from .terrain import Wheel
+
+        rho = p["rho"]
+        wheel = Wheel(ctx.wheel.radius * (1.0 + rho), ctx.wheel.width)
+        s_e = np.clip(1.0 - (1.0 - np.asarray(slip, float)) / (1.0 + rho), 0.0, 0.999)
+        return wong_forces(terrain, wheel, load_n, s_e, sinkage=ctx.sinkage)
+
+
+class SensorGain(Hypothesis):
+    """The transducer's drawbar pull and torque read (1 + g_dp) and (1 + g_t) times Wong's values.
+
+    Not a cause on our list: a calibration error of the wheel force transducer (Fx or My gain).
+    Effect ``unexplained``: a listed cause it explains as well is not named.
+    """
+
+    name, effect, title = "sensor_gain", "unexplained", "a gain error of the force transducer (no listed cause)"
+    source = "generic alternative: transducer calibration (Fx, My gains)"
+
+    def own_params(self, ctx):
+        return (HParam("g_dp", 0.0, -0.5, 0.5, "-", "relative gain error of the drawbar pull (Fx)"),
+                HParam("g_t", 0.0, -0.5, 0.5, "-", "relative gain error of the torque (My)"))
+
+    def forces(self, ctx, terrain, load_n, slip, x, p):
+        f = wong_forces(terrain, ctx.wheel, load_n, slip, sinkage=ctx.sinkage)
+        return WheelForces(sinkage_m=f.sinkage_m, theta1_rad=f.theta1_rad, load_model_n=f.load_model_n,
+                           drawbar_pull_n=f.drawbar_pull_n * (1.0 + p["g_dp"]), torque_nm=f.torque_nm * (1.0 + p["g_t"]))
+
+
+class VerticalBalance(Hypothesis):
+    """Wong's model with the static sinkage from the vertical balance Eq. (7) = W instead of
+    Eq. (10)'s small-angle formula (kernel ``sinkage="balance"``); no parameters.
+
+    Not a cause on our list (a model-form alternative): when it explains the data as well as
+    a listed cause, that cause is not named.  Not tried when the fit already uses ``balance``.
+    """
+
+    name, effect, title = "balance", "unexplained", "static sinkage from the vertical balance (no listed cause)"
+    source = "paper Eq. (7) solved for z0 (wheelsoil.model.wong, sinkage='balance')"
+
+    def available(self, ctx, has_x):
+        if ctx.sinkage == "balance":
+            return "the fit already takes the static sinkage from the vertical balance"
+        return super().available(ctx, has_x)
+
+    def forces(self, ctx, terrain, load_n, slip, x, p):
+        return wong_forces(terrain, ctx.wheel, load_n, slip, sinkage="balance")
+
+
+#: The registry: name -> hypothesis.  Add a cause: one class above and one entry here.
+HYPOTHESES: dict[str, Hypothesis] = {
+    h.name: h
+    for h in (Wong(), Vasilev(), Lyasko(), Ding(), TerrainMismatch(), VasilevTerrain(), DingTerrain(),
+              WongReece(), DriftLinear(), DrawbarResistance(), WheelRadius(), SensorGain(),
+              VerticalBalance())
+}
+
+
+def get_hypothesis(name: str) -> Hypothesis:
+    """The hypothesis registered as ``name`` (``terrain_mismatch`` is accepted for ``terrain``).
+
+    Raises ValueError listing the known names."""
+    if name == "terrain_mismatch":
+        name = "terrain"
+    try:
+        return HYPOTHESES[name]
+    except KeyError:
+        raise ValueError(f"unknown hypothesis {name!r}; known: {', '.join(HYPOTHESES)}") from None

@@ -1,0 +1,79 @@
+"""The hypothesis registry: every cause one small class, null parameters reduce to its nested model."""
+
+import numpy as np
+import pytest
+
+from wheelsoil.model import DEFAULT_WHEEL, load_terrain, wong_forces
+from wheelsoil.model.hypotheses import EFFECTS, HYPOTHESES, Context, HParam, Hypothesis, get_hypothesis, lab_prior
+
+SAND = load_terrain("sand")
+CTX = Context(SAND, DEFAULT_WHEEL, "eq10", lab_prior(SAND, DEFAULT_WHEEL))
+W = np.full(5, 13000.0)
+S = np.linspace(0.15, 0.85, 5)
+X = np.linspace(-0.5, 0.5, 5)
+
+
+def _defaults(h):
+    return {q.name: q.default for q in h.parameters(CTX)}
+
+
+@pytest.mark.parametrize("name", list(HYPOTHESES))
+def test_every_hypothesis_has_an_effect_bounded_parameters_and_reduces_to_wong(name):
+    h = HYPOTHESES[name]
+    assert h.effect in EFFECTS and h.title and h.source
+    for q in h.parameters(CTX):
+        assert q.lower <= q.default <= q.upper, q
+        if q.prior:
+            assert q.prior[1] > 0
+    if h.available(CTX, True):
+        pytest.skip(h.available(CTX, True))
+    f = h.predict(CTX, W, S, X, _defaults(h))
+    if name == "balance":  # a model-form alternative: the vertical balance holds instead
+        np.testing.assert_allclose(f.load_model_n, W, rtol=1e-9)
+        return
+    ref = wong_forces(SAND.replace(kc=0.0, kphi=SAND.k_eq(DEFAULT_WHEEL.width)), DEFAULT_WHEEL, W, S)
+    np.testing.assert_allclose(f.drawbar_pull_n, ref.drawbar_pull_n, rtol=1e-9)
+    np.testing.assert_allclose(f.torque_nm, ref.torque_nm, rtol=1e-9)
+
+
+def test_terrain_mismatch_is_the_alias_of_terrain_and_unknown_names_are_errors():
+    assert get_hypothesis("terrain_mismatch") is HYPOTHESES["terrain"]
+    with pytest.raises(ValueError, match="known"):
+        get_hypothesis("nope")
+
+
+def test_drift_changes_the_forces_along_the_run_only_with_a_slope():
+    h = HYPOTHESES["drift_linear"]
+    p = _defaults(h)
+    p["g_phi"] = np.radians(6.0)
+    f = h.predict(CTX, W, np.full(5, 0.5), X, p)
+    assert np.all(np.diff(f.drawbar_pull_n) > 0)  # friction grows along the run: more pull
+    assert h.available(CTX, False) and not h.available(CTX, True)
+
+
+def test_lab_prior_uses_the_terrain_uncertainties():
+    pr = lab_prior(SAND, DEFAULT_WHEEL)
+    assert set(pr) == {"k_eq", "n", "c", "phi", "K"}
+    assert pr["k_eq"][2] and pr["K"][2] and not pr["phi"][2]
+    wide = lab_prior(SAND, DEFAULT_WHEEL, widen=3.0)
+    assert wide["n"][1] == pytest.approx(3 * pr["n"][1])
+
+
+def test_a_new_cause_is_one_small_class():
+    class Offset(Hypothesis):
+        name, effect, title, source = "offset", "unexplained", "constant Dp offset", "test"
+
+        def own_params(self, ctx):
+            return (HParam("d", 0.0, -1e4, 1e4, "N", "offset"),)
+
+        def forces(self, ctx, terrain, load_n, slip, x, p):
+            f = wong_forces(terrain, ctx.wheel, load_n, slip)
+            return type(f)(f.sinkage_m, f.theta1_rad, f.load_model_n, f.drawbar_pull_n + p["d"], f.torque_nm)
+
+    from wheelsoil.model.crossval import fit_hypothesis
+    from wheelsoil.model.data import prepare_data, synthetic_data
+
+    df = synthetic_data(SAND, DEFAULT_WHEEL, "wong", kind="table", n_rows=40, load_n=13000.0, seed=1)
+    df["drawbar_pull_n"] += 500.0
+    f = fit_hypothesis(Offset(), CTX, prepare_data(df).cells)
+    assert abs(f.params["d"] - 500.0) < 4 * f.stderr["d"] + 20.0
