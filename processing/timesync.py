@@ -206,9 +206,12 @@ def _traction_sse(tau: float, t_g: np.ndarray, v_g: np.ndarray, t_ref: np.ndarra
     if dw_ref is not None:
         dw = np.interp(tq, t_ref, dw_ref)[m]
         B = np.column_stack([B, B * dw[:, None]])
-    coef, *_ = np.linalg.lstsq(B, xm, rcond=None)
-    r = xm - B @ coef
-    return float(r @ r), n, r, m
+    # normal equations by einsum (no multi-threaded BLAS on the tall matrix: this runs ~260 times
+    # and a threaded BLAS on a busy machine is ~30x slower); the small system by SVD least squares
+    gram = np.einsum("ij,ik->jk", B, B)
+    coef = np.linalg.lstsq(gram, np.einsum("ij,i->j", B, xm), rcond=1e-12)[0]
+    r = xm - np.einsum("ij,j->i", B, coef)
+    return float(np.einsum("i,i->", r, r)), n, r, m
 
 
 def estimate_latency_traction(t_gnss_s: np.ndarray, v_gnss: np.ndarray, t_ref_s: np.ndarray,
