@@ -71,8 +71,8 @@ def main(argv=None) -> int:
              QUICK if a.quick else DEFAULT)
     if a.effects:
         cases = list(cases) + EFFECTS
-    hdr = (f"{'terrain':7} {'effect':15} {'fronts':9} {'true ms':>7} {'seed':>4} {'dur s':>5} | {'est ms':>7} {'err ms':>7} "
-           f"{'se ms':>6} {'reliable':8} {'method':18} | {'wheel_ref':>9} {'traction':>9} {'dynamics':>9} | ok")
+    hdr = (f"{'terrain':7} {'effect':15} {'fronts':9} {'true ms':>7} {'seed':>4} {'dur s':>5} | "
+           f"{'est ms':>7} {'err ms':>7} {'se ms':>6} {'reliable':8} {'method':18} | {'wheel_ref':>9} {'traction':>9} {'dynamics':>9} | ok")
     print(hdr)
     print("-" * len(hdr))
     n_ok = 0
@@ -92,7 +92,8 @@ def main(argv=None) -> int:
                 v = cands.get(k, {})
                 if v.get("estimate_s") is None:
                     return f"{'-':>9}"
-                return f"{v['estimate_s'] * 1e3:8.1f}{'' if v.get('usable') else 'x'}" + (" " if v.get("usable") else "")
+                mark = " " if v.get("usable") else "x"
+                return f"{v['estimate_s'] * 1e3:8.1f}{mark}"
 
             err = r["err_ms"]
             est_txt = "-" if r["est"] is None else f"{r['est'] * 1e3:7.1f}"

@@ -430,11 +430,12 @@ def _choose_latency(cands: dict, errs: dict, *, coupled: bool, wheel_ref_label: 
         if method not in usable and "+" not in method:
             reasons.append(f"{method} is not usable ({info[method]['note']})")
     reliable = chosen is not None and not reasons
+    wr_info = info.get("wheel_reference", {})
     q = {"estimate_s": None if chosen is None else chosen.latency_s,
          "stderr_s": None if chosen is None else chosen.stderr_s,
          "method": method or None, "reliable": bool(reliable), "reasons": reasons,
-         "fronts_driven": bool(coupled) or (fronts and not info.get("wheel_reference", {}).get("usable", False)
-                                            and "do not roll freely" in info.get("wheel_reference", {}).get("note", "")),
+         "fronts_driven": bool(coupled) or (fronts and not wr_info.get("usable", False)
+                                            and "do not roll freely" in wr_info.get("note", "")),
          "candidates": info, "search_range_s": [0.0, LATENCY_MAX_S]}
     label = {"wheel_reference": wheel_ref_label, "traction": _LATENCY_METHODS["traction"],
              "dynamics": _LATENCY_METHODS["dynamics"],

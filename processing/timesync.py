@@ -248,7 +248,8 @@ def estimate_latency_traction(t_gnss_s: np.ndarray, v_gnss: np.ndarray, t_ref_s:
 
     Returns :class:`LatencyEstimate` (``gain`` 1, ``offset_mps`` 0,
     ``residual_rms_mps`` holds the RMS of ``x - g(s)`` [-]; ``note`` names an
-    edge hit: within :data:`TRACTION_EDGE_S` or two standard errors of an end). Raises ``ValueError`` when too few samples overlap or the
+    edge hit: within :data:`TRACTION_EDGE_S` or two standard errors of an end).
+    Raises ``ValueError`` when too few samples overlap or the
     traction coefficient does not vary.
     """
     t_g = np.asarray(t_gnss_s, dtype=np.float64)
