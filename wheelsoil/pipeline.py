@@ -588,6 +588,7 @@ def run_fit(
     except ValueError as exc:
         _failure_report(out, inputs, ter, wheel, slip_min, str(exc), provenance=prov)
         raise ValueError(f"{exc} (a report saying so was written to {out / 'report.html'})") from None
+    _cap_for_time_base(diag, info)
     prov["settings"]["hypotheses_tried"] = list(getattr(diag, "tried", None) or diag.fits)
     prov["settings"]["diagnosis_thresholds"] = dict(getattr(diag, "thresholds", {}) or {})
     prov["settings"]["cross_validation"] = getattr(data, "group_kind", None)
@@ -606,6 +607,20 @@ def run_fit(
         details.append(d)
     return write_report(diag, out, terrain=ter, wheel=wheel, inputs=inputs, time_sync=ts,
                         extra_notes=notes, progress=progress, provenance=prov, input_details=details)
+
+
+def _cap_for_time_base(diag, info) -> None:
+    """Confidence at most "low" when processing could not establish a reliable GNSS latency
+    for an input (``ProcessResult.quality["latency"]["reliable"]`` False): slip (Eq. 6) is
+    then in doubt by the latency's error, and so is every verdict built on it."""
+    from wheelsoil.model.diagnosis import cap_confidence
+
+    for path, res in zip(info["time_sync"], info["results"]):
+        lat = ((getattr(res, "quality", None) or {}).get("latency") or {}) if res is not None else {}
+        if lat and not lat.get("reliable", True):
+            cap_confidence(diag, "low", f"the GNSS latency of {Path(path['input']).name} is unreliable "
+                           f"({'; '.join(map(str, lat.get('reasons') or [])) or 'see the data-quality table'}): "
+                           "slip is in doubt")
 
 
 def _parse_models(text: str):
