@@ -92,9 +92,6 @@ def test_hidden_effect_verdict(name, case, strict, tmp_path):
         assert not (v["wrong_cause"] and v["confidence"] == "high"), why
 
 
-@pytest.mark.xfail(reason="processing estimates the GNSS latency against the FL/FR wheels as if they rolled "
-                   "freely; on the 4x4 they are driven and slip (issue 11 finding, processing's to fix)",
-                   strict=False)
 def test_latency_with_driven_front_wheels(tmp_path):
     from wheelsoil.processing import process_recording
 
