@@ -548,8 +548,8 @@ def _robust_sd(r: np.ndarray) -> float:
 
 def _smooth_basis(slip, load_n, x, n_cells):
     """Design matrix of a flexible smooth in (slip, load, drift coordinate): a cubic B-spline in
-    slip (4..8 functions, interior knots at slip quantiles), the centred load and its product
-    with slip (whenever the load varies at all), and x, x^2 in the drift coordinate (time series)."""
+    slip (4..8 functions, interior knots at slip quantiles), its product with the centred load
+    (when the load varies), and x, x^2 in the drift coordinate (time series)."""
     from scipy.interpolate import BSpline
 
     s = np.asarray(slip, float)
@@ -560,9 +560,7 @@ def _smooth_basis(slip, load_n, x, n_cells):
     B = BSpline.design_matrix(np.clip(s, lo, hi), t, 3).toarray()
     cols = [B]
     w = np.asarray(load_n, float)
-    # any load variation: the forces scale with W, so even a 0.5 % load change moves the
-    # torque (noise ~0.1 % of it) by several noise sigmas; left out, it would inflate sigma
-    if np.std(w) > 1e-9 * abs(np.mean(w)):
+    if np.std(w) > 0.01 * abs(np.mean(w)):
         wc = (w - w.mean()) / np.std(w)
         sc = (s - s.mean()) / (np.std(s) or 1.0)
         cols.append(np.column_stack([wc, wc * sc]))
