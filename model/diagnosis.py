@@ -1145,3 +1145,22 @@ def _summary(d: Diagnosis) -> str:
     if d.failures:
         parts.append("Not done: " + " ".join(d.failures))
     return " ".join(parts)
+
+
+_LEVELS = ("low", "medium", "high")
+
+
+def cap_confidence(diag: Diagnosis, level: str, reason: str) -> Diagnosis:
+    """Lower ``diag.confidence`` to at most ``level`` (``low``/``medium``/``high``) for a
+    reason found outside the fits (e.g. an unreliable GNSS latency, so the slip itself is in
+    doubt); the reason joins ``confidence_reasons`` and the summary is regenerated from the
+    same facts. Returns ``diag`` (modified in place). Raises ``ValueError`` for an unknown level.
+    """
+    if level not in _LEVELS:
+        raise ValueError(f"confidence level must be one of {', '.join(_LEVELS)}, got {level!r}")
+    if _LEVELS.index(diag.confidence) > _LEVELS.index(level):
+        diag.confidence = level
+    if reason not in diag.confidence_reasons:
+        diag.confidence_reasons.append(reason)
+    diag.summary = _summary(diag)
+    return diag

@@ -1,16 +1,32 @@
-"""The fitted-model report: ``report.html`` (self-contained), ``*.png``, ``report.json``.
+"""The fitted-model report: ``report.html`` (one self-contained file), ``*.png``, ``report.json``.
 
-:func:`write_report` turns a :class:`wheelsoil.model.diagnosis.Diagnosis` into
+:func:`write_report` turns a :class:`wheelsoil.model.diagnosis.Diagnosis` (and,
+from the pipeline, the provenance and the processed signals of each input) into
 
-* ``report.json`` (schema ``wheelsoil.report/1``, valid JSON: no NaN, ``null``
-  instead), with the keys listed in :data:`REQUIRED_KEYS`;
-* ``dp_vs_slip.png`` (measured Dp with every model's curve, like the paper's
-  Figs. 4–5), ``residuals.png`` (Wong's residuals vs slip with binned means and
-  95 % CIs, vs load and time), ``sinkage_vs_slip.png`` (each model's sinkage,
-  measured points when present);
-* ``report.html``: one file with the figures embedded as base64 ``data:`` URIs,
-  inline CSS only, no scripts, fonts or external links, so it opens offline;
-  tables like the paper's Tabs. 1–4 and per-run metrics beside the pooled ones.
+* ``report.json`` (schema ``wheelsoil.report/1``, strict JSON: no NaN, ``null``
+  instead; SI units, the unit in every key where it is ambiguous), with the
+  keys of :data:`REQUIRED_KEYS` and ``provenance`` (what was run on what, enough
+  to re-run it), ``data_quality`` (per input), per-model ``parameters`` with
+  their flags, ``per_channel`` metrics, ``flags``, ``findings`` (the report's
+  statements, generated from the numbers next to them);
+* ``overview.png`` (``overview_<i>.png`` for several inputs): V, r*omega, slip,
+  W, Dp, T against time with the phases shaded and every span excluded from
+  the fit marked with its reason; ``dp_vs_slip.png`` (paper Figs. 4-5),
+  ``residuals.png`` (Wong's residuals vs slip, load, time) and
+  ``sinkage_vs_slip.png``; curves that overlap are drawn once and said to;
+* ``report.html``: one file, figures embedded as base64 PNG ``data:`` URIs,
+  inline CSS only (responsive: readable at phone width, tables scroll; a
+  print style), no scripts, fonts or links, so it opens offline.
+
+One display convention (:func:`fmt`): forces in N, torques in N m, sinkage and
+lengths (K, H) in mm, cohesion in kPa, angles in degrees, kc in kN/m^(n+1),
+kphi and k_eq in kN/m^(n+2), three significant figures (standard errors two).
+
+The diagnosis object comes from ``Diagnosis.to_dict()`` when the diagnosis
+provides it (team contract D: effect, model, confidence, summary, channels,
+probabilities, alternatives, consistency, flags, models); every key is
+optional here, and what today's :class:`Diagnosis` lacks (flags) is derived
+from its fits.  Metrics: paper section 1.3 (M0, R0, R^2).
 """
 
 from __future__ import annotations
@@ -19,25 +35,167 @@ import base64
 import html
 import json
 import math
+import textwrap
 from pathlib import Path
 
 import numpy as np
 
-from .diagnosis import CHANNEL_TITLES, TITLES, Diagnosis
+from .diagnosis import CHANNEL_TITLES, TITLES
 
-__all__ = ["write_report", "report_dict", "SCHEMA", "ALL_MODELS"]
+__all__ = ["write_report", "report_dict", "fmt", "fmt_param", "param_unit", "SCHEMA", "ALL_MODELS",
+           "REQUIRED_KEYS", "CORRELATION_LIMIT", "CONDITION_LIMIT", "exclusion_masks"]
 
 SCHEMA = "wheelsoil.report/1"
+#: Models always listed (a missing one says why); others the diagnosis fits are appended.
 ALL_MODELS = ("wong", "vasilev", "lyasko", "ding", "terrain_mismatch", "vasilev+terrain", "ding+terrain",
               "wong_reece", "drift_linear")
+#: report name -> the diagnosis's fit name where they differ (the terrain hypothesis)
+_FIT_ALIAS = {"terrain_mismatch": "terrain"}
+#: Top-level keys every report.json has.
+REQUIRED_KEYS = ("schema", "input", "provenance", "terrain", "wheel", "samples_used", "slip_min", "time_sync",
+                 "models", "diagnosis", "gain", "flags", "data_quality", "findings", "metric_definitions")
+#: terrain parameters a fit can identify (k_eq = kc/b + kphi: one wheel width cannot separate kc and kphi)
+TERRAIN_KEYS = ("k_eq", "n", "c", "phi", "K")
+MAX_POINTS = 4000  #: samples drawn per scatter panel (every k-th; file size, readability)
+CORRELATION_LIMIT = 0.95  #: |correlation| of two fitted parameters above this is flagged
+CONDITION_LIMIT = 100.0  #: condition number of the scaled Jacobian above this is flagged (derived flags)
+_PALETTE = ("#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b", "#e377c2", "#17becf", "#bcbd22")
 COLORS = {"wong": "#444444", "vasilev": "#1f77b4", "lyasko": "#d62728", "ding": "#2ca02c",
           "terrain_mismatch": "#9467bd", "vasilev+terrain": "#17becf", "ding+terrain": "#bcbd22",
           "wong_reece": "#8c564b", "drift_linear": "#e377c2"}
+_CHANNEL_UNIT = {"drawbar_pull_n": "force", "torque_nm": "torque", "sinkage_m": "length_mm"}
+_CHANNEL_SUFFIX = {"drawbar_pull_n": "n", "torque_nm": "nm", "sinkage_m": "m"}
+
+
+def _canon(name):
+    """The report's name of a fit (``terrain`` -> ``terrain_mismatch``)."""
+    for k, v in _FIT_ALIAS.items():
+        if name == v:
+            return k
+    return name
 
 
 def _fit_of(diag, name):
-    """The fit shown under ``name`` (``terrain_mismatch`` is the ``terrain`` hypothesis)."""
-    return diag.fits.get(name) or (diag.fits.get("terrain") if name == "terrain_mismatch" else None)
+    """The fit shown under ``name`` (``terrain_mismatch`` is the diagnosis's ``terrain`` hypothesis)."""
+    fits = getattr(diag, "fits", {}) or {}
+    return fits.get(name) if name in fits else fits.get(_FIT_ALIAS.get(name, name))
+
+
+def _fit_names(diag) -> list:
+    """Report names of the fitted models, in display order."""
+    return sorted({_canon(k) for k in (getattr(diag, "fits", {}) or {})}, key=_model_order)
+
+
+def _title(name) -> str:
+    return TITLES.get(name, str(name).replace("_", " ")) if name is not None else "none"
+
+
+def _color(name, i=0) -> str:
+    return COLORS.get(name, _PALETTE[i % len(_PALETTE)])
+
+
+def _distinct_colors(names) -> list:
+    """One colour per name, its own where it has one, never the same twice (up to 20 names)."""
+    import matplotlib
+
+    tab = [matplotlib.colors.to_hex(c) for c in matplotlib.colormaps["tab20"].colors]
+    spare = tab[::2] + ["#000000", "#7f0000", "#004c6d", "#5a3e00"] + tab[1::2]  # strong colours first
+    out, used = [], set()
+    for n in names:
+        c = COLORS.get(n)
+        if c is None or c in used:
+            c = next((x for x in spare if x not in used), "#000000")
+        used.add(c)
+        out.append(c)
+    return out
+
+
+# ============================================================================ display convention
+
+#: quantity -> (SI unit, display unit, factor SI -> display)
+QUANTITIES = {
+    "force": ("N", "N", 1.0),
+    "torque": ("N m", "N m", 1.0),
+    "length_mm": ("m", "mm", 1e3),
+    "length_m": ("m", "m", 1.0),
+    "pressure": ("Pa", "kPa", 1e-3),
+    "angle": ("rad", "deg", 180.0 / math.pi),
+    "kc": ("N/m^(n+1)", "kN/m^(n+1)", 1e-3),
+    "kphi": ("N/m^(n+2)", "kN/m^(n+2)", 1e-3),
+    "ratio": ("1", "", 1.0),
+    "percent": ("%", "%", 1.0),
+    "time": ("s", "s", 1.0),
+    "latency": ("s", "ms", 1e3),
+    "speed": ("m/s", "m/s", 1.0),
+    "mass": ("kg", "kg", 1.0),
+    "inertia": ("kg m^2", "kg m^2", 1.0),
+}
+#: fitted parameter -> quantity (field symbols of the DEVELOPERS guide)
+PARAM_QUANTITY = {"c": "pressure", "phi": "angle", "K": "length_mm", "H": "length_mm", "kc": "kc",
+                  "kphi": "kphi", "k_eq": "kphi", "n": "ratio", "n1": "ratio", "m1": "ratio", "m2": "ratio",
+                  "a1": "ratio", "a2": "ratio"}
+
+
+def num(x, sig: int = 3) -> str:
+    """``x`` with ``sig`` significant figures, plain decimals for 1e-3 <= |x| < 1e6, else
+    ``m.mme-k``; ``n/a`` for None or non-finite.  The one number formatter of the report."""
+    if x is None or isinstance(x, (str, bool)):
+        return "n/a" if x is None else str(x)
+    try:
+        v = float(x)
+    except (TypeError, ValueError):
+        return str(x)
+    if not math.isfinite(v):
+        return "n/a"
+    if v == 0:
+        return "0"
+    e = int(math.floor(math.log10(abs(v))))
+    if -3 <= e < 6:
+        dec = max(0, sig - 1 - e)
+        r = round(v, dec) if dec > 0 else round(v, sig - 1 - e)
+        if r != 0 and int(math.floor(math.log10(abs(r)))) > e:  # 9.996 -> 10.0
+            dec = max(0, dec - 1)
+        return f"{r:.{dec}f}"
+    m = f"{v:.{sig - 1}e}"
+    mant, _, ex = m.partition("e")
+    return f"{mant}e{int(ex)}"
+
+
+def fmt(v, quantity: str = "ratio", sig: int = 3, unit: bool = True) -> str:
+    """An SI value in the report's display unit of ``quantity`` (see :data:`QUANTITIES`),
+    e.g. ``fmt(0.0312, "length_mm") == "31.2 mm"``; ``n/a`` for None/NaN."""
+    _, disp, k = QUANTITIES.get(quantity, ("", "", 1.0))
+    if v is None or not isinstance(v, (int, float, np.floating, np.integer)) or not math.isfinite(float(v)):
+        return "n/a"
+    txt = num(float(v) * k, sig)
+    return f"{txt} {disp}" if unit and disp else txt
+
+
+def param_unit(name: str, display: bool = False) -> str:
+    """SI unit (or the display unit) of a fitted parameter; ``"1"`` / ``""`` when dimensionless."""
+    si, disp, _ = QUANTITIES[PARAM_QUANTITY.get(name, "ratio")]
+    return disp if display else si
+
+
+def fmt_param(name: str, value, se=None, unit: bool = True) -> str:
+    """``value ± se unit`` of a fitted parameter in display units (se with 2 significant figures)."""
+    q = PARAM_QUANTITY.get(name, "ratio")
+    txt = fmt(value, q, 3, unit=False)
+    if se is not None:
+        txt += " ± " + fmt(se, q, 2, unit=False)
+    u = QUANTITIES[q][1]
+    return f"{txt} {u}" if unit and u else txt
+
+
+def _chan_fmt(v, channel, sig=3) -> str:
+    return fmt(v, _CHANNEL_UNIT.get(channel, "ratio"), sig)
+
+
+def _chan_unit(channel) -> str:
+    return QUANTITIES[_CHANNEL_UNIT.get(channel, "ratio")][1]
+
+
+# ============================================================================ JSON helpers
 
 
 def _clean(obj):
@@ -55,24 +213,230 @@ def _clean(obj):
     if isinstance(obj, (float, np.floating)):
         v = float(obj)
         return v if math.isfinite(v) else None
+    if isinstance(obj, Path):
+        return str(obj)
     return obj
 
 
 def _terrain_dict(t, wheel) -> dict:
+    """Terrain values in SI with the unit in each key (JSON)."""
     return {
         "name": t.name,
         "c_pa": t.c,
         "phi_deg": t.phi_deg,
+        "phi_rad": t.phi,
         "k_m": t.K,
         "n": t.n,
         "kc": t.kc,
         "kphi": t.kphi,
         "k_eq": t.k_eq(wheel.width),
+        "kc_unit": "N/m^(n+1)",
+        "kphi_unit": "N/m^(n+2)",
         "source": getattr(t, "source", ""),
     }
 
 
-def _per_run(diag: Diagnosis) -> list:
+def _finite(v):
+    try:
+        v = float(v)
+    except (TypeError, ValueError):
+        return None
+    return v if math.isfinite(v) else None
+
+
+# ============================================================================ diagnosis object
+
+
+def _legacy_diagnosis(diag) -> dict:
+    """The diagnosis keys today's :class:`Diagnosis` has (every attribute optional)."""
+    g = lambda k, d=None: getattr(diag, k, d)  # noqa: E731
+    structure = {}
+    for k, v in (g("structure") or {}).items():
+        structure[_canon(k)] = {c: {"p": t.get("p"), "p_poly": t.get("p_poly"), "p_bins": t.get("p_bins"),
+                                    "effect_sigma": t.get("effect"), "effect_abs": t.get("effect_abs"),
+                                    "effect_rel": t.get("effect_rel"), "units": t.get("units"),
+                                    "channel": t.get("channel", c.partition("@")[0])}
+                                for c, t in v.items()}
+    data = g("data")
+    out = {
+        "effect": g("effect"),
+        "model": g("model"),
+        "confidence": g("confidence"),
+        "confidence_reasons": list(g("confidence_reasons") or []),
+        "summary": g("summary") or "",
+        "forms_distinguishable": g("forms_distinguishable"),
+        "indistinguishable_forms": list(g("indistinguishable_forms") or []),
+        "structure_tests": structure,
+        "load_test": g("load_test"),
+        "time_test": g("time_test"),
+        "sinkage_evidence": g("sinkage_evidence"),
+        "thresholds": dict(g("thresholds") or {}),
+        "fit_terrain": g("fit_terrain", False),
+        "identifiability": g("identifiability") or {},
+        "cross_validation": getattr(data, "group_kind", None),
+    }
+    return out
+
+
+def diagnosis_dict(diag) -> dict:
+    """The JSON ``diagnosis`` object: today's keys, overlaid by ``diag.to_dict()`` (contract D)
+    when the diagnosis provides it; ``flags`` derived from the fits when it does not."""
+    out = _legacy_diagnosis(diag)
+    to_dict = getattr(diag, "to_dict", None)
+    if callable(to_dict):
+        try:
+            d = to_dict()
+        except Exception as exc:  # noqa: BLE001 - a report must still be written
+            out.setdefault("notes", []).append(f"Diagnosis.to_dict() failed: {type(exc).__name__}: {exc}")
+            d = {}
+        out.update(_clean(d) if isinstance(d, dict) else {})
+    if "flags" not in out or out["flags"] is None:
+        out["flags"] = derived_flags(getattr(diag, "fits", {}) or {})
+        out["flags_source"] = "derived by the report from the fits (the diagnosis gives none)"
+    return _clean(out)
+
+
+def derived_flags(fits: dict) -> list:
+    """Flags of degenerate fits from :class:`~wheelsoil.model.fit.ModelFit` objects:
+    parameters at a bound, |correlation| > :data:`CORRELATION_LIMIT`, condition number >
+    :data:`CONDITION_LIMIT`.  Returns contract-D flag dicts ``{model, parameter, kind, detail}``."""
+    flags = []
+    for name in sorted(fits, key=_model_order):
+        f = fits[name]
+        res = getattr(f, "result", None)
+        if res is None:
+            continue
+        for p in getattr(res, "at_bound", ()) or ():
+            v = f.params.get(p, res.params.get(p) if hasattr(res, "params") else None)
+            flags.append({"model": name, "parameter": p, "kind": "at_bound",
+                          "detail": f"{p} = {fmt_param(p, v)} ended on a bound of its allowed range: the best "
+                                    "fit lies at the edge, so its standard error is not a confidence interval"})
+        names = list(getattr(res, "names", ()) or ())
+        corr = np.asarray(getattr(res, "correlation", np.empty((0, 0))), dtype=float)
+        for i in range(len(names)):
+            for j in range(i + 1, len(names)):
+                if i < corr.shape[0] and j < corr.shape[1]:
+                    c = corr[i, j]
+                    if np.isfinite(c) and abs(c) > CORRELATION_LIMIT:
+                        flags.append({"model": name, "parameter": f"{names[i]},{names[j]}", "kind": "correlation",
+                                      "value": float(c),
+                                      "detail": f"correlation({names[i]}, {names[j]}) = {c:+.5f}: the data pin down "
+                                                "one combination of the two, not each"})
+        cn = _finite(getattr(res, "condition_number", None))
+        if cn is not None and cn > CONDITION_LIMIT:
+            flags.append({"model": name, "parameter": None, "kind": "ill_conditioned", "value": cn,
+                          "detail": f"condition number {num(cn)} > {num(CONDITION_LIMIT)}: some parameter "
+                                    "combinations are poorly determined"})
+    return flags
+
+
+def _model_order(name) -> tuple:
+    return (ALL_MODELS.index(name), "") if name in ALL_MODELS else (len(ALL_MODELS), str(name))
+
+
+# ============================================================================ report.json
+
+
+def _per_channel(data, fit) -> dict:
+    """channel -> in-sample M0/R0/R^2 and out-of-sample R0, unit suffix in the keys."""
+    from .fit import _metrics
+
+    out = {}
+    cvr = (fit.cv or {}).get("cv_R0") or {}
+    for c in data.channels:
+        sfx = _CHANNEL_SUFFIX.get(c, "si")
+        m = _metrics(data.channels[c], fit.predictions[c]) if c in fit.predictions else {}
+        out[c] = {"M0_pct": m.get("M0_pct"), f"R0_{sfx}": m.get("R0_n"), "R2": m.get("R2"),
+                  f"cv_R0_{sfx}": cvr.get(c) if c != "drawbar_pull_n" else fit.cv_R0_n}
+    return out
+
+
+def _r0(pc: dict, c: str, cv: bool = False):
+    sfx = _CHANNEL_SUFFIX.get(c, "si")
+    return (pc.get(c) or {}).get(("cv_" if cv else "") + f"R0_{sfx}")
+
+
+def _worse_than_wong(models: dict, channels: list) -> dict:
+    """model -> channel -> {in_sample, out_of_sample, reason} where a fitted model is worse than Wong."""
+    wong = models.get("wong", {}).get("per_channel") or {}
+    out = {}
+    for k, m in models.items():
+        pc = m.get("per_channel")
+        if k == "wong" or not pc:
+            continue
+        better = {c: (_r0(pc, c) is not None and _r0(wong, c) is not None and _r0(pc, c) < _r0(wong, c))
+                  for c in channels}
+        for c in channels:
+            a, b = _r0(wong, c), _r0(pc, c)
+            ca, cb = _r0(wong, c, True), _r0(pc, c, True)
+            ins = a is not None and b is not None and b > a * 1.001
+            oos = ca is not None and cb is not None and cb > ca * 1.001
+            if not (ins or oos):
+                continue
+            others = [o for o in channels if o != c and better.get(o)]
+            if ins and others:
+                why = (f"joint fit with {', '.join(CHANNEL_TITLES.get(o, o) for o in others)}: the fit minimises "
+                       "the noise-weighted error of all measured channels together and trades "
+                       f"{CHANNEL_TITLES.get(c, c)} accuracy for "
+                       + ", ".join(f"{CHANNEL_TITLES.get(o, o)} ({_chan_fmt(_r0(wong, o), o)} -> "
+                                   f"{_chan_fmt(_r0(pc, o), o)} in sample)" for o in others))
+            elif ins:
+                why = ("the model's form cannot follow this channel: it is worse in sample although it contains "
+                       "more freedom than Wong; see its flags")
+            else:
+                why = ("better in sample but worse out of sample: the fitted parameters do not carry over to "
+                       "held-out cycles (over-fitting or an unstable parameter, see its flags)")
+            out.setdefault(k, {})[c] = {"in_sample": ins, "out_of_sample": oos, "reason": why}
+    return out
+
+
+def _model_entry(name, f, data, wheel, dd_model: dict | None) -> dict:
+    res = f.result
+    at_bound = set(getattr(f, "at_bound", ()) or ()) | (set(getattr(res, "at_bound", ()) or ()) if res is not None else set())
+    params = {}
+    for p, v in f.params.items():
+        params[p] = {"value": v, "se": f.stderr.get(p), "unit": (getattr(f, "units", None) or {}).get(p) or param_unit(p),
+                     "at_bound": p in at_bound}
+    for p, e in ((dd_model or {}).get("params") or {}).items():  # contract D overrides
+        if isinstance(e, dict):
+            params.setdefault(p, {}).update({k: e[k] for k in ("value", "se", "unit", "at_bound") if k in e})
+    return {
+        "status": "ok" if f.success else f"did not converge: {f.message}",
+        "fit_name": getattr(f, "name", name),
+        "effect": getattr(f, "effect", None),
+        "params": {k: v for k, v in f.params.items()},
+        "stderr": {k: v for k, v in f.stderr.items()},
+        "params_unit": {k: (getattr(f, "units", None) or {}).get(k) or param_unit(k) for k in f.params},
+        "parameters": params,
+        "params_fixed_terrain": list(getattr(f, "fixed_terrain", ()) or ()),
+        "terrain_fitted": [p for p in TERRAIN_KEYS if p in f.params],
+        "terrain_held_fixed": [p for p in TERRAIN_KEYS if p not in f.params],
+        "terrain_used": _terrain_dict(f.terrain, wheel),
+        "metrics": dict(f.metrics),
+        "channel_metrics": f.channel_metrics,
+        "per_channel": _per_channel(data, f),
+        "cv_R0_n": f.cv_R0_n,
+        "cv_R0": f.cv["cv_R0"] if f.cv else None,
+        "cv_score": f.cv["cv_score"] if f.cv else None,
+        "cv_folds": f.cv["n_groups"] if f.cv else None,
+        "stderr_jackknife": f.cv.get("stderr_jackknife") if f.cv else None,
+        "probability": None,
+        "stderr_method": ("max(cluster-robust over cycle x slip cells, jackknife over cycles)"
+                          if f.cv and f.cv.get("stderr_jackknife") else
+                          "cluster-robust over cycle x slip cells" if data.kind == "timeseries"
+                          else "s^2 (J^T J)^-1 (reduced chi-square)"),
+        "bic": f.bic,
+        "n_eff": f.n_eff,
+        "k": f.k,
+        "iterations": None if res is None else res.iterations,
+        "correlation": None if res is None else {"names": list(res.names), "matrix": res.correlation},
+        "condition_number": getattr(f, "condition_number", None) if res is None or getattr(f, "condition_number", None)
+        is not None else res.condition_number,
+        "notes": list(f.notes),
+    }
+
+
+def _per_run(diag) -> list:
     """Per-run Dp metrics of every fitted model (only when several runs)."""
     from .fit import _metrics
 
@@ -84,69 +448,108 @@ def _per_run(diag: Diagnosis) -> list:
     for r in runs:
         m = data.run == r
         row = {"run": int(r), "samples": int(m.sum()), "models": {}}
-        for k, f in diag.fits.items():
+        for k in _fit_names(diag):
+            f = _fit_of(diag, k)
             row["models"][k] = _metrics(data.channels["drawbar_pull_n"][m], f.predictions["drawbar_pull_n"][m])
         out.append(row)
     return out
 
 
-def report_dict(diag: Diagnosis, *, terrain, wheel, inputs, time_sync: dict | None = None,
-                figures: list | None = None, extra_notes: list | None = None) -> dict:
+METRIC_DEFINITIONS = {
+    "M0_pct": "maximum error rate (paper section 1.3): M0 = 100 max_i |y_p,i - y_a,i| / |y_a,i| [%]; one sample "
+              "with a measured value near zero dominates it (small Dp at small slip), so it is shown but not used "
+              "to rank models.",
+    "R0": "root mean squared error (paper section 1.3): R0 = [1/N sum_i (y_p,i - y_a,i)^2]^(1/2), in the "
+          "channel's unit (N for Dp, N m for T, mm for z); lower is better.",
+    "R2": "squared correlation coefficient (paper section 1.3): R^2 = [cov(y_a, y_p) / (sigma_a sigma_p)]^2. "
+          "It says whether prediction and measurement go up and down together, not whether the prediction is the "
+          "right size: a model offset by 1 kN can have R^2 = 1, and a model whose prediction hardly varies over "
+          "the samples has R^2 near 0 however close it is. Meaningful only when the samples span a range of the "
+          "channel much larger than the noise (a wide slip sweep) and the model is unbiased; rank models by R0 "
+          "and CV R0 instead.",
+    "cv_R0": "out-of-sample R0: each cross-validation group (accelerate cycle, or block of table rows) is "
+             "predicted by the model fitted without it; R0 over all held-out predictions.",
+    "cv_score": "out-of-sample RMS of the noise-weighted residuals over all measured channels (the rule's score).",
+    "bic": "Bayesian information criterion with the effective number of independent observations n_eff: "
+           "n_eff ln(RSS/N) + k ln(n_eff); lower is better; a difference of 10 or more is 'very strong' "
+           "evidence (Kass & Raftery 1995). Shown as the difference to Wong.",
+    "probability": "posterior probability of each hypothesis given the data (evidence of the fits with the "
+                   "effective number of independent units, and the lab priors); they sum to 1 over the "
+                   "hypotheses tried, so they compare the candidates with each other, not with causes not on "
+                   "the list.",
+    "condition_number": "condition number of the scaled Jacobian of the fit: above "
+                        f"{CONDITION_LIMIT:g}, some parameter combination is poorly determined.",
+    "correlation": f"|correlation| of two fitted parameters above {CORRELATION_LIMIT:g}: the data determine one "
+                   "combination of them, not each.",
+}
+
+
+def _definitions(data, dd) -> dict:
+    """:data:`METRIC_DEFINITIONS`, adapted to how this diagnosis computed them (cell means, BIC form)."""
+    out = dict(METRIC_DEFINITIONS)
+    if getattr(data, "cells", None) is not None:
+        out["cv_R0"] = ("out-of-sample R0: each cross-validation group (accelerate cycle, or block of table rows) "
+                        "is predicted by the model fitted without it; RMS of the held-out errors of the cell means "
+                        "(averages over cycle x slip cells, the units the models are fitted to), so it is smaller "
+                        "than the in-sample R0 over the samples: compare CV R0 between models, not with R0.")
+    if "c_hat" in dd:
+        out["bic"] = ("Bayesian information criterion of the fit on the cell means: chi-square of the data divided "
+                      "by the common overdispersion c_hat, plus the chi-square of the lab priors, plus k ln(number "
+                      "of cells); lower is better; a difference of 10 or more is 'very strong' evidence (Kass & "
+                      "Raftery 1995). Shown as the difference to Wong; the probabilities (Laplace evidence) are "
+                      "the verdict's measure.")
+    return out
+
+
+def report_dict(diag, *, terrain, wheel, inputs, time_sync: dict | None = None,
+                figures: list | None = None, extra_notes: list | None = None, provenance: dict | None = None,
+                data_quality: list | None = None, figure_notes: dict | None = None) -> dict:
     """The ``report.json`` content (schema ``wheelsoil.report/1``) as a JSON-safe dict.
 
     ``terrain``/``wheel``: the terrain and wheel given by the user; ``inputs``:
-    list of input descriptions (paths); ``time_sync``: ``{"gnss_latency_s": ...}``
-    (None values for tables).  Every model of :data:`ALL_MODELS` has an entry;
-    one that was not fitted has ``"status"`` saying why and null numbers.
+    list of input paths (str); ``time_sync``: ``{"gnss_latency_s": ...}`` (None
+    values for tables); ``provenance``: the run's provenance (see
+    :func:`wheelsoil.pipeline.run_fit`), ``data_quality``: per-input dicts;
+    ``figure_notes``: file name -> list of sentences (e.g. overlapping curves).
+    Every model of :data:`ALL_MODELS` has an entry; one that was not fitted
+    has ``"status"`` saying why and null numbers.
     """
     data = diag.data
+    dd = diagnosis_dict(diag)
+    dmodels = dd.get("models") if isinstance(dd.get("models"), dict) else {}
     models = {}
-    for name in ALL_MODELS:
+    names = list(ALL_MODELS) + [k for k in _fit_names(diag) if k not in ALL_MODELS]
+    for name in names:
         f = _fit_of(diag, name)
         if f is None:
             why = "not fitted"
-            for msg in diag.failures + diag.notes:
-                if msg.startswith(TITLES[name]) or msg.startswith(name):
+            for msg in list(getattr(diag, "failures", [])) + list(getattr(diag, "notes", [])):
+                if msg.startswith(_title(name)) or msg.startswith(name):
                     why = msg
-            models[name] = {"status": why, "params": None, "stderr": None,
+            models[name] = {"status": why, "params": None, "stderr": None, "parameters": None,
                             "metrics": {"M0_pct": None, "R0_n": None, "R2": None},
-                            "cv_R0_n": None, "bic": None}
+                            "cv_R0_n": None, "bic": None, "flags": []}
             continue
-        models[name] = {
-            "status": "ok" if f.success else f"did not converge: {f.message}",
-            "params": {k: v for k, v in f.params.items()},
-            "stderr": {k: v for k, v in f.stderr.items()},
-            "params_fixed_terrain": list(f.fixed_terrain),
-            "terrain_used": _terrain_dict(f.terrain, wheel),
-            "metrics": dict(f.metrics),
-            "channel_metrics": f.channel_metrics,
-            "cv_R0_n": f.cv_R0_n,
-            "cv_R0": f.cv["cv_R0"] if f.cv else None,
-            "cv_score": f.cv["cv_score"] if f.cv else None,
-            "cv_folds": f.cv["n_groups"] if f.cv else None,
-            "stderr_jackknife": f.cv.get("stderr_jackknife") if f.cv else None,
-            "stderr_method": ("max(cluster-robust over cycle x slip cells, jackknife over cycles)"
-                              if f.cv and f.cv.get("stderr_jackknife") else
-                              "cluster-robust over cycle x slip cells" if data.kind == "timeseries"
-                              else "s^2 (J^T J)^-1 (reduced chi-square)"),
-            "bic": f.bic,
-            "n_eff": f.n_eff,
-            "k": f.k,
-            "iterations": None if f.result is None else f.result.iterations,
-            "correlation": None if f.result is None else {
-                "names": list(f.result.names), "matrix": f.result.correlation},
-            "condition_number": None if f.result is None else f.result.condition_number,
-            "notes": list(f.notes),
-        }
-    struct = {
-        k: {c: {"p": t["p"], "p_poly": t.get("p_poly"), "p_bins": t.get("p_bins"), "effect_sigma": t["effect"],
-                "effect_abs": t.get("effect_abs"), "effect_rel": t.get("effect_rel"), "units": t["units"]}
-            for c, t in v.items()}
-        for k, v in diag.structure.items()
-    }
+        models[name] = _model_entry(name, f, data, wheel, dmodels.get(name, dmodels.get(_FIT_ALIAS.get(name))))
+    flags = [fl for fl in dd.get("flags") or [] if isinstance(fl, dict)]
+    for name, m in models.items():
+        m["flags"] = [fl for fl in flags if _canon(fl.get("model")) == name]
+        for p, e in (m.get("parameters") or {}).items():
+            e["flags"] = sorted({fl.get("kind") for fl in m["flags"]
+                                 if p in str(fl.get("parameter") or "").split(",") or
+                                 (fl.get("kind") == "at_bound" and fl.get("parameter") == p)} - {None})
+            if e.get("at_bound") and "at_bound" not in e["flags"]:
+                e["flags"].append("at_bound")
+    probs = dd.get("probabilities") or {}
+    for name, m in models.items():
+        m["probability"] = probs.get(name, probs.get(_FIT_ALIAS.get(name)))
+    worse = _worse_than_wong(models, list(data.channels))
+    for k, v in worse.items():
+        models[k]["worse_than_wong"] = v
     out = {
         "schema": SCHEMA,
         "input": list(inputs),
+        "provenance": provenance or {},
         "terrain": _terrain_dict(terrain, wheel),
         "wheel": {"radius_m": wheel.radius, "width_m": wheel.width},
         "samples_used": data.n,
@@ -156,292 +559,981 @@ def report_dict(diag: Diagnosis, *, terrain, wheel, inputs, time_sync: dict | No
         "channels": list(data.channels),
         "noise_sigma": dict(data.sigma),
         "time_sync": dict(time_sync) if time_sync else {"gnss_latency_s": None},
+        "data_quality": list(data_quality or []),
         "models": models,
-        "diagnosis": {
-            **diag.to_dict(),
-            "effect": diag.effect,
-            "model": diag.model,
-            "confidence": diag.confidence,
-            "confidence_reasons": list(diag.confidence_reasons),
-            "summary": diag.summary,
-            "forms_distinguishable": diag.forms_distinguishable,
-            "indistinguishable_forms": list(diag.indistinguishable_forms),
-            "structure_tests": struct,
-            "load_test": diag.load_test,
-            "time_test": diag.time_test,
-            "sinkage_evidence": diag.sinkage_evidence,
-            "thresholds": diag.thresholds,
-            "fit_terrain": diag.fit_terrain,
-            "identifiability": diag.identifiability,
-            "cross_validation": data.group_kind,
-        },
+        "diagnosis": dd,
+        "flags": flags,
         "gain": dict(diag.gain),
         "per_run": _per_run(diag),
         "binned_wong_residuals": diag.binned,
-        "notes": list(diag.notes) + list(extra_notes or []),
-        "not_done": list(diag.failures),
+        "notes": list(getattr(diag, "notes", [])) + list(extra_notes or []),
+        "not_done": list(getattr(diag, "failures", [])),
         "figures": list(figures or []),
+        "figure_notes": dict(figure_notes or {}),
+        "metric_definitions": _definitions(data, dd),
     }
-    return _clean(out)
+    out = _clean(out)
+    out["findings"] = findings(out)
+    return out
 
 
-# ----------------------------------------------------------------------------- figures
+# ============================================================================ findings (text from the numbers)
 
 
-def _model_curves(diag: Diagnosis, wheel, slip_grid, load):
+def _n_tests(rep) -> int:
+    """Number of structure tests the Bonferroni correction divides by: every test of Wong's residuals
+    (keys ``<channel>``, ``<channel>@load``, ``<channel>@x``); before those keys existed the load test
+    was separate (``load_test``)."""
+    d = rep["diagnosis"]
+    tests = (d.get("structure_tests") or {}).get("wong") or {}
+    if any("@" in k for k in tests):
+        return max(1, len(tests))
+    return max(1, len(tests) + (1 if d.get("load_test") else 0))
+
+
+_AGAINST = {"": "against slip", "load": "against load", "x": "against distance/time"}
+
+
+def _test_label(key: str) -> str:
+    c, _, against = key.partition("@")
+    return f"{CHANNEL_TITLES.get(c, c)} {_AGAINST.get(against, 'against ' + against)}"
+
+
+def structure_statements(rep) -> list:
+    """One sentence per channel on Wong's residual structure, from the test numbers and the rule's
+    thresholds: significant and large enough / significant but too small (which size rule failed) /
+    not significant.  Returns list of dicts ``{test, channel, kind, text}`` (kind: ``systematic``,
+    ``small``, ``not_significant``, ``untested``)."""
+    d = rep["diagnosis"]
+    th = d.get("thresholds") or {}
+    tests = (d.get("structure_tests") or {}).get("wong") or {}
+    alpha = th.get("alpha")
+    min_s, min_r = th.get("min_effect_sigma"), th.get("min_effect_rel")
+    out = []
+    if alpha is None or not tests:
+        return out
+    lvl = alpha / _n_tests(rep)
+    for key, t in tests.items():
+        c = t.get("channel") or key.partition("@")[0]
+        p, es, er, ea = t.get("p"), t.get("effect_sigma"), t.get("effect_rel"), t.get("effect_abs")
+        ch = _test_label(key)
+        if p is None:
+            out.append({"test": key, "channel": c, "kind": "untested", "text": f"{ch}: too few independent units to test."})
+            continue
+        size = (f"{_chan_fmt(ea, c)} RMS, {num(es, 2)} noise sigma, {num(100 * er, 2) if er is not None else 'n/a'} % "
+                f"of the channel's magnitude")
+        if p < lvl:
+            fails = []
+            if min_s is not None and (es is None or es < min_s):
+                fails.append(f"{num(es, 2)} sigma < {num(min_s, 2)} sigma")
+            if min_r is not None and (er is None or er < min_r):
+                fails.append(f"{num(100 * er, 2) if er is not None else 'n/a'} % < {num(100 * min_r, 2)} %")
+            if fails:
+                out.append({"test": key, "channel": c, "kind": "small", "text":
+                            f"{ch}: statistically significant (p = {num(p, 2)} < {num(lvl, 2)}) but too small to "
+                            f"attribute to a cause ({size}; size rule failed: {'; '.join(fails)})."})
+            else:
+                out.append({"test": key, "channel": c, "kind": "systematic", "text":
+                            f"{ch}: systematic (p = {num(p, 2)} < {num(lvl, 2)}) and large enough ({size})."})
+        else:
+            out.append({"test": key, "channel": c, "kind": "not_significant", "text":
+                        f"{ch}: not significant (p = {num(p, 2)} >= {num(lvl, 2)}; {size})."})
+    return out
+
+
+def findings(rep) -> list:
+    """The report's own statements around the diagnosis summary, each generated from the numbers it
+    cites (list of str): the structure test per channel, what the chosen model does per channel, the
+    models worse than Wong and why, the terrain parameters fitted/held fixed, the flags."""
+    d = rep["diagnosis"]
+    out = [s["text"] for s in structure_statements(rep)]
+    lt = d.get("load_test")
+    if lt and lt.get("p") is not None and lt.get("slope") is not None:
+        out.append(f"Drawbar pull error against load: slope {num(lt.get('slope'), 2)} per N "
+                   f"(p = {num(lt.get('p'), 2)}).")
+    chosen = _canon(d.get("model"))
+    m = rep["models"].get(chosen) if chosen else None
+    w = rep["models"].get("wong") or {}
+    if chosen and chosen != "wong" and m and m.get("per_channel"):
+        for c in rep["channels"]:
+            a, b = _r0(w.get("per_channel") or {}, c, True), _r0(m["per_channel"], c, True)
+            if a is None or b is None:
+                continue
+            verb = "lowers" if b < a else ("raises" if b > a else "leaves")
+            out.append(f"{_title(chosen)} {verb} the out-of-sample {CHANNEL_TITLES.get(c, c)} error: "
+                       f"{_chan_fmt(a, c)} (Wong) -> {_chan_fmt(b, c)}.")
+    for k, chans in sorted(((k, v.get("worse_than_wong")) for k, v in rep["models"].items()
+                            if v.get("worse_than_wong")), key=lambda kv: _model_order(kv[0])):
+        for c, v in chans.items():
+            where = " and ".join(x for x, flag in (("in sample", v["in_sample"]), ("out of sample", v["out_of_sample"]))
+                                 if flag)
+            out.append(f"{_title(k)} is worse than Wong on the {CHANNEL_TITLES.get(c, c)} {where} "
+                       f"(R0 {_chan_fmt(_r0(w.get('per_channel') or {}, c), c)} -> "
+                       f"{_chan_fmt(_r0(rep['models'][k]['per_channel'], c), c)}, out of sample "
+                       f"{_chan_fmt(_r0(w.get('per_channel') or {}, c, True), c)} -> "
+                       f"{_chan_fmt(_r0(rep['models'][k]['per_channel'], c, True), c)}): {v['reason']}.")
+    shown = chosen if chosen in rep["models"] else "wong"
+    if d.get("fit_terrain") and (rep["models"].get(shown) or {}).get("params") is not None:
+        mm = rep["models"][shown]
+        fitted = list(mm.get("terrain_fitted") or [])
+        fixed = list(mm.get("terrain_held_fixed") or [])
+        out.append(f"Terrain parameters fitted in {_title(shown)}: {', '.join(fitted) or 'none'}; held at the "
+                   f"given terrain's values: {', '.join(fixed) or 'none'} (as in the coefficient table).")
+    flags = rep.get("flags") or []
+    for fl in flags:
+        if _canon(fl.get("model")) == chosen:
+            par = f", {fl['parameter']}" if fl.get("parameter") else ""
+            out.append(f"Flag on the chosen model ({fl.get('kind')}{par}): {fl.get('detail') or ''}".rstrip(": "))
+    others = sorted({_canon(fl.get("model")) for fl in flags if _canon(fl.get("model")) != chosen} - {None},
+                    key=_model_order)
+    if others:
+        out.append(f"{sum(_canon(fl.get('model')) != chosen for fl in flags)} flag(s) on other models ("
+                   + ", ".join(_title(k) for k in others) + "): see the coefficient table and Flags.")
+    return out
+
+
+# ============================================================================ figures
+
+
+def exclusion_masks(signals, slip_min: float, excluded_spans=None, used=None) -> tuple:
+    """Why each sample of a processed recording is or is not used by the fit.
+
+    ``signals``: DataFrame of :func:`wheelsoil.processing.process_recording`
+    (``t_s, slip, load_n, drawbar_pull_n, phase, valid``); ``slip_min`` as
+    given to the fit; ``excluded_spans``: processing's ``ProcessResult.excluded``
+    (``{t0_s, t1_s, reason}``).  The selection is that of
+    :func:`wheelsoil.model.fit.prepare_data` (valid, finite s/W/Dp,
+    slip_min < s < 1, W > 0).
+
+    Returns ``(used (N,) bool, {reason: (N,) bool})``; reasons overlap (a
+    standstill sample has no slip either).
+    """
+    try:
+        from .data import _ZERO_SLIP
+    except ImportError:  # before the diagnosis split
+        from .fit import _ZERO_SLIP
+
+    t = signals["t_s"].to_numpy(float)
+    s = signals["slip"].to_numpy(float)
+    w = signals["load_n"].to_numpy(float)
+    dp = signals["drawbar_pull_n"].to_numpy(float)
+    valid = signals["valid"].fillna(False).astype(bool).to_numpy() if "valid" in signals else np.ones(t.size, bool)
+    phase = signals["phase"].astype(str).to_numpy() if "phase" in signals else np.full(t.size, "")
+    fin = np.isfinite(s) & np.isfinite(w) & np.isfinite(dp)
+    cyc = signals["cycle"].to_numpy(float) if "cycle" in signals else np.zeros(t.size)
+    with np.errstate(invalid="ignore"):
+        driving = valid & fin & (s > slip_min) & (s < 1.0) & (w > 0)
+        outside = driving & ~(cyc >= 0) if (cyc >= 0).any() else np.zeros(t.size, bool)
+        given = used is not None
+        used = np.asarray(used, bool) if given else driving & ~outside
+        reasons = {
+            "marked invalid by processing": ~valid,
+            "standstill": phase == "standstill",
+            "no slip (r omega < 0.1 m/s) or no W/Dp": valid & ~fin,
+            "skid / braking (s < 0)": valid & fin & (s < -_ZERO_SLIP),
+            "s ~ 0": valid & fin & (np.abs(s) <= _ZERO_SLIP),
+            f"0 < s <= slip_min = {slip_min:g}": valid & fin & (s > _ZERO_SLIP) & (s <= slip_min),
+            "s >= 1 or W <= 0": valid & fin & ((s >= 1.0) | (w <= 0)),
+            "outside the accelerate cycles (transients)": outside,
+        }
+    for e in excluded_spans or []:
+        try:
+            t0, t1 = float(e.get("t0_s")), float(e.get("t1_s"))
+        except (TypeError, ValueError):
+            continue
+        key = f"processing: {e.get('reason', 'excluded')}"
+        m = (t >= t0) & (t <= t1)
+        reasons[key] = reasons.get(key, np.zeros(t.size, bool)) | m
+        if not given:
+            used &= ~m
+    listed = np.zeros(t.size, bool)
+    for v in reasons.values():
+        listed |= v
+    reasons["other (the fit's own selection)"] = ~used & ~listed
+    return used, {k: v for k, v in reasons.items() if v.any()}
+
+
+def _runs(mask: np.ndarray) -> list:
+    """(start, stop) index pairs of the True runs of a bool array."""
+    m = np.concatenate([[False], np.asarray(mask, bool), [False]])
+    d = np.diff(m.astype(np.int8))
+    return list(zip(np.flatnonzero(d == 1), np.flatnonzero(d == -1)))
+
+
+_PHASE_COLORS = {"accel": ("#2ca02c", "shaded: accelerate phase"), "brake": ("#d62728", "shaded: brake phase"),
+                 "standstill": ("#7f7f7f", "shaded: standstill")}
+
+
+def overview_figure(signals, wheel_radius_m: float, slip_min: float, excluded_spans, path: Path, title: str,
+                    plt, used=None) -> dict:
+    """The run at a glance: V and r*omega, slip, W, Dp, T against time, phases shaded, and a strip of
+    the spans excluded from the fit with their reasons.  Writes ``path``; returns
+    ``{"used": n, "samples": N, "excluded": {reason: n}}``."""
+    from matplotlib.patches import Patch
+
+    t = signals["t_s"].to_numpy(float)
+    used, reasons = exclusion_masks(signals, slip_min, excluded_spans, used)
+    phase = signals["phase"].astype(str).to_numpy() if "phase" in signals else np.full(t.size, "")
+    fig, axes = plt.subplots(6, 1, figsize=(12, 15), sharex=True, layout="constrained",
+                             gridspec_kw={"height_ratios": [1, 1, 1, 1, 1, 0.25 + 0.14 * max(len(reasons), 1)]})
+
+    def shade(ax):
+        for ph, (col, _) in _PHASE_COLORS.items():
+            m = phase == ph
+            if m.any():
+                ax.fill_between(t, 0, 1, where=m, transform=ax.get_xaxis_transform(), color=col, alpha=0.10,
+                                lw=0, step="mid")
+
+    v = signals["speed_mps"].to_numpy(float) if "speed_mps" in signals else np.full(t.size, np.nan)
+    om = signals["omega_radps"].to_numpy(float) if "omega_radps" in signals else np.full(t.size, np.nan)
+    ax = axes[0]
+    ax.plot(t, v, color="#1f77b4", lw=1.2, label="V (GNSS, latency removed)")
+    ax.plot(t, wheel_radius_m * om, color="#ff7f0e", lw=1.0, ls="--", label=f"r omega (r = {num(wheel_radius_m)} m)")
+    ax.set_ylabel("speed [m/s]")
+    s = signals["slip"].to_numpy(float)
+    ax = axes[1]
+    ax.plot(t, s, color="#bbbbbb", lw=0.8, label="slip s, all samples (Eq. 6)")
+    ax.plot(t[used], s[used], ".", ms=1.5, color="#000000", label="samples used in the fit")
+    ax.axhline(slip_min, color="#9467bd", ls=":", lw=1.2, label=f"slip_min = {slip_min:g}")
+    ax.set_ylabel("slip s [-]")
+    lo, hi = np.nanpercentile(s, [0.5, 99.5]) if np.isfinite(s).any() else (-1, 1)
+    ax.set_ylim(max(lo - 0.05, -1.5), min(hi + 0.05, 1.5))
+    for ax, col, lab, unit, c in ((axes[2], "load_n", "vertical load W", "N", "#8c564b"),
+                                  (axes[3], "drawbar_pull_n", "drawbar pull Dp", "N", "#2ca02c"),
+                                  (axes[4], "torque_nm", "torque T", "N m", "#d62728")):
+        y = signals[col].to_numpy(float) if col in signals else np.full(t.size, np.nan)
+        ax.plot(t, y, color=c, lw=0.9, label=f"{lab} (WFT)")
+        ax.set_ylabel(f"{lab.split()[-1]} [{unit}]")
+        if not np.isfinite(y).any():
+            ax.text(0.5, 0.5, "not measured", transform=ax.transAxes, ha="center", va="center", color="#888")
+    handles = [Patch(color=col, alpha=0.25, label=lab) for ph, (col, lab) in _PHASE_COLORS.items() if (phase == ph).any()]
+    for i, ax in enumerate(axes[:5]):
+        shade(ax)
+        ax.grid(alpha=0.3)
+        h, lab = ax.get_legend_handles_labels()
+        if i == 0:  # the phase shading, once, with the first panel's lines
+            h, lab = h + handles, lab + [x.get_label() for x in handles]
+        _legend(ax, handles=h, labels=lab, markerscale=4.0, fontsize=8, loc="lower left", bbox_to_anchor=(0.0, 1.0),
+                ncol=5, frameon=False, borderaxespad=0.1)
+    # exclusion strip
+    ax = axes[5]
+    keys = list(reasons)
+    dt = float(np.median(np.diff(t))) if t.size > 1 else 1.0
+    for i, k in enumerate(keys):
+        segs = [(t[a], max(t[b - 1] - t[a] + dt, dt)) for a, b in _runs(reasons[k])]
+        ax.broken_barh(segs, (i - 0.4, 0.8), color=_PALETTE[i % len(_PALETTE)], label=k)
+    ax.set_yticks(range(len(keys)))
+    ax.set_yticklabels(keys, fontsize=8)
+    ax.set_ylim(-0.7, max(len(keys), 1) - 0.3)
+    ax.invert_yaxis()
+    ax.set_title("excluded from the fit (a sample may have several reasons)", fontsize=9, loc="left")
+    if not keys:
+        ax.text(0.5, 0.5, "nothing excluded", transform=ax.transAxes, ha="center", va="center")
+    ax.set_xlabel("time t [s] since the first frame")
+    ax.grid(alpha=0.3, axis="x")
+    fig.suptitle(title, fontsize=11)
+    _save(fig, path, plt)
+    return {"samples": int(t.size), "used": int(used.sum()),
+            "excluded": {k: int(v.sum()) for k, v in reasons.items()}}
+
+
+def _model_curves(diag, wheel, slip_grid, load):
     """name -> WheelForces on a slip grid at one load (models that cannot be evaluated are skipped)."""
     from wheelsoil.model import get_model
 
     out = {}
-    for k, f in diag.fits.items():
-        key = "terrain_mismatch" if k == "terrain" else k
+    for k in _fit_names(diag):
+        f = _fit_of(diag, k)
         try:
-            if hasattr(f, "curve"):
-                out[key] = f.curve(np.full(slip_grid.size, load), slip_grid)
+            if hasattr(f, "curve"):  # hypothesis fits evaluate themselves (drift: mid-run)
+                out[k] = f.curve(np.full(slip_grid.size, load), slip_grid)
                 continue
-            mp = {p: v for p, v in f.params.items() if p in {q.name for q in get_model(f.model).params}}
-            out[key] = get_model(f.model).predict(f.terrain, wheel, np.full(slip_grid.size, load), slip_grid, mp)
-        except ValueError:
+            mobj = get_model(f.model)
+            mp = {p: v for p, v in f.params.items() if p in {q.name for q in mobj.params}}
+            out[k] = mobj.predict(f.terrain, wheel, np.full(slip_grid.size, load), slip_grid, mp)
+        except (ValueError, KeyError, TypeError):
             continue
     return out
 
 
-def _figures(diag: Diagnosis, wheel, out_dir: Path) -> list:
-    import matplotlib
+def overlapping_groups(curves: dict, rtol: float = 0.005, atol: float = 0.0) -> list:
+    """Group curves (name -> (M,) array) that overlap: max |a - b| <= atol + rtol * (range of all
+    curves).  Returns a list of name lists, in the input order; a curve overlaps itself only."""
+    names = list(curves)
+    if not names:
+        return []
+    allv = np.concatenate([np.asarray(curves[k], float)[np.isfinite(curves[k])] for k in names] or [np.zeros(1)])
+    span = float(np.ptp(allv)) if allv.size else 0.0
+    tol = atol + rtol * max(span, 1e-12)
+    groups: list[list] = []
+    for k in names:
+        y = np.asarray(curves[k], float)
+        for g in groups:
+            yg = np.asarray(curves[g[0]], float)
+            ok = np.isfinite(y) & np.isfinite(yg)
+            if ok.any() and np.array_equal(np.isfinite(y), np.isfinite(yg)) and np.max(np.abs(y[ok] - yg[ok])) <= tol:
+                g.append(k)
+                break
+        else:
+            groups.append([k])
+    return groups
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
 
+def _figures(diag, wheel, out_dir: Path, plt) -> tuple:
+    """dp_vs_slip.png, residuals.png, sinkage_vs_slip.png; returns (paths, {file: [notes]})."""
     data = diag.data
     s, dp = data.slip, data.channels["drawbar_pull_n"]
     big = data.n > 500
-    pt = dict(s=4 if big else 18, alpha=0.25 if big else 0.8, color="#888888", lw=0)
+    # every k-th sample is drawn (at most MAX_POINTS per panel; the numbers use all of them)
+    step = max(1, int(math.ceil(data.n / MAX_POINTS)))
+    sub = np.arange(0, data.n, step)
+    meas = dict(s=5 if big else 28, alpha=0.3 if big else 0.9, color="#9a9a9a", lw=0, marker="o")
     load = float(np.median(data.load_n))
     grid = np.linspace(max(data.slip_min, 1e-3), min(float(s.max()) + 0.02, 0.98), 120)
     curves = _model_curves(diag, wheel, grid, load)
-    files = []
+    files, notes = [], {}
 
     # 1. Dp vs slip, one panel per model (paper Figs. 4-5)
-    names = [k for k in ALL_MODELS if _fit_of(diag, k) is not None]
+    names = _fit_names(diag)
     ncol = 3 if len(names) > 2 else len(names)
     nrow = int(math.ceil(len(names) / ncol))
-    fig, axes = plt.subplots(nrow, ncol, figsize=(4.2 * ncol, 3.3 * nrow), squeeze=False, sharey=True)
-    for ax, k in zip(axes.flat, names):
+    fig, axes = plt.subplots(nrow, ncol, figsize=(5.6 * ncol, 4.6 * nrow), squeeze=False, sharey=True)
+    order = sub[np.argsort(s[sub], kind="stable")]
+    palette = _distinct_colors(names)
+    for i, (ax, k) in enumerate(zip(axes.flat, names)):
         f = _fit_of(diag, k)
-        ax.scatter(s, dp, label="measured", **pt)
-        order = np.argsort(s)
-        if big:
-            ax.plot(s[order], f.predictions["drawbar_pull_n"][order], ".", ms=1, color=COLORS[k], alpha=0.3)
-        else:
-            ax.plot(s[order], f.predictions["drawbar_pull_n"][order], "o", ms=3, mfc="none", color=COLORS[k],
-                    label="model at measured W")
+        col = palette[i]
+        ax.plot(s[order[::3]], f.predictions["drawbar_pull_n"][order[::3]], "x", ms=2.5 if big else 5, mew=0.8, color=col,
+                alpha=0.4 if big else 1.0, label="model at each sample's measured W", zorder=2)
+        ax.scatter(s[sub], dp[sub], label="measured Dp", zorder=3, **meas)
         if k in curves:
-            ax.plot(grid, curves[k].drawbar_pull_n, "-", color=COLORS[k], lw=2, label=f"model, W = {load:.4g} N")
+            ax.plot(grid, curves[k].drawbar_pull_n, "-", color=col, lw=2.2, label=f"model curve at W = {fmt(load, 'force')}")
         m = f.metrics
-        ax.set_title(f"{TITLES[k]}\nM0 {_n(m['M0_pct'], '%')}  R0 {_n(m['R0_n'], 'N')}  R² {_n(m['R2'])}", fontsize=9)
-        ax.set_xlabel("slip s")
+        ax.set_title(f"{_title(k)}\nM0 {fmt(m.get('M0_pct'), 'percent')}   R0 {fmt(m.get('R0_n'), 'force')}   "
+                     f"CV R0 {fmt(f.cv_R0_n, 'force')}   R² {num(m.get('R2'))}", fontsize=10)
+        ax.set_xlabel("slip s [-]")
         ax.grid(alpha=0.3)
+        _legend(ax, fontsize=8, loc="best")
     for ax in axes[:, 0]:
         ax.set_ylabel("drawbar pull Dp [N]")
     for ax in list(axes.flat)[len(names):]:
         ax.axis("off")
-    axes.flat[0].legend(fontsize=7, loc="best")
     fig.tight_layout()
     files.append(_save(fig, out_dir / "dp_vs_slip.png", plt))
 
     # 2. Wong's residuals vs slip (binned means, CI), vs load, vs time
     chans = list(data.channels)
     wong = diag.fits["wong"]
-    fig, axes = plt.subplots(len(chans), 3, figsize=(13, 3.0 * len(chans)), squeeze=False)
+    fig, axes = plt.subplots(len(chans), 3, figsize=(16, 4.2 * len(chans)), squeeze=False)
     scale = {"drawbar_pull_n": (1.0, "N"), "torque_nm": (1.0, "N m"), "sinkage_m": (1e3, "mm")}
     t = data.t_s if data.t_s is not None else np.arange(data.n)
     for i, c in enumerate(chans):
-        k, unit = scale[c]
+        k, unit = scale.get(c, (1.0, ""))
         e = (data.channels[c] - wong.predictions[c]) * k
         b = diag.binned[c]
         ax = axes[i, 0]
-        ax.scatter(s, e, **pt)
-        ax.errorbar(b["slip"], np.array(b["mean"]) * k,
-                    yerr=np.abs(np.vstack([np.array(b["mean"]) - np.array(b["lo"]),
-                                           np.array(b["hi"]) - np.array(b["mean"])])) * k,
-                    fmt="o-", color="#d62728", capsize=3, label="binned mean, 95% CI")
-        ax.axhline(0, color="k", lw=0.8)
-        p = diag.structure["wong"][c]["p"]
-        ax.set_title(f"Wong residual, {CHANNEL_TITLES[c]} (structure p = {_n(p)})", fontsize=9)
-        ax.set_xlabel("slip s")
+        ax.scatter(s[sub], e[sub], label="measured - Wong, per sample", **meas)
+        if b["mean"]:
+            mean = np.array(b["mean"], float)
+            ax.errorbar(b["slip"], mean * k,
+                        yerr=np.abs(np.vstack([mean - np.array(b["lo"], float), np.array(b["hi"], float) - mean])) * k,
+                        fmt="s-", color="#d62728", capsize=3, label="binned mean of independent units, 95 % CI")
+        ax.axhline(0, color="k", lw=0.8, label="zero error")
+        p = ((getattr(diag, "structure", {}) or {}).get("wong", {}).get(c) or {}).get("p")
+        ax.set_title(f"Wong's {CHANNEL_TITLES.get(c, c)} error vs slip (structure test p = {num(p, 2)})", fontsize=10)
+        ax.set_xlabel("slip s [-]")
         ax.set_ylabel(f"measured - Wong [{unit}]")
-        ax.legend(fontsize=7)
-        axes[i, 1].scatter(data.load_n, e, **pt)
-        axes[i, 1].axhline(0, color="k", lw=0.8)
-        axes[i, 1].set_xlabel("load W [N]")
-        axes[i, 1].set_title("vs load", fontsize=9)
-        axes[i, 2].scatter(t, e, **pt)
-        axes[i, 2].axhline(0, color="k", lw=0.8)
-        axes[i, 2].set_xlabel("time [s]" if data.t_s is not None else "row")
-        axes[i, 2].set_title("vs time" if data.t_s is not None else "vs row order", fontsize=9)
+        _legend(ax, fontsize=8)
+        axes[i, 1].scatter(data.load_n[sub], e[sub], label="measured - Wong, per sample", **meas)
+        axes[i, 1].axhline(0, color="k", lw=0.8, label="zero error")
+        axes[i, 1].set_xlabel("vertical load W [N]")
+        axes[i, 1].set_title(f"vs load", fontsize=10)
+        axes[i, 2].scatter(t[sub], e[sub], label="measured - Wong, per sample", **meas)
+        axes[i, 2].axhline(0, color="k", lw=0.8, label="zero error")
+        axes[i, 2].set_xlabel("time t [s]" if data.t_s is not None else "table row")
+        axes[i, 2].set_title("vs time" if data.t_s is not None else "vs row order", fontsize=10)
+        for ax in axes[i, 1:]:
+            _legend(ax, fontsize=8)
         for ax in axes[i]:
             ax.grid(alpha=0.3)
     fig.tight_layout()
     files.append(_save(fig, out_dir / "residuals.png", plt))
 
-    # 3. sinkage vs slip per model
-    fig, ax = plt.subplots(figsize=(6.5, 4.2))
+    # 3. sinkage vs slip per model; overlapping curves drawn once
+    fig, ax = plt.subplots(figsize=(10, 6.0 + 0.22 * (len(names) + 2)), layout="constrained")
     if "sinkage_m" in data.channels:
-        ax.scatter(s, data.channels["sinkage_m"] * 1e3, label="measured", **pt)
-    for k in names:
-        if k in curves:
-            ax.plot(grid, curves[k].sinkage_m * 1e3, "-", color=COLORS[k], lw=2, label=TITLES[k])
-    ax.set_xlabel("slip s")
+        ax.scatter(s[sub], data.channels["sinkage_m"][sub] * 1e3, label="measured z", **meas)
+    zc = {k: curves[k].sinkage_m * 1e3 for k in names if k in curves}
+    groups = overlapping_groups(zc)
+    ov = []
+    colors = _distinct_colors([g[0] for g in groups])
+    for i, g in enumerate(groups):
+        lab = " = ".join(_title(k) for k in g)
+        if len(g) > 1:
+            lab += " (curves overlap)"
+            ov.append(f"sinkage curves of {', '.join(_title(k) for k in g)} overlap (within 0.5 % of the plotted "
+                      "range): drawn as one line")
+        ax.plot(grid, zc[g[0]], "-", color=colors[i], lw=2.4 if len(g) > 1 else 2.0,
+                label=textwrap.fill(lab, 90, subsequent_indent="   "))
+    ax.set_xlabel("slip s [-]")
     ax.set_ylabel("sinkage z [mm]")
-    ax.set_title(f"sinkage vs slip (model curves at W = {load:.4g} N)", fontsize=9)
+    ax.set_title(f"sinkage vs slip: model curves at W = {fmt(load, 'force')}"
+                 + ("" if "sinkage_m" in data.channels else " (sinkage not measured)"), fontsize=10)
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=7)
-    fig.tight_layout()
+    h, lab = ax.get_legend_handles_labels()
+    leg = fig.legend(h, lab, loc="outside lower center", ncol=1, fontsize=8, markerscale=2.0)
+    for x in getattr(leg, "legend_handles", []):
+        x.set_alpha(1.0)
     files.append(_save(fig, out_dir / "sinkage_vs_slip.png", plt))
-    return files
+    if ov:
+        notes["sinkage_vs_slip.png"] = ov
+    if step > 1:
+        for f in ("dp_vs_slip.png", "residuals.png"):
+            notes.setdefault(f, []).append(f"every {_ordinal(step)} of the {data.n} samples is drawn (all are used in the "
+                                           "numbers)")
+    if "sinkage_m" in data.channels and step > 1:
+        notes.setdefault("sinkage_vs_slip.png", []).append(f"every {_ordinal(step)} sample is drawn")
+    return files, notes
+
+
+def _ordinal(k: int) -> str:
+    return f"{k}{'th' if 10 <= k % 100 <= 20 else {1: 'st', 2: 'nd', 3: 'rd'}.get(k % 10, 'th')}"
+
+
+def _legend(ax, **kw):
+    """A legend whose markers are opaque and large enough to see (the points may be faint)."""
+    from matplotlib.patches import Rectangle
+
+    leg = ax.legend(markerscale=kw.pop("markerscale", 2.0), **kw)
+    for h in getattr(leg, "legend_handles", getattr(leg, "legendHandles", [])):
+        if isinstance(h, Rectangle):  # shading keeps its own transparency
+            continue
+        try:
+            h.set_alpha(1.0)
+        except AttributeError:
+            pass
+    return leg
 
 
 def _save(fig, path: Path, plt) -> Path:
-    fig.savefig(path, dpi=90)
+    fig.savefig(path, dpi=100, metadata={"Software": None})  # no version string: byte-stable output
     plt.close(fig)
     return path
 
 
-def _n(v, unit="", nd=4):
-    if v is None or (isinstance(v, float) and not math.isfinite(v)):
-        return "n/a"
-    return f"{v:.{nd}g}{(' ' + unit) if unit else ''}"
-
-
-# ----------------------------------------------------------------------------- HTML
+# ============================================================================ HTML
 
 _CSS = """
-body{font-family:system-ui,-apple-system,'Segoe UI',sans-serif;max-width:1150px;margin:1.5em auto;padding:0 1em;color:#222}
+*{box-sizing:border-box}
+body{font-family:system-ui,-apple-system,'Segoe UI',sans-serif;max-width:1200px;margin:1.2em auto;padding:0 1em;
+color:#222;line-height:1.45}
 h1{font-size:1.5em}h2{font-size:1.2em;border-bottom:1px solid #ccc;padding-bottom:.2em;margin-top:1.6em}
+h3{font-size:1.05em;margin-top:1.2em}
+.scroll{overflow-x:auto;-webkit-overflow-scrolling:touch;max-width:100%}
 table{border-collapse:collapse;margin:.6em 0;font-size:.9em}
-th,td{border:1px solid #ccc;padding:.25em .6em;text-align:right}th{background:#f0f0f0}
-td:first-child,th:first-child{text-align:left}
+th,td{border:1px solid #ccc;padding:.25em .6em;text-align:right;vertical-align:top}th{background:#f0f0f0}
+td:first-child,th:first-child,td.l{text-align:left}
 .verdict{padding:.8em 1em;border-radius:6px;background:#eef5ff;border:1px solid #9bc}
 .effect{font-size:1.3em;font-weight:bold}
 .warn{background:#fff4e0;border:1px solid #e0b060;padding:.5em 1em;border-radius:6px}
-img{max-width:100%;border:1px solid #ddd;margin:.5em 0}
-code{background:#f4f4f4;padding:0 .2em}
+.sim{background:#f3eefc;border:1px solid #a58bd0;padding:.5em 1em;border-radius:6px;margin:.6em 0}
+.flag{color:#a40000;font-weight:bold;white-space:nowrap}
+figure{margin:1em 0}figcaption{font-size:.9em;color:#444}
+img{max-width:100%;height:auto;border:1px solid #ddd}
+code{background:#f4f4f4;padding:0 .2em;word-break:break-all}
+dl dt{font-weight:bold;margin-top:.4em}dl dd{margin-left:1.2em}
+@media (max-width:640px){body{padding:0 .4em;font-size:15px}table{font-size:.8em}th,td{padding:.2em .35em}
+.effect{font-size:1.1em}}
+@media print{body{max-width:none;margin:0;font-size:10pt}.scroll{overflow:visible}
+figure,table,.verdict{page-break-inside:avoid;break-inside:avoid}h2{page-break-after:avoid;break-after:avoid}
+a{color:inherit;text-decoration:none}}
 """
 
 
-def _table(headers, rows) -> str:
-    h = "".join(f"<th>{html.escape(str(x))}</th>" for x in headers)
-    body = "".join("<tr>" + "".join(f"<td>{html.escape(str(x))}</td>" for x in r) + "</tr>" for r in rows)
-    return f"<table><tr>{h}</tr>{body}</table>"
+def _e(x) -> str:
+    return html.escape(str(x), quote=True)
 
 
-def _img(path: Path, alt: str) -> str:
+def _table(headers, rows, raw: bool = False) -> str:
+    """A scrollable table; cells escaped unless ``raw`` (then the caller escaped them)."""
+    h = "".join(f"<th>{_e(x)}</th>" for x in headers)
+    cell = (lambda x: str(x)) if raw else _e
+    body = "".join("<tr>" + "".join(f"<td>{cell(x)}</td>" for x in r) + "</tr>" for r in rows)
+    return f"<div class='scroll'><table><thead><tr>{h}</tr></thead><tbody>{body}</tbody></table></div>"
+
+
+def _img(path: Path, alt: str, caption: str = "") -> str:
     b64 = base64.b64encode(path.read_bytes()).decode("ascii")
-    return f'<img alt="{html.escape(alt)}" src="data:image/png;base64,{b64}">'
+    cap = f"<figcaption>{caption}</figcaption>" if caption else ""
+    return f"<figure><img alt='{_e(alt)}' src='data:image/png;base64,{b64}'>{cap}</figure>"
 
 
-def _html(rep: dict, figs: list) -> str:
+def _flag_marks(flags: list) -> str:
+    return "".join(f" <span class='flag' title='{_e(k)}'>[{_e(k.replace('_', ' '))}]</span>" for k in flags)
+
+
+def _provenance_html(p: dict) -> str:
+    if not p:
+        return "<p>No provenance given (library call without it).</p>"
+    parts = []
+    cmd = p.get("command")
+    rows = [["wheelsoil version", _e(p.get("version"))],
+            ["command", f"<code>{_e(' '.join(map(str, cmd)))}</code>" if cmd else "n/a"],
+            ["working directory", f"<code>{_e(p.get('cwd'))}</code>"],
+            ["analysis time (UTC)", _e(p.get("created"))]]
+    env = p.get("environment") or {}
+    if env:
+        rows.append(["environment", _e(", ".join(f"{k} {v}" for k, v in env.items()))])
+    parts.append(_table(["item", "value"], rows, raw=True))
+    parts.append("<h3>Inputs</h3>")
+    irows = []
+    for inp in p.get("inputs") or []:
+        pv = inp.get("provenance") or {}
+        kind = pv.get("kind", "unknown")
+        detail = ", ".join(f"{k}: {v}" for k, v in pv.items() if k not in ("kind",) and v not in (None, "", []))
+        irows.append([f"<code>{_e(inp.get('path'))}</code>", _e(kind), f"<code>{_e(inp.get('sha256'))}</code>",
+                      _e(_plain(inp.get("size_bytes"))) + " bytes", _e(detail)])
+    parts.append(_table(["path", "origin", "sha256", "size", "its own provenance"], irows, raw=True))
+    vc = p.get("vehicle_config") or {}
+    if vc:
+        parts.append("<h3>Vehicle configuration used</h3>")
+        rows = [["source", _e(vc.get("source"))]]
+        for k, q in (("wheel_radius_m", "length_m"), ("wheel_width_m", "length_m"), ("wheel_mass_kg", "mass"),
+                     ("wheel_inertia_kgm2", "inertia")):
+            if k in vc:
+                rows.append([_e(k), _e(fmt(vc.get(k), q))])
+        if vc.get("sha256"):
+            rows.append(["vehicle.toml sha256", f"<code>{_e(vc['sha256'])}</code>"])
+        for dbc in vc.get("dbcs") or []:
+            rows.append([f"DBC {_e(dbc.get('name'))}", f"<code>{_e(dbc.get('sha256'))}</code>"])
+        parts.append(_table(["item", "value"], rows, raw=True))
+    st = p.get("settings") or {}
+    if st:
+        parts.append("<h3>Settings</h3>")
+        rows = []
+        for k, v in st.items():  # 6 significant figures: the values a re-run must match
+            if isinstance(v, dict):
+                v = ", ".join(f"{a} = {_plain(b, 6)}" for a, b in v.items() if not isinstance(b, dict)) + "".join(
+                    f"; {a}: " + ", ".join(f"{x} = {_plain(y, 6)}" for x, y in b.items())
+                    for a, b in v.items() if isinstance(b, dict))
+            elif isinstance(v, list):
+                v = ", ".join(map(str, v))
+            else:
+                v = _plain(v, 6)
+            rows.append([k, v])
+        parts.append(_table(["setting", "value (SI)"], rows))
+    return "".join(parts)
+
+
+def _plain(v, sig: int = 3) -> str:
+    """A value of a generic dict: integers as they are, floats by the one formatter."""
+    if isinstance(v, bool) or v is None:
+        return str(v)
+    if isinstance(v, (int, np.integer)):
+        return str(int(v))
+    if isinstance(v, (float, np.floating)):
+        return num(v, sig)
+    return json.dumps(v, sort_keys=True) if isinstance(v, (dict, list)) else str(v)
+
+
+def _quality_rows(q: dict) -> list:
+    rows = []
+    if q.get("kind") == "table":
+        rows.append(["rows read", num(q.get("rows"), 6)])
+        return rows
+    rows.append(["duration", fmt(q.get("duration_s"), "time")])
+    if q.get("wheel_radius_m") is not None:
+        rows.append(["slip radius r (Eq. 6)", fmt(q["wheel_radius_m"], "length_mm")
+                     + (f" ({q['wheel_radius_source']})" if q.get("wheel_radius_source") else "")])
+    rows.append(["valid share (processing)", f"{num(100 * q['valid_share'], 3)} %" if q.get("valid_share") is not None
+                 else "n/a"])
+    if q.get("used_in_fit") is not None:
+        rows.append(["samples used in the fit", f"{q['used_in_fit']} of {q.get('samples')}"])
+    lf = q.get("lost_frames") or {}
+    for msg in sorted(lf):
+        v = lf[msg]
+        if v.get("lost") is None:
+            rows.append([f"lost frames {msg}", f"unknown ({v.get('method', '')}); {v.get('received')} received"])
+        else:
+            rows.append([f"lost frames {msg}", f"{v.get('lost')} of {(v.get('received') or 0) + v.get('lost')} "
+                         f"({v.get('method', '')})"])
+    if not lf:
+        rows.append(["lost frames", "none counted"])
+    rej = q.get("rejected_frames")
+    rows.append(["rejected frames (import)", _plain(rej) if rej is not None else
+                 ("none reported by the import" if q.get("imported") else "n/a (not imported)")])
+    dmg = q.get("damaged_chunks") or []
+    pdmg = (q.get("processing_quality") or {}).get("damage") or []
+    if pdmg:
+        lost = sum(int(d.get("frames_lost") or 0) for d in pdmg if isinstance(d, dict))
+        rows.append(["damaged chunks", f"{len(pdmg)} skipped, {lost} frames lost"
+                     + (": " + " | ".join(dmg) if dmg else "")])
+    else:
+        rows.append(["damaged chunks", "none" if not dmg else f"{len(dmg)}: " + " | ".join(dmg)])
+    rows.append(["recording read to its end (MCAP footer)", {True: "yes", False: "no (truncated or damaged: see "
+                                                              "above and the warnings)", None: "n/a"}[q.get("complete")]])
+    rx = q.get("kernel_rx_dropped")
+    if rx:
+        rows.append(["kernel receive drops", ", ".join(f"{b}: {'unknown' if n is None else n}" for b, n in sorted(rx.items()))])
+    g = q.get("gnss_fix") or {}
+    if g:
+        rows.append(["GNSS fix", "; ".join(f"{k} = {_plain(v)}" for k, v in g.items())])
+    lat = q.get("gnss_latency_s")
+    rows.append(["GNSS latency found and removed", "not estimated" if lat is None else
+                 f"{fmt(lat, 'latency')} ± {fmt(q.get('gnss_latency_stderr_s'), 'latency', 2)} "
+                 f"(reference: {q.get('latency_reference') or 'n/a'})"])
+    ine = q.get("inertia") or {}
+    if ine:
+        rows.append(["inertia compensation", ("applied" if ine.get("applied") else "not applied") + "; "
+                     + ", ".join(f"{k} = {_plain(v)}" for k, v in ine.items() if k != "applied")])
+    else:
+        rows.append(["inertia compensation", "not reported by processing (not applied)"])
+    for k, v in sorted((q.get("processing_quality") or {}).items()):
+        rows.append([f"processing: {k}", _plain(v)])
+    spans = q.get("excluded_spans") or []
+    if spans:
+        rows.append(["spans excluded by processing", "; ".join(
+            f"{num(e.get('t0_s'))}-{num(e.get('t1_s'))} s: {e.get('reason')}" for e in spans[:20])
+            + (f"; ... {len(spans) - 20} more" if len(spans) > 20 else "")])
+    for w in q.get("warnings") or []:
+        rows.append(["warning", w])
+    return rows
+
+
+def _metrics_section(rep) -> list:
+    parts = ["<h2>How well each model predicts (paper Tabs. 2 and 4)</h2>"]
+    w = rep["models"]["wong"]
+    wbic = w.get("bic")
+    probs = (rep["diagnosis"].get("probabilities") or {})
+    rows = []
+    for k, m in rep["models"].items():
+        mm = m["metrics"]
+        dbic = None if (m.get("bic") is None or wbic is None) else m["bic"] - wbic
+        rows.append([_e(_title(k)), _e(fmt(mm.get("M0_pct"), "percent", unit=False)),
+                     _e(fmt(mm.get("R0_n"), "force", unit=False)), _e(num(mm.get("R2"))),
+                     _e(fmt(m.get("cv_R0_n"), "force", unit=False)), _e(num(m.get("cv_score"))),
+                     _e("n/a" if dbic is None else f"{dbic:+.0f}"),
+                     _e(num(m.get("probability"), 2) if m.get("probability") is not None else "-"),
+                     _e(m["status"]) + _flag_marks(sorted({f.get("kind") for f in m.get("flags") or []} - {None}))])
+    parts.append(_table(["model", "M0 [%]", "R0 Dp [N]", "R² Dp [-]", "CV R0 Dp [N]", "CV score [-]",
+                         "BIC - BIC(Wong) [-]", "probability [-]", "status, flags"], rows, raw=True))
+    extra = {k: v for k, v in probs.items() if _canon(k) not in rep["models"]}
+    if extra:
+        parts.append("<p>Probabilities of the other hypotheses tried: "
+                     + _e(", ".join(f"{_title(k)} {num(v, 2)}" for k, v in extra.items())) + ".</p>")
+    # R^2 misleads: say so with the numbers
+    r2 = {k: m["metrics"].get("R2") for k, m in rep["models"].items() if m["metrics"].get("R2") is not None}
+    r0 = {k: m["metrics"].get("R0_n") for k, m in rep["models"].items() if m["metrics"].get("R0_n") is not None}
+    if r2 and r0:
+        best_r2, best_r0 = max(r2, key=r2.get), min(r0, key=r0.get)
+        txt = []
+        if best_r2 != best_r0:
+            txt.append(f"R² ranks the models differently from R0 here (highest R²: {_title(best_r2)} "
+                       f"{num(r2[best_r2])}; lowest R0: {_title(best_r0)} {fmt(r0[best_r0], 'force')})")
+        low = [k for k, v in r2.items() if v < 0.1]
+        if low:
+            txt.append("R² is below 0.1 for " + ", ".join(f"{_title(k)} ({num(r2[k])}, R0 {fmt(r0.get(k), 'force')})"
+                                                           for k in low)
+                       + ": the samples' Dp varies little compared with the noise, so R² says little about accuracy")
+        if txt:
+            parts.append("<p class='warn'>" + _e("; ".join(txt)) + ". Compare models by R0 and CV R0.</p>")
+    md = rep["metric_definitions"]
+    parts.append("<dl>" + "".join(f"<dt>{_e(t)}</dt><dd>{_e(md[k])}</dd>" for t, k in (
+        ("M0", "M0_pct"), ("R0", "R0"), ("R²", "R2"), ("CV R0", "cv_R0"), ("CV score", "cv_score"),
+        ("BIC", "bic"), ("probability", "probability"))) + "</dl>")
+    # per channel
+    chans = rep["channels"]
+    parts.append("<h3>Per channel: in sample and out of sample</h3>")
+    hdr = ["model"]
+    for c in chans:
+        u = _chan_unit(c)
+        hdr += [f"R0 {CHANNEL_TITLES.get(c, c)} [{u}]", f"CV R0 {CHANNEL_TITLES.get(c, c)} [{u}]"]
+    rows = []
+    for k, m in rep["models"].items():
+        pc = m.get("per_channel")
+        if not pc:
+            continue
+        row = [_e(_title(k))]
+        worse = m.get("worse_than_wong") or {}
+        for c in chans:
+            wv = worse.get(c) or {}
+            row.append(_e(_chan_fmt(_r0(pc, c), c).replace(" " + _chan_unit(c), ""))
+                       + (" <span class='flag'>[worse than Wong]</span>" if wv.get("in_sample") else ""))
+            row.append(_e(_chan_fmt(_r0(pc, c, True), c).replace(" " + _chan_unit(c), ""))
+                       + (" <span class='flag'>[worse than Wong]</span>" if wv.get("out_of_sample") else ""))
+        rows.append(row)
+    parts.append(_table(hdr, rows, raw=True))
+    reasons = [(k, c, v["reason"]) for k, m in rep["models"].items() for c, v in (m.get("worse_than_wong") or {}).items()]
+    if reasons:
+        parts.append("<p>Why a fitted model is worse than Wong on a channel:</p><ul>" + "".join(
+            f"<li>{_e(_title(k))}, {_e(CHANNEL_TITLES.get(c, c))}: {_e(r)}</li>" for k, c, r in reasons) + "</ul>")
+    dch = rep["diagnosis"].get("channels") or {}
+    if dch:
+        parts.append("<h3>Verdict per channel</h3>")
+        keys = sorted({k for v in dch.values() if isinstance(v, dict) for k in v})
+        first = [k for k in ("effect", "measured", "wong_cv_rmse", "best_cv_rmse", "improves", "worsens") if k in keys]
+        keys = first + [k for k in keys if k not in first]
+        rows = []
+        for c, v in dch.items():
+            v = v if isinstance(v, dict) else {"value": v}
+            rows.append([CHANNEL_TITLES.get(c, c)] + [
+                (_chan_fmt(v.get(k), c) if k.endswith(("rmse", "sigma_cell"))
+                 else _title(_canon(v.get(k))) if k in ("model", "compared_model") and v.get(k)
+                 else {True: "yes", False: "no"}[v.get(k)] if isinstance(v.get(k), bool)
+                 else num(v.get(k), 2) if isinstance(v.get(k), float)
+                 else ("-" if v.get(k) is None else str(v.get(k))))
+                for k in keys])
+        names = {"effect": "effect", "measured": "measured", "wong_cv_rmse": "Wong CV R0 (channel unit)",
+                 "best_cv_rmse": "model CV R0 (channel unit)", "improves": "model improves it out of sample",
+                 "worsens": "model worsens it out of sample", "compared_model": "model compared",
+                 "model": "model", "gain_noise_var": "held-out gain [noise variances per cell]",
+                 "noise_sigma_cell": "cell noise sigma (channel unit)", "p_improve": "p (improves)",
+                 "p_worse": "p (worsens)", "structure_p": "p (Wong's structure)"}
+        parts.append(_table(["channel"] + [names.get(k, k.replace("_", " ")) for k in keys], rows))
+    return parts
+
+
+def _coefficients_section(rep) -> list:
+    parts = ["<h2>Fitted coefficients (paper Tab. 3), ± standard error, with flags</h2>"]
+    rows = []
+    for k, m in rep["models"].items():
+        ps = m.get("parameters")
+        if not ps:
+            rows.append([_e(_title(k)), "(no free parameters)" if m["status"] == "ok" else _e(m["status"]),
+                         _e(", ".join(m.get("terrain_fitted") or []) or "-"),
+                         _e(", ".join(m.get("terrain_held_fixed") or []) or "-"), "-"])
+            continue
+        cells = []
+        for p, e in ps.items():
+            cells.append(f"{_e(p)} = {_e(fmt_param(p, e.get('value'), e.get('se')))}" + _flag_marks(e.get("flags") or []))
+        fitted_t = m.get("terrain_fitted") or []
+        fixed = ", ".join(m.get("terrain_held_fixed") or []) or "-"
+        cn = m.get("condition_number")
+        cn_txt = _e(num(cn)) + (_flag_marks(["ill_conditioned"]) if any(
+            f.get("kind") == "ill_conditioned" for f in m.get("flags") or []) else "")
+        rows.append([_e(_title(k)), "<br>".join(cells), _e(", ".join(fitted_t) or "-"), _e(fixed), cn_txt])
+    parts.append(_table(["model", "parameters (display units)", "terrain fitted", "terrain held at the given values",
+                         "condition no. [-]"], rows, raw=True))
+    parts.append("<p>Units: c in kPa, phi in degrees, K, H and sinkage in mm, kc in kN/m^(n+1), kphi and "
+                 "k_eq = kc/b + kphi in kN/m^(n+2), n, n1, m1, m2 dimensionless. report.json has every value in "
+                 "SI (phi in rad, lengths in m, moduli in N).</p>")
+    flags = rep.get("flags") or []
+    parts.append("<h3>Flags</h3>")
+    if flags:
+        parts.append(_table(["model", "parameter", "kind", "detail"],
+                            [[_title(f.get("model")), f.get("parameter") or "-", f.get("kind"), f.get("detail") or ""]
+                             for f in flags]))
+    else:
+        parts.append("<p>No flags: no parameter at a bound, no |correlation| above "
+                     f"{num(CORRELATION_LIMIT)}, no ill-conditioned or physically inconsistent fit.</p>")
+    parts.append("<dl><dt>at bound</dt><dd>the parameter ended on a bound of its search box; its standard error "
+                 "is not a confidence interval.</dd><dt>correlation</dt><dd>" + _e(METRIC_DEFINITIONS["correlation"])
+                 + "</dd><dt>ill conditioned</dt><dd>" + _e(METRIC_DEFINITIONS["condition_number"])
+                 + "</dd><dt>inconsistent</dt><dd>the fitted model violates a physical check (its vertical load "
+                 "(Eq. 7) against the measured load, sinkage against the limits of Eq. 10).</dd></dl>")
+    cons = rep["diagnosis"].get("consistency") or {}
+    if cons:
+        parts.append("<h3>Physical consistency of the fits</h3>")
+        rows = []
+        for k, v in sorted(cons.items(), key=lambda kv: _model_order(_canon(kv[0]))):
+            v = v if isinstance(v, dict) else {}
+            ratios = [r.get("ratio") for r in v.get("load_ratio_by_slip") or [] if isinstance(r, dict)
+                      and r.get("ratio") is not None]
+            rows.append([_title(_canon(k)), {True: "yes", False: "NO"}.get(v.get("consistent"), "n/a"),
+                         f"{num(min(ratios))} to {num(max(ratios))}" if ratios else "n/a",
+                         f"{fmt(v.get('sinkage_static_m'), 'length_mm')} (limit {fmt(v.get('sinkage_limit_m'), 'length_mm')})"
+                         if v.get("sinkage_limit_m") is not None else "n/a",
+                         "; ".join(map(str, v.get("reasons") or [])) or "-"])
+        parts.append(_table(["model", "consistent", "model W / measured W over slip bins (Eq. 7) [-]",
+                             "static sinkage (limit D/6, Eq. 10)", "reasons"], rows))
+    return parts
+
+
+def _html(rep: dict, figs: list, overviews: list) -> str:
     d = rep["diagnosis"]
-    parts = [f"<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'><title>wheelsoil fit report</title>"
-             f"<style>{_CSS}</style></head><body>"]
-    parts.append("<h1>wheelsoil fit report</h1>")
-    parts.append("<p>Input: " + ", ".join(f"<code>{html.escape(str(i))}</code>" for i in rep["input"]) + "</p>")
+    prov = rep.get("provenance") or {}
+    parts = ["<!DOCTYPE html>", "<html lang='en'><head><meta charset='utf-8'>",
+             "<meta name='viewport' content='width=device-width, initial-scale=1'>",
+             f"<title>wheelsoil fit report: {_e(', '.join(Path(str(i)).name for i in rep['input']))}</title>",
+             f"<style>{_CSS}</style></head><body>", "<h1>wheelsoil fit report</h1>"]
+    parts.append("<p>Input: " + ", ".join(f"<code>{_e(i)}</code>" for i in rep["input"])
+                 + f". Terrain: {_e(rep['terrain']['name'])}. Analysed {_e(prov.get('created', 'n/a'))} with wheelsoil "
+                 f"{_e(prov.get('version', 'n/a'))} (provenance at the end).</p>")
+    sims = [i for i in prov.get("inputs") or [] if (i.get("provenance") or {}).get("kind") == "simulated"]
+    if sims:
+        parts.append("<div class='sim'><p><b>Simulated recording.</b> "
+                     + _e(", ".join(Path(str(i.get("path"))).name for i in sims))
+                     + " was made by <code>wheelsoil simulate</code>, not measured on a vehicle: it tests the pipeline. "
+                     "The effect hidden in it is not recorded in the file; check the verdict against the simulator's "
+                     "truth (<code>wheelsoil simulate ... --truth truth.json</code>).</p></div>")
+    damaged = [q for q in rep.get("data_quality") or [] if q.get("damaged_chunks")]
+    if damaged:
+        parts.append("<div class='warn'><p><b>Damaged input.</b> "
+                     + _e(" ".join(w for q in damaged for w in q["damaged_chunks"]))
+                     + " The frames of a damaged part are left out, never used altered; the overview shows the "
+                     "gap.</p></div>")
+    eff = d.get("effect")
     parts.append(
-        f"<div class='verdict'><div class='effect'>Effect: {html.escape(d['effect'])} &nbsp;·&nbsp; model: "
-        f"{html.escape(TITLES.get(d['model'], d['model'] or 'none'))} &nbsp;·&nbsp; confidence: {html.escape(d['confidence'])}</div>"
-        f"<p>{html.escape(d['summary'])}</p></div>"
-    )
-    if rep["not_done"]:
+        f"<div class='verdict'><div class='effect'>Effect: {_e(eff)} &nbsp;·&nbsp; model: "
+        f"{_e(_title(_canon(d.get('model'))))} &nbsp;·&nbsp; confidence: {_e(d.get('confidence'))}</div>"
+        f"<p>{_e(d.get('summary', ''))}</p></div>")
+    if rep.get("not_done"):
         parts.append("<h2>What could not be done</h2><div class='warn'><ul>"
-                     + "".join(f"<li>{html.escape(x)}</li>" for x in rep["not_done"]) + "</ul></div>")
+                     + "".join(f"<li>{_e(x)}</li>" for x in rep["not_done"]) + "</ul></div>")
+    parts.append("<h2>What the verdict rests on</h2><ul>" + "".join(f"<li>{_e(x)}</li>" for x in rep["findings"])
+                 + "</ul>")
+    alts = d.get("alternatives") or []
+    if alts:
+        parts.append("<p>Hypotheses that explain the data equally well: " + _e(", ".join(_title(a) for a in alts))
+                     + (f". The measurement that would separate them: {_e(d.get('separating_measurement'))}."
+                        if d.get("separating_measurement") else ".") + "</p>")
+    g = rep["gain"]
+    parts.append(_table(["drawbar pull R0 [N]", "Wong", _title(_canon(d.get("model")) or "wong")],
+                        [["in sample", fmt(g.get("R0_n_before"), "force", unit=False), fmt(g.get("R0_n_after"), "force", unit=False)],
+                         ["out of sample (CV)", fmt(g.get("cv_R0_n_before"), "force", unit=False),
+                          fmt(g.get("cv_R0_n_after"), "force", unit=False)]]))
+    parts.extend(_metrics_section(rep))
+    parts.extend(_coefficients_section(rep))
+    # the run itself
+    parts.append("<h2>The run: overview and data quality</h2>")
+    dq = {q.get("input"): q for q in rep.get("data_quality") or []}
+    for path_fig, inp in overviews:
+        parts.append(f"<h3>{_e(inp)}</h3>")
+        if path_fig is not None:
+            parts.append(_img(Path(path_fig), f"overview of {inp}",
+                              "Top to bottom: speed V and r omega, slip (black: samples used in the fit), vertical load "
+                              "W, drawbar pull Dp, torque T against time; shading: accelerate / brake / standstill "
+                              "phases; bottom strip: the spans excluded from the fit and why."))
+        q = dq.get(inp)
+        if q:
+            parts.append(_table(["data quality", "value"], _quality_rows(q)))
+    for q in rep.get("data_quality") or []:
+        if q.get("input") not in {i for _, i in overviews}:
+            parts.append(f"<h3>{_e(q.get('input'))}</h3>" + _table(["data quality", "value"], _quality_rows(q)))
     # Tab. 1: terrain and wheel
     t = rep["terrain"]
     parts.append("<h2>Terrain and wheel (given)</h2>")
     parts.append(_table(
-        ["terrain", "c [kPa]", "phi [deg]", "K [m]", "n", "kc [kN/m^(n+1)]", "kphi [kN/m^(n+2)]", "k_eq = kc/b+kphi [kN/m^(n+2)]"],
-        [[t["name"], _n(t["c_pa"] / 1e3), _n(t["phi_deg"]), _n(t["k_m"]), _n(t["n"]), _n(t["kc"] / 1e3),
-          _n(t["kphi"] / 1e3), _n(t["k_eq"] / 1e3)]]))
+        ["terrain", "c [kPa]", "phi [deg]", "K [mm]", "n [-]", "kc [kN/m^(n+1)]", "kphi [kN/m^(n+2)]",
+         "k_eq = kc/b + kphi [kN/m^(n+2)]"],
+        [[t["name"], fmt(t["c_pa"], "pressure", unit=False), num(t["phi_deg"]), fmt(t["k_m"], "length_mm", unit=False),
+          num(t["n"]), fmt(t["kc"], "kc", unit=False), fmt(t["kphi"], "kphi", unit=False),
+          fmt(t["k_eq"], "kphi", unit=False)]]))
     w = rep["wheel"]
-    parts.append(f"<p>Wheel radius {w['radius_m']} m, width {w['width_m']} m. Samples used: {rep['samples_used']} of "
-                 f"{rep['samples_read']} ({rep['independent_units']} independent units), slip_min = {rep['slip_min']}. "
-                 f"Channels: {', '.join(rep['channels'])}. Noise sigma (weights): "
-                 + ", ".join(f"{k} {_n(v)}" for k, v in rep["noise_sigma"].items())
-                 + f". GNSS latency: {_n(rep['time_sync'].get('gnss_latency_s'), 's')}.</p>")
-    # Tab. 2/4: metrics
-    parts.append("<h2>Prediction of the drawbar pull (paper Tabs. 2 and 4)</h2>")
-    rows = []
-    for k, m in rep["models"].items():
-        mm = m["metrics"]
-        rows.append([TITLES[k], _n(mm["M0_pct"]), _n(mm["R0_n"]), _n(mm["R2"]), _n(m["cv_R0_n"]),
-                     _n(m.get("cv_score")), _n(m["bic"], nd=5), m["status"]])
-    parts.append(_table(["model", "M0 [%]", "R0 [N]", "R²", "CV R0 [N]", "CV weighted RMS", "BIC (n_eff)", "status"], rows))
-    parts.append("<p>M0 = max |error| / |measured| (paper §1.3) grows without bound where the measured Dp "
-                 "is near zero; R0 and the out-of-sample CV R0 are the robust comparison. BIC uses the effective "
-                 "number of independent observations; lower is better.</p>")
-    chan_rows = []
-    for k, m in rep["models"].items():
-        if m.get("channel_metrics"):
-            for c, v in m["channel_metrics"].items():
-                if c != "drawbar_pull_n":
-                    chan_rows.append([TITLES[k], c, _n(v["R0"]), _n(v["R2"]), _n((m.get("cv_R0") or {}).get(c))])
-    if chan_rows:
-        parts.append("<p>Other channels:</p>" + _table(["model", "channel", "R0", "R²", "CV R0"], chan_rows))
-    # Tab. 3: coefficients
-    parts.append("<h2>Fitted coefficients (paper Tab. 3), ± standard error</h2>")
-    rows = []
-    for k, m in rep["models"].items():
-        if m["params"]:
-            txt = "; ".join(f"{p} = {_n(v)} ± {_n(m['stderr'].get(p), nd=2)}" for p, v in m["params"].items())
-            fixed = ", ".join(m.get("params_fixed_terrain") or []) or "-"
-            rows.append([TITLES[k], txt, fixed, _n(m.get("condition_number"), nd=3)])
-        else:
-            rows.append([TITLES[k], "(no free parameters)" if m["status"] == "ok" else m["status"], "-", "-"])
-    parts.append(_table(["model", "parameters (SI; phi in rad)", "terrain held fixed", "condition no."], rows))
+    parts.append(f"<p>Wheel radius {_e(fmt(w['radius_m'], 'length_mm'))}, width {_e(fmt(w['width_m'], 'length_mm'))}. "
+                 f"Samples used: {rep['samples_used']} of {rep['samples_read']} ({rep['independent_units']} "
+                 f"independent units), slip_min = {_e(num(rep['slip_min']))}. Noise sigma (fit weights): "
+                 + _e(", ".join(f"{CHANNEL_TITLES.get(k, k)} {_chan_fmt(v, k, 2)}" for k, v in rep["noise_sigma"].items()))
+                 + f". GNSS latency: {_e(fmt(rep['time_sync'].get('gnss_latency_s'), 'latency'))}.</p>")
     if rep["per_run"]:
         parts.append("<h2>Per-run metrics (pooled fit)</h2>")
-        hdr = ["run", "samples"] + [f"{TITLES[k]} R0 [N]" for k in rep["models"] if rep["models"][k]["params"] is not None]
-        rows = []
-        for r in rep["per_run"]:
-            rows.append([r["run"], r["samples"]] + [_n(r["models"][k]["R0_n"]) for k in rep["models"]
-                                                     if k in r["models"] and rep["models"][k]["params"] is not None])
+        shown = [k for k in rep["models"] if rep["models"][k]["params"] is not None]
+        hdr = ["run", "samples"] + [f"{_title(k)} R0 Dp [N]" for k in shown]
+        rows = [[r["run"], r["samples"]] + [fmt((r["models"].get(k) or {}).get("R0_n"), "force", unit=False) for k in shown]
+                for r in rep["per_run"]]
         parts.append(_table(hdr, rows))
     parts.append("<h2>Figures</h2>")
+    captions = {
+        "dp_vs_slip.png": "Drawbar pull against slip, one panel per model (paper Figs. 4-5): grey dots measured, "
+                          "crosses the model at each sample's measured load, line the model at the median load.",
+        "residuals.png": "Wong's error (measured - model) per channel against slip (with binned means of independent "
+                         "units and 95 % confidence intervals), load and time.",
+        "sinkage_vs_slip.png": "Sinkage against slip: each model's curve at the median load; grey dots measured "
+                               "sinkage when measured.",
+    }
     for f in figs:
-        parts.append(_img(Path(f), Path(f).stem))
-    parts.append("<h2>Diagnosis rule</h2><p>Thresholds: "
-                 + ", ".join(f"{k} = {v}" for k, v in d["thresholds"].items())
-                 + f". Cross-validation: {html.escape(d['cross_validation'])}. See "
+        name = Path(f).name
+        cap = captions.get(name, "") + "".join(" " + n + "." for n in rep["figure_notes"].get(name, []))
+        parts.append(_img(Path(f), Path(f).stem, _e(cap)))
+    th = d.get("thresholds") or {}
+    parts.append("<h2>Diagnosis rule</h2><p>Thresholds: " + _e(", ".join(f"{k} = {v}" for k, v in th.items()))
+                 + f". Cross-validation: {_e(d.get('cross_validation'))}. See "
                  "<code>wheelsoil.model.diagnosis</code> for the rule.</p>")
     if rep["notes"]:
-        parts.append("<h2>Notes</h2><ul>" + "".join(f"<li>{html.escape(x)}</li>" for x in rep["notes"]) + "</ul>")
+        parts.append("<h2>Notes</h2><ul>" + "".join(f"<li>{_e(x)}</li>" for x in rep["notes"]) + "</ul>")
+    parts.append("<h2>Provenance: how to re-run this report</h2>")
+    parts.append("<p>Run the command below in the working directory shown, with the same inputs (check their "
+                 "sha256): it gives the same report.json except the analysis time.</p>")
+    parts.append(_provenance_html(prov))
     parts.append("</body></html>")
     return "\n".join(parts)
 
 
-def write_report(diag: Diagnosis, out_dir, *, terrain, wheel, inputs, time_sync: dict | None = None,
-                 extra_notes: list | None = None, progress: bool = False) -> dict:
+# ============================================================================ entry point
+
+
+def _fit_rows(data, signals, run: int):
+    """(N,) bool: the samples of input ``run`` that the fit used (matched by time), or None when
+    the fit data carry no times."""
+    t_fit = getattr(data, "t_s", None)
+    if t_fit is None or "t_s" not in signals:
+        return None
+    return np.isin(signals["t_s"].to_numpy(float), np.asarray(t_fit)[np.asarray(data.run) == run])
+
+
+def write_report(diag, out_dir, *, terrain, wheel, inputs, time_sync: dict | None = None,
+                 extra_notes: list | None = None, progress: bool = False, provenance: dict | None = None,
+                 input_details: list | None = None) -> dict:
     """Write ``report.json``, the PNG figures and ``report.html`` into ``out_dir``.
 
     Parameters: ``diag`` from :func:`wheelsoil.model.diagnosis.diagnose`;
     ``terrain``, ``wheel`` as given by the user; ``inputs`` list of input
     names; ``time_sync`` e.g. ``{"gnss_latency_s": 0.12}`` (None for tables);
-    ``extra_notes`` appended to the notes.  Figures that fail are listed under
+    ``extra_notes`` appended to the notes; ``provenance`` the run's provenance
+    dict (``version, command, cwd, inputs, vehicle_config, settings, created``);
+    ``input_details`` one dict per input: ``path``, ``quality`` (JSON-safe
+    data-quality dict) and, for a processed recording, ``signals`` (the
+    DataFrame of ``process_recording``), ``wheel_radius_m`` and ``excluded``
+    (processing's excluded spans).  Figures that fail are listed under
     ``not_done`` instead of aborting the report.
 
     Returns the report dict (as written to ``report.json``).
     Raises OSError when ``out_dir`` cannot be created or written.
     """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     figs: list = []
+    fig_notes: dict = {}
     notes = list(extra_notes or [])
+    failures = getattr(diag, "failures", None)
+    if failures is None:
+        failures = []
     try:
-        figs = _figures(diag, wheel, out)
-    except Exception as exc:  # a figure must never hide the numbers
-        diag.failures.append(f"figures could not be drawn: {type(exc).__name__}: {exc}")
+        figs, fig_notes = _figures(diag, wheel, out, plt)
+    except Exception as exc:  # noqa: BLE001 - a figure must never hide the numbers
+        failures.append(f"figures could not be drawn: {type(exc).__name__}: {exc}")
+    details = list(input_details or [])
+    overviews, quality = [], []
+    with_signals = [x for x in details if x.get("signals") is not None]
+    for i, det in enumerate(details):
+        q = dict(det.get("quality") or {})
+        q.setdefault("input", str(det.get("path")))
+        if det.get("signals") is not None:
+            name = "overview.png" if len(with_signals) == 1 else f"overview_{i}.png"
+            try:
+                stats = overview_figure(det["signals"], float(det.get("wheel_radius_m") or wheel.radius),
+                                        diag.data.slip_min, det.get("excluded") or [], out / name,
+                                        f"{Path(str(det.get('path'))).name}: the run, what was fitted and what was not",
+                                        plt, used=_fit_rows(diag.data, det["signals"], i))
+                q["samples"] = stats["samples"]
+                q["used_in_fit"] = stats["used"]
+                q["excluded_samples"] = stats["excluded"]
+                overviews.append((out / name, q["input"]))
+                figs.append(out / name)
+            except Exception as exc:  # noqa: BLE001
+                failures.append(f"overview figure of {q['input']} could not be drawn: {type(exc).__name__}: {exc}")
+                overviews.append((None, q["input"]))
+        quality.append(q)
     rep = report_dict(diag, terrain=terrain, wheel=wheel, inputs=inputs, time_sync=time_sync,
-                      figures=[f.name for f in figs], extra_notes=notes)
+                      figures=[Path(f).name for f in figs], extra_notes=notes, provenance=provenance,
+                      data_quality=quality, figure_notes=fig_notes)
     text = json.dumps(rep, indent=2, allow_nan=False)
     (out / "report.json").write_text(text, encoding="utf-8")
-    (out / "report.html").write_text(_html(rep, figs), encoding="utf-8")
+    main_figs = [f for f in figs if not Path(f).name.startswith("overview")]
+    (out / "report.html").write_text(_html(rep, main_figs, overviews), encoding="utf-8")
     return rep

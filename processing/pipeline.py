@@ -8,11 +8,16 @@ Steps (each in its own module):
    one sample, report lost frames, rotate to the hub frame (:mod:`.wft`);
    lost runs of at most ``MAX_FILL_SAMPLES`` samples are interpolated,
    longer ones split the data into segments;
-3. clocks: host->GPS time mapping, GNSS latency from the free-rolling front
-   wheels (or the measured wheel when it is nearly unloaded; or, when the
-   front wheels turn with the measured one (all wheels driven) or that
-   reference fails, from the vehicle dynamics: GNSS dV/dt against the
-   measured Fx), removed from the GNSS timestamps (:mod:`.timesync`);
+3. clocks: host->GPS time mapping, and the GNSS latency (:mod:`.timesync`)
+   from up to three estimators: the free-rolling front wheels' r*omega (or
+   the measured wheel where it is nearly unloaded), the measured wheel's
+   slip-traction consistency (T/(rW) a single function of slip: needs no
+   free-rolling wheel) and the vehicle dynamics (GNSS dV/dt against the
+   measured Fx); front wheels that turn with the measured one or disagree
+   with the traction estimate are driven and not used; the choice, its total
+   standard error and a ``reliable`` flag go to ``quality["latency"]``
+   (:func:`_choose_latency`), an unreliable one is applied only when best
+   supported and is stated in the warnings; removed from the GNSS timestamps;
 4. per source and per contiguous segment: uniform resampling at the source's
    own rate, zero-phase Butterworth low-pass (:mod:`.filters`), linear
    interpolation onto the output grid (``rate_hz``, from the first frame);
@@ -45,7 +50,7 @@ from .decode import DecodedMessage, Decoder, decode_batches
 from .filters import DEFAULT_CUTOFF_HZ, MAX_FILL_SAMPLES, filter_to_grid, segments
 from .slip import accel_cycles, classify_phases, slip_ratio
 from .timebase import MAX_GRID_ROWS, cycle_loss, find_time_outliers, robust_period, split_joined_parts
-from .timesync import LatencyEstimate, estimate_latency, fit_gps_time_mapping
+from .timesync import LatencyEstimate, estimate_latency, estimate_latency_traction, fit_gps_time_mapping
 from .wft import assemble_wft_samples, rotate_to_hub
 
 __all__ = ["ProcessResult", "process_recording", "COLUMNS", "MAX_FILL_SAMPLES"]
@@ -66,6 +71,21 @@ LATENCY_MAX_DECEL_MPS2 = 0.3
 LATENCY_REF_CUTOFF_HZ = 5.0
 #: |T| [N m] under which the measured wheel counts as free rolling (latency fallback).
 FREE_ROLLING_TORQUE_NM = 150.0
+#: GNSS latency search range [s] (hardware.md: typically 20-200 ms); an estimate within 4 ms of
+#: either end is an edge hit (unreliable).
+LATENCY_MAX_S = 0.5
+#: Wheel load [N] below which the traction coefficient T/(rW) is not formed (wheel lifted).
+LATENCY_MIN_LOAD_N = 500.0
+#: Systematic (model) uncertainty [s] of each latency estimator, added in quadrature to its
+#: statistical standard error: the wheel reference is exact for a free-rolling wheel; the
+#: slip-traction estimate is biased by up to ~15 ms where the torque is not a function of slip
+#: and load alone (load transfer, hidden effects), the dynamics one by ~+15..25 ms (the measured
+#: wheel's Fx only stands for the sum over the wheels); benchmarks/bench_latency.py measures them.
+LATENCY_SYSTEMATIC_S = {"wheel_reference": 0.0, "traction": 0.015, "dynamics": 0.025}
+#: Two estimates agree when they differ by at most this many combined (total) standard errors.
+LATENCY_AGREE_SIGMAS = 2.0
+#: A latency is reliable only with a total standard error at most this [s] (the +-20 ms target).
+LATENCY_RELIABLE_SE_S = 0.015
 
 
 @dataclass
@@ -99,7 +119,13 @@ class ProcessResult:
     damaged parts of the file as the reader reports them; ``t0_s``/``t1_s`` None
     when the time is unknown).
     ``quality`` dict: frames with outlier timestamps, non-monotonic parts, lost
-    frames per message (None = unknown), grid size.
+    frames per message (None = unknown), grid size, and ``quality["latency"]``:
+    ``estimate_s`` (applied, None if none), ``stderr_s`` (total: statistical and
+    systematic), ``method`` (``wheel_reference`` | ``traction`` |
+    ``traction+dynamics`` | None), ``reliable`` bool (False: slip and what is built
+    on it are less certain), ``reasons`` (why not reliable), ``fronts_driven``,
+    ``candidates`` {name: {estimate_s, stderr_s, stderr_stat_s, systematic_s,
+    usable, note, n, method}}, ``search_range_s`` (see :func:`_choose_latency`).
     """
 
     signals: pd.DataFrame
@@ -137,9 +163,12 @@ class ProcessResult:
         elif ine:
             lines.append("inertia NOT compensated: drawbar_pull_n = Fx and torque_nm = My as measured "
                          f"({ine.get('reason', 'switched off')})")
+        lq = (self.quality or {}).get("latency") or {}
         if self.gnss_latency_s is not None:
             lines.append(f"GNSS latency: {self.gnss_latency_s * 1e3:.1f} ms +- "
-                         f"{self.gnss_latency_stderr_s * 1e3:.1f} ms (reference: {self.latency_reference}; removed)")
+                         f"{self.gnss_latency_stderr_s * 1e3:.1f} ms (reference: {self.latency_reference}; removed)"
+                         + ("" if lq.get("reliable", True) else
+                            " UNRELIABLE: " + "; ".join(lq.get("reasons") or [])))
         else:
             lines.append("GNSS latency: not estimated (see warnings); GNSS timestamps used as received")
         g = self.gps_time_mapping
@@ -281,6 +310,153 @@ def _force_latency(g_rel: np.ndarray, g_v: np.ndarray, g_period: float, t_grid: 
         return estimate_latency(g_rel, dv, t_grid, fxs, usable_ref=np.isfinite(fxs), min_speed_mps=-np.inf)
     except ValueError:
         return None
+
+
+_LATENCY_METHODS = {
+    "wheel_reference": "GNSS V aligned with a wheel-speed reference r*omega",
+    "traction": "slip-traction consistency of the measured wheel (T/(rW) a function of slip, no hysteresis)",
+    "dynamics": "GNSS dV/dt against the measured Fx (vehicle dynamics)",
+}
+
+
+def _agree(a: LatencyEstimate, b: LatencyEstimate) -> bool:
+    """Two estimates (total standard errors) within :data:`LATENCY_AGREE_SIGMAS` combined errors."""
+    return abs(a.latency_s - b.latency_s) <= LATENCY_AGREE_SIGMAS * math.hypot(a.stderr_s, b.stderr_s)
+
+
+def _with_systematic(name: str, c: LatencyEstimate) -> LatencyEstimate:
+    """``c`` with its standard error raised by :data:`LATENCY_SYSTEMATIC_S` (quadrature)."""
+    from dataclasses import replace
+
+    return replace(c, stderr_s=math.hypot(c.stderr_s, LATENCY_SYSTEMATIC_S.get(name, 0.0)))
+
+
+def _choose_latency(cands: dict, errs: dict, *, coupled: bool, wheel_ref_label: str, fronts: bool):
+    """Pick the GNSS latency from the candidate estimates and judge its reliability.
+
+    ``cands`` name -> :class:`.timesync.LatencyEstimate` (``wheel_reference``,
+    ``traction``, ``dynamics``); ``errs`` name -> why a candidate is missing;
+    ``coupled`` the front wheels turn with the measured one (driven: no free-rolling
+    reference); ``fronts`` the reference is the front wheels. Each candidate's standard
+    error is first raised by its systematic uncertainty (:data:`LATENCY_SYSTEMATIC_S`).
+    Rules: a candidate at the edge of the search range or without a finite standard
+    error is unusable; the wheel reference is unusable when the front wheels are
+    coupled, or when it disagrees with the slip-traction estimate (which needs no
+    other wheel) unless the dynamics estimate sides with it: its wheels then do not
+    roll freely. The choice: the wheel reference if usable (most precise), else the
+    inverse-variance mean of agreeing traction and dynamics estimates, else the
+    usable one with the smaller standard error, else (flagged) the best finite one;
+    the dynamics estimate alone is never applied (its bias is known, it only confirms
+    or joins the traction one): then no latency is applied.
+    ``reliable`` needs a total standard error of at most
+    :data:`LATENCY_RELIABLE_SE_S`, no edge hit, agreement (within
+    :data:`LATENCY_AGREE_SIGMAS` combined standard errors) with every other usable
+    candidate, and an independent confirmation: two agreeing estimators, or the
+    front wheels' reference not coupled to the measured wheel.
+
+    Returns ``(estimate or None, reference label, quality dict, warnings)``; the
+    quality dict is ``ProcessResult.quality["latency"]``: ``estimate_s``,
+    ``stderr_s`` (total), ``method``, ``reliable``, ``reasons`` (why not reliable),
+    ``fronts_driven``, ``candidates`` {name: {estimate_s, stderr_s, stderr_stat_s,
+    systematic_s, usable, note, n, method}} and ``search_range_s``.
+    """
+    warns: list[str] = []
+    reasons: list[str] = []
+    info: dict = {}
+    usable: dict = {}
+    stat = {k: c.stderr_s for k, c in cands.items()}
+    cands = {k: _with_systematic(k, c) for k, c in cands.items()}
+    for k, c in cands.items():
+        why = ""
+        if c.note:
+            why = c.note
+        elif not (math.isfinite(c.stderr_s) and math.isfinite(c.latency_s)):
+            why = "no finite standard error"
+        elif k == "wheel_reference" and coupled:
+            why = "the front wheels turn with the measured wheel (driven): no free-rolling reference"
+        info[k] = {"estimate_s": c.latency_s, "stderr_s": c.stderr_s, "stderr_stat_s": stat[k],
+                   "systematic_s": LATENCY_SYSTEMATIC_S.get(k, 0.0), "usable": not why, "note": why,
+                   "n": c.n, "method": _LATENCY_METHODS[k]}
+        if not why:
+            usable[k] = c
+    for k, e in errs.items():
+        info.setdefault(k, {"estimate_s": None, "stderr_s": None, "stderr_stat_s": None,
+                            "systematic_s": LATENCY_SYSTEMATIC_S.get(k, 0.0), "usable": False, "note": e,
+                            "n": 0, "method": _LATENCY_METHODS[k]})
+    wr, tr, dy = usable.get("wheel_reference"), usable.get("traction"), usable.get("dynamics")
+    if wr is not None and tr is not None and not _agree(wr, tr):
+        if dy is None or _agree(tr, dy) or not _agree(wr, dy):
+            # the slip-traction estimate (independent of any other wheel) contradicts the wheel
+            # reference: the reference wheels slip (driven, or braking), so they are not used
+            info["wheel_reference"]["usable"] = False
+            info["wheel_reference"]["note"] = (
+                f"disagrees with the slip-traction estimate ({tr.latency_s * 1e3:.1f} +- "
+                f"{tr.stderr_s * 1e3:.1f} ms): the reference wheels do not roll freely")
+            usable.pop("wheel_reference")
+            wr = None
+    chosen: LatencyEstimate | None = None
+    method = ""
+    if wr is not None:
+        chosen, method = wr, "wheel_reference"
+    elif tr is not None and dy is not None and _agree(tr, dy):
+        w1, w2 = tr.stderr_s ** -2, dy.stderr_s ** -2
+        tau = (w1 * tr.latency_s + w2 * dy.latency_s) / (w1 + w2)
+        chosen = LatencyEstimate(tau, (w1 + w2) ** -0.5, 1.0, 0.0, tr.residual_rms_mps, tr.n + dy.n,
+                                 "inverse-variance mean of the traction and dynamics estimates")
+        method = "traction+dynamics"
+    elif set(usable) - {"dynamics"}:
+        alone = {k: c for k, c in usable.items() if k != "dynamics"}
+        method = min(alone, key=lambda k: alone[k].stderr_s)
+        chosen = alone[method]
+    elif cands:  # nothing usable: the best-supported one, flagged, if not at the edge
+        fin = {k: c for k, c in cands.items() if not c.note and math.isfinite(c.stderr_s)
+               and not (k == "wheel_reference" and coupled) and k != "dynamics"}
+        if fin:
+            method = min(fin, key=lambda k: fin[k].stderr_s)
+            chosen = fin[method]
+    if chosen is None:
+        reasons.append("no usable estimate")
+    else:
+        if chosen.stderr_s > LATENCY_RELIABLE_SE_S:
+            reasons.append(f"standard error {chosen.stderr_s * 1e3:.1f} ms > {LATENCY_RELIABLE_SE_S * 1e3:g} ms")
+        others = [k for k in usable if k not in method.split("+")]
+        bad = [k for k in others if not _agree(chosen, usable[k])]
+        if bad:
+            reasons.append("disagrees with " + ", ".join(
+                f"{k} ({usable[k].latency_s * 1e3:.1f} +- {usable[k].stderr_s * 1e3:.1f} ms)" for k in bad))
+        if "+" not in method and not [k for k in others if k not in bad] and not (
+                method == "wheel_reference" and fronts and not coupled):
+            reasons.append(f"only one estimator ({method}) usable: no independent check")
+        if method not in usable and "+" not in method:
+            reasons.append(f"{method} is not usable ({info[method]['note']})")
+    reliable = chosen is not None and not reasons
+    wr_info = info.get("wheel_reference", {})
+    q = {"estimate_s": None if chosen is None else chosen.latency_s,
+         "stderr_s": None if chosen is None else chosen.stderr_s,
+         "method": method or None, "reliable": bool(reliable), "reasons": reasons,
+         "fronts_driven": bool(coupled) or (fronts and not wr_info.get("usable", False)
+                                            and "do not roll freely" in wr_info.get("note", "")),
+         "candidates": info, "search_range_s": [0.0, LATENCY_MAX_S]}
+    label = {"wheel_reference": wheel_ref_label, "traction": _LATENCY_METHODS["traction"],
+             "dynamics": _LATENCY_METHODS["dynamics"],
+             "traction+dynamics": _LATENCY_METHODS["traction"] + " and " + _LATENCY_METHODS["dynamics"]}.get(method, "")
+    cand_txt = "; ".join(f"{k}: " + ("none" if v["estimate_s"] is None else
+                                     f"{v['estimate_s'] * 1e3:.1f} +- {v['stderr_s'] * 1e3:.1f} ms")
+                         + ("" if v["usable"] else f" (not used: {v['note']})") for k, v in info.items())
+    if chosen is None:
+        warns.append(f"GNSS latency not estimated (LATENCY UNKNOWN): GNSS timestamps used as received; slip "
+                     "may be biased "
+                     f"(candidates: {cand_txt}); ProcessResult.quality['latency']")
+    elif not reliable:
+        warns.append(f"GNSS LATENCY UNRELIABLE: applied {chosen.latency_s * 1e3:.1f} +- "
+                     f"{chosen.stderr_s * 1e3:.1f} ms from {label} ({'; '.join(reasons)}); slip and every verdict "
+                     f"built on it are less certain (candidates: {cand_txt}); ProcessResult.quality['latency']")
+    elif method != "wheel_reference" or coupled:
+        warns.append(f"GNSS latency {chosen.latency_s * 1e3:.1f} +- {chosen.stderr_s * 1e3:.1f} ms from {label}"
+                     + (": the front wheels turn with the measured wheel (all wheels driven?), so they are no "
+                        "free-rolling reference" if q["fronts_driven"] else "")
+                     + f" (candidates: {cand_txt})")
+    return chosen, label, q, warns
 
 
 # --------------------------------------------------------------------------- resampling
@@ -821,60 +997,56 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
         rep, g_period = _time_gaps(g_msg, g_t, *cfg.cycle_time_s(g_bus, g_msg), parts=tb_parts.get(g_msg))
         lost_frames[g_msg] = rep
         g_rel = rel_s(g_t)
-        # latency reference: free-rolling front wheels, else the measured wheel at low torque
+        # latency candidates (docs/architecture.md "GNSS latency"): a wheel-speed reference
+        # (free-rolling front wheels, else the measured wheel at low torque), the measured wheel's
+        # slip-traction consistency, and the vehicle dynamics; combined in _choose_latency
+        cands: dict[str, LatencyEstimate] = {}
+        errs: dict[str, str] = {}
         ref_t = ref_v = usable = None
+        wheel_ref_label = ""
         f_series = [s for s in (get(f) for f in fronts) if s is not None and s[0].shape[0] >= 3]
         if f_series:
             ft = f_series[0][0]
             fv = np.nanmean(np.vstack([np.interp(ft, s[0], s[1]) for s in f_series]), axis=0) * r
             ref_t, ref_v = rel_s(ft), fv
-            lat_ref = "front wheels r*omega (" + ", ".join(f.signal for f in fronts) + ")"
+            wheel_ref_label = "front wheels r*omega (" + ", ".join(f.signal for f in fronts) + ")"
         elif wss_t is not None and np.isfinite(torque).any():
             ref_t, ref_v = wss_rel, got[1] * r
             tq = np.interp(ref_t, t_grid, np.nan_to_num(torque, nan=1e9))
             usable = np.abs(tq) < FREE_ROLLING_TORQUE_NM
-            lat_ref = f"measured wheel r*omega where |T| < {FREE_ROLLING_TORQUE_NM:g} N m"
+            wheel_ref_label = f"measured wheel r*omega where |T| < {FREE_ROLLING_TORQUE_NM:g} N m"
         if ref_t is not None:
             _, ref_period = _time_gaps("ref", (ref_t * 1e9).astype(np.int64))
             ref_f = filter_to_grid(ref_t, ref_v, ref_period, ref_t, LATENCY_REF_CUTOFF_HZ)
             dv = np.gradient(np.nan_to_num(ref_f), ref_t)
             use = dv > -LATENCY_MAX_DECEL_MPS2
             usable = use if usable is None else (usable & use)
-            lat_err = ""
             try:
-                latency = estimate_latency(g_rel, g_v, ref_t, ref_f, usable_ref=usable)
+                cands["wheel_reference"] = estimate_latency(g_rel, g_v, ref_t, ref_f, usable_ref=usable,
+                                                            max_latency_s=LATENCY_MAX_S)
             except ValueError as exc:
-                lat_err = str(exc)
-            # front wheels that turn exactly with the measured wheel while it is driven (a 4x4
-            # with locked differentials) are no free-rolling reference: check against physics
-            coupled = f_series and wss_t is not None and _fronts_coupled(ft, fv, wss_t, got[1] * r)
-            if coupled or (latency is not None and latency.note) or lat_err:
-                alt = _force_latency(g_rel, g_v, g_period, t_grid, fx_f, min(cutoff, 0.4 / g_period))
-                disagree = (latency is not None and alt is not None and abs(alt.latency_s - latency.latency_s)
-                            > 3.0 * math.hypot(alt.stderr_s, latency.stderr_s))
-                if alt is not None and not alt.note and (latency is None or latency.note or disagree):
-                    why = ("the front wheels turn with the measured wheel (all wheels driven?), so they are no "
-                           "free-rolling reference" if coupled else
-                           f"the wheel-speed reference gave {'no estimate' if latency is None else latency.note}")
-                    warns.append(f"GNSS latency from the GNSS acceleration against the measured drawbar pull "
-                                 f"(m dV/dt follows Fx): {why}"
-                                 + (f"; the wheel-speed reference said {latency.latency_s * 1e3:.1f} ms"
-                                    if latency is not None else ""))
-                    latency, lat_err = alt, ""
-                    lat_ref = "GNSS dV/dt against the measured Fx (vehicle dynamics)"
-                elif coupled and latency is not None:
-                    warns.append("GNSS latency: the front wheels turn with the measured wheel (all wheels driven?); "
-                                 "the estimate from them agrees with the one from the GNSS acceleration against "
-                                 "the measured drawbar pull" if alt is not None else
-                                 "GNSS latency: the front wheels turn with the measured wheel (all wheels "
-                                 "driven?) and may not roll freely; no independent check was possible")
-            if latency is not None and latency.note:
-                warns.append(f"GNSS latency: {latency.note}")
-            if latency is None:
-                warns.append(f"GNSS latency not estimated ({lat_err}); GNSS timestamps used as received")
+                errs["wheel_reference"] = str(exc)
         else:
-            warns.append("GNSS latency not estimated: no free-rolling wheel speed to compare with; "
-                         "GNSS timestamps used as received")
+            errs["wheel_reference"] = "no free-rolling wheel speed to compare with"
+        coupled = bool(f_series) and wss_t is not None and _fronts_coupled(ft, fv, wss_t, got[1] * r)
+        if np.isfinite(omega).any() and np.isfinite(torque).any() and np.isfinite(load).any():
+            with np.errstate(invalid="ignore", divide="ignore"):
+                coeff = np.where(load > LATENCY_MIN_LOAD_N, torque / (r * load), np.nan)
+            try:
+                cands["traction"] = estimate_latency_traction(g_rel, g_v, t_grid, r * omega, coeff, load_n=load,
+                                                              max_latency_s=LATENCY_MAX_S)
+            except ValueError as exc:
+                errs["traction"] = str(exc)
+        else:
+            errs["traction"] = "needs the measured wheel's speed, torque and load"
+        alt = _force_latency(g_rel, g_v, g_period, t_grid, fx_f, min(cutoff, 0.4 / g_period))
+        if alt is not None:
+            cands["dynamics"] = alt
+        else:
+            errs["dynamics"] = "needs the measured Fx and the GNSS speed"
+        latency, lat_ref, quality["latency"], lat_warns = _choose_latency(
+            cands, errs, coupled=coupled, wheel_ref_label=wheel_ref_label, fronts=bool(f_series))
+        warns.extend(lat_warns)
         shift = latency.latency_s if latency is not None else 0.0
         speed, dspeed = filter_to_grid(g_rel - shift, g_v, g_period, t_grid, min(cutoff, 0.4 / g_period),
                                        derivative=True)

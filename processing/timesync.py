@@ -25,7 +25,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import optimize, stats
 
-__all__ = ["GPS_EPOCH_UNIX_S", "fit_gps_time_mapping", "LatencyEstimate", "estimate_latency"]
+__all__ = ["GPS_EPOCH_UNIX_S", "fit_gps_time_mapping", "LatencyEstimate", "estimate_latency",
+           "estimate_latency_traction"]
 
 #: 1980-01-06T00:00:00 (GPS epoch) in Unix seconds (UTC, no leap seconds).
 GPS_EPOCH_UNIX_S = 315_964_800
@@ -165,3 +166,139 @@ def estimate_latency(t_gnss_s: np.ndarray, v_gnss: np.ndarray, t_ref_s: np.ndarr
     if tau <= 0.004 or tau >= max_latency_s - 0.004:
         note = f"latency at the edge of the search range 0..{max_latency_s:g} s"
     return LatencyEstimate(tau, stderr, a, b, float(np.sqrt(mse)), n, note)
+
+
+#: Slip range [-] used by :func:`estimate_latency_traction` (outside: locked or spinning wheel).
+TRACTION_SLIP_RANGE = (-0.5, 0.95)
+#: An estimate within this [s] (or two standard errors) of either end of the search range is
+#: an edge hit (the profile may still fall beyond it).
+TRACTION_EDGE_S = 0.010
+
+
+def _traction_sse(tau: float, t_g: np.ndarray, v_g: np.ndarray, t_ref: np.ndarray, w_ref: np.ndarray,
+                  x_ref: np.ndarray, keep_ref: np.ndarray, n_knots: int, min_speed_mps: float,
+                  dw_ref: np.ndarray | None = None):
+    """Least-squares cubic spline of the traction coefficient on slip at lag ``tau``
+    (plus a second spline times the relative load change ``dw_ref``, if given).
+
+    Returns ``(sse, n, resid, mask)``: ``sse`` sum of squared residuals of
+    ``x - g(s) - h(s) dW`` [-] over the usable GNSS samples (inf when the fit is impossible)."""
+    from scipy.interpolate import BSpline
+
+    tq = t_g - tau
+    w = np.interp(tq, t_ref, w_ref, left=np.nan, right=np.nan)
+    x = np.interp(tq, t_ref, x_ref, left=np.nan, right=np.nan)
+    k = np.interp(tq, t_ref, keep_ref.astype(np.float64), left=0.0, right=0.0) > 0.999
+    m = k & np.isfinite(w) & np.isfinite(x) & np.isfinite(v_g) & (w >= min_speed_mps)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        s = 1.0 - v_g / w
+    m &= (s > TRACTION_SLIP_RANGE[0]) & (s < TRACTION_SLIP_RANGE[1])
+    n = int(np.count_nonzero(m))
+    if n < 10 * (n_knots + 4):
+        return np.inf, n, None, m
+    sm, xm = s[m], x[m]
+    inner = np.quantile(sm, np.linspace(0.0, 1.0, n_knots + 2)[1:-1])
+    knots = np.concatenate([[sm.min()] * 4, inner, [sm.max()] * 4])
+    try:
+        B = BSpline.design_matrix(sm, knots, 3).toarray()
+    except ValueError:
+        return np.inf, n, None, m
+    if dw_ref is not None:
+        dw = np.interp(tq, t_ref, dw_ref)[m]
+        B = np.column_stack([B, B * dw[:, None]])
+    # normal equations by einsum (no multi-threaded BLAS on the tall matrix: this runs ~260 times
+    # and a threaded BLAS on a busy machine is ~30x slower); the small system by SVD least squares
+    gram = np.einsum("ij,ik->jk", B, B)
+    coef = np.linalg.lstsq(gram, np.einsum("ij,i->j", B, xm), rcond=1e-12)[0]
+    r = xm - np.einsum("ij,j->i", B, coef)
+    return float(np.einsum("i,i->", r, r)), n, r, m
+
+
+def estimate_latency_traction(t_gnss_s: np.ndarray, v_gnss: np.ndarray, t_ref_s: np.ndarray,
+                              wheel_speed_mps: np.ndarray, traction_coeff: np.ndarray, *,
+                              load_n: np.ndarray | None = None, usable_ref: np.ndarray | None = None,
+                              max_latency_s: float = 0.5, min_speed_mps: float = 1.0,
+                              n_knots: int = 10) -> LatencyEstimate:
+    """GNSS latency from slip-traction consistency: needs no free-rolling wheel.
+
+    A wheel's torque at a given load is a function of its slip (the paper's
+    Eqs. 1-6: T(s) at load W; Wong, *Theory of Ground Vehicles*, ch. 2). With
+    the GNSS speed shifted by the wrong lag, the slip ``s = 1 - V/(r omega)``
+    (Eq. 6) computed from it is off by about ``(tau_true - tau) dV/dt /
+    (r omega)``, which changes sign between accelerating and braking and scales
+    with 1/speed, so the points of the torque-slip cloud scatter about any one
+    curve (hysteresis loops). The latency is the lag that minimises the scatter
+    ``sum (x - g(s))^2`` of the traction coefficient ``x = T/(r W)`` about a
+    cubic least-squares spline ``g`` of slip (``n_knots`` interior knots at
+    quantiles of s), on a 2 ms grid over ``0..max_latency_s`` refined by a
+    bounded scalar minimisation. With ``load_n`` the model is ``g(s) + h(s)
+    (W/mean(W) - 1)`` (a second spline ``h``): the load transfer onto the wheel
+    while accelerating changes ``T/(rW)`` at a given slip (``T`` is not
+    proportional to ``W``, Eq. 10's sinkage grows with ``W``), in step with
+    ``dV/dt``, which would otherwise read as a lag. Slips outside :data:`TRACTION_SLIP_RANGE` and
+    speeds ``r omega < min_speed_mps`` are not used.
+
+    Parameters: ``t_gnss_s`` (N,) host receive times [s] of the GNSS speed and
+    ``v_gnss`` (N,) [m/s]; ``t_ref_s`` (M,) sorted host times [s] of the
+    measured wheel's ``wheel_speed_mps`` (M,) ``r omega`` [m/s] and
+    ``traction_coeff`` (M,) ``T/(r W)`` [-] (filtered, undelayed); ``load_n``
+    (M,) W [N] or None; ``usable_ref`` (M,) bool. Standard error: ``2 sigma^2 / SSE''`` (curvature
+    of the profile, ``sigma^2 = SSE/(n - p)``) inflated by ``(1 + rho)/(1 -
+    rho)`` for the lag-1 autocorrelation ``rho`` of the residuals.
+
+    Returns :class:`LatencyEstimate` (``gain`` 1, ``offset_mps`` 0,
+    ``residual_rms_mps`` holds the RMS of ``x - g(s)`` [-]; ``note`` names an
+    edge hit: within :data:`TRACTION_EDGE_S` or two standard errors of an end).
+    Raises ``ValueError`` when too few samples overlap or the
+    traction coefficient does not vary.
+    """
+    t_g = np.asarray(t_gnss_s, dtype=np.float64)
+    v_g = np.asarray(v_gnss, dtype=np.float64)
+    t_r = np.asarray(t_ref_s, dtype=np.float64)
+    w_r = np.asarray(wheel_speed_mps, dtype=np.float64)
+    x_r = np.asarray(traction_coeff, dtype=np.float64)
+    keep = np.isfinite(w_r) & np.isfinite(x_r) & (w_r >= min_speed_mps)
+    if usable_ref is not None:
+        keep &= np.asarray(usable_ref, dtype=bool)
+    if np.count_nonzero(keep) < 200:
+        raise ValueError(f"only {np.count_nonzero(keep)} wheel samples with torque and load above "
+                         f"{min_speed_mps:g} m/s (need 200)")
+    dw_r = None
+    if load_n is not None:
+        ld = np.asarray(load_n, dtype=np.float64)
+        keep &= np.isfinite(ld)
+        mean_w = float(np.mean(ld[keep])) if keep.any() else float("nan")
+        if mean_w > 0:
+            dw_r = np.where(np.isfinite(ld), ld / mean_w - 1.0, 0.0)
+    if np.count_nonzero(keep) < 200:
+        raise ValueError(f"only {np.count_nonzero(keep)} wheel samples with torque and load above "
+                         f"{min_speed_mps:g} m/s (need 200)")
+    lo, hi = np.percentile(x_r[keep], [1, 99])
+    if not hi - lo > 0.05:
+        raise ValueError(f"the traction coefficient T/(rW) hardly varies ({lo:.3f}..{hi:.3f}): "
+                         "no slip sweep to align")
+
+    def sse(t):
+        return _traction_sse(t, t_g, v_g, t_r, w_r, x_r, keep, n_knots, min_speed_mps, dw_r)[0]
+
+    taus = np.arange(0.0, max_latency_s + 1e-9, 0.002)
+    prof = np.array([sse(t) for t in taus])
+    if not np.isfinite(prof).any():
+        raise ValueError("too few GNSS samples overlap the wheel's traction data")
+    i = int(np.nanargmin(prof))
+    a, b = taus[max(i - 2, 0)], taus[min(i + 2, taus.size - 1)]
+    res = optimize.minimize_scalar(sse, bounds=(a, b), method="bounded", options={"xatol": 1e-5})
+    tau = float(res.x)
+    s0, n, r, _ = _traction_sse(tau, t_g, v_g, t_r, w_r, x_r, keep, n_knots, min_speed_mps, dw_r)
+    p = (n_knots + 4) * (1 if dw_r is None else 2) + 1
+    s2 = s0 / max(n - p, 1)
+    h = 0.006
+    curv = (sse(tau + h) - 2 * s0 + sse(tau - h)) / h**2
+    rho = float(np.corrcoef(r[:-1], r[1:])[0, 1]) if r is not None and n > 3 else 0.0
+    rho = min(max(rho, 0.0), 0.95) if np.isfinite(rho) else 0.0
+    stderr = float(np.sqrt(2 * s2 / curv * (1 + rho) / (1 - rho))) if curv > 0 else float("inf")
+    note = ""
+    edge = max(TRACTION_EDGE_S, 2 * stderr) if np.isfinite(stderr) else TRACTION_EDGE_S
+    if tau <= edge or tau >= max_latency_s - edge:
+        note = f"latency at the edge of the search range 0..{max_latency_s:g} s"
+    return LatencyEstimate(tau, stderr, 1.0, 0.0, float(np.sqrt(s0 / max(n, 1))), n, note)

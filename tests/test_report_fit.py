@@ -15,8 +15,11 @@ from wheelsoil.model.report import write_report
 from wheelsoil.pipeline import run_fit
 
 SAND = load_terrain("sand")
-CMU = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "cmu-grouser-wheel" / \
-    "cmu_pavlov2023_grouser_beta0.csv"
+CMU = next((p / "shared" / "data" / "cmu-grouser-wheel" / "cmu_pavlov2023_grouser_beta0.csv"
+            for p in Path(__file__).resolve().parents[1].parents
+            if (p / "shared" / "data" / "cmu-grouser-wheel").exists()),
+           Path(__file__).resolve().parents[2] / "shared" / "data" / "cmu-grouser-wheel" /
+           "cmu_pavlov2023_grouser_beta0.csv")
 EFFECTS = {"none", "slip_sinkage", "terrain_mismatch", "unexplained"}
 
 
@@ -62,7 +65,7 @@ def test_write_report_files_json_and_html(tmp_path):
     on_disk = _strict_json(tmp_path / "report.json")
     assert on_disk == rep
     pngs = sorted(p.name for p in tmp_path.glob("*.png"))
-    assert pngs == ["dp_vs_slip.png", "residuals.png", "sinkage_vs_slip.png"]
+    assert pngs == ["dp_vs_slip.png", "residuals.png", "sinkage_vs_slip.png"]  # a table: no overview
     _check_self_contained((tmp_path / "report.html").read_text(), len(pngs))
     assert rep["diagnosis"]["effect"] == "slip_sinkage"
     assert rep["models"]["lyasko"]["params"]["m1"] == pytest.approx(0.6, abs=0.15)
@@ -107,6 +110,7 @@ def test_bad_tables_give_a_clear_message_and_a_report_saying_so(tmp_path, conten
     if content:  # the file was readable: the report says what could not be done
         rep = _strict_json(out / "report.json")
         assert rep["samples_used"] == 0 and rep["not_done"]
+        assert rep["provenance"]["inputs"][0]["sha256"] and rep["provenance"]["command"][:2] == ["wheelsoil", "fit"]
         assert "Nothing could be fitted" in (out / "report.html").read_text()
 
 

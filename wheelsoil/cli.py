@@ -70,7 +70,9 @@ def main(argv: list[str] | None = None) -> int:
     Ctrl-C exits 130.
     """
     parser = build_parser()
+    argv = list(sys.argv[1:] if argv is None else argv)
     args = parser.parse_args(argv)
+    args.argv = argv  # the command as typed: reports record it (provenance) so it can be re-run
     func = getattr(args, "func", None)
     if func is None:
         parser.print_help()

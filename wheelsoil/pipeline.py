@@ -14,7 +14,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-__all__ = ["run_fit", "load_inputs", "register", "RECORDING_SUFFIXES"]
+__all__ = ["run_fit", "load_inputs", "build_provenance", "register", "RECORDING_SUFFIXES"]
 
 RECORDING_SUFFIXES = (".mcap", ".log", ".blf", ".asc", ".trc")
 TABLE_SUFFIXES = (".csv", ".txt", ".tsv")
@@ -33,14 +33,21 @@ def _read_table(path: Path):
     return df
 
 
-def load_inputs(inputs, *, progress: bool = False, wheel_radius_m: float | None = None):
+def load_inputs(inputs, *, progress: bool = False, rate_hz: float = 100.0, cutoff_hz: float | None = None,
+                wheel_radius_m: float | None = None, inertia: bool = True):
     """Read every input into one DataFrame for fitting.
 
     Returns ``(df, info)``: ``df`` has the fit columns plus ``run`` (input
     index) and, for recordings, ``t_s``, ``valid`` and ``cycle``; ``info`` is a
     dict with ``kinds`` (per input: ``table``/``recording``), ``time_sync`` (per
     input latency values, None for tables), ``wheel_radius_m``/``wheel_width_m``
-    from the first recording's vehicle config (None for tables) and ``notes``.
+    from the first recording (None for tables), ``notes``, ``results`` (per
+    input the :class:`~wheelsoil.processing.ProcessResult`, None for a table:
+    the report draws its overview and data quality from it) and ``tables``
+    (per input the table's DataFrame, None for a recording).
+
+    ``rate_hz``, ``cutoff_hz``, ``wheel_radius_m`` (slip radius, Eq. 6) and
+    ``inertia`` are passed to ``process_recording`` for recordings.
     ``wheel_radius_m`` [m], when given, is the radius recordings compute slip
     with (Eq. 6; ``process_recording(wheel_radius_m=...)``), so the fit's radius
     is the slip radius; radius conflicts (recordings whose configurations
@@ -54,7 +61,7 @@ def load_inputs(inputs, *, progress: bool = False, wheel_radius_m: float | None 
     """
     import pandas as pd
 
-    frames, kinds, sync, notes, processing = [], [], [], [], []
+    frames, kinds, sync, notes, processing, results, tables = [], [], [], [], [], [], []
     radius = width = None
     for i, raw in enumerate(inputs):
         path = Path(raw)
@@ -64,16 +71,20 @@ def load_inputs(inputs, *, progress: bool = False, wheel_radius_m: float | None 
         if suffix in RECORDING_SUFFIXES:
             from wheelsoil.processing import process_recording
 
-            res = process_recording(path, progress=progress, wheel_radius_m=wheel_radius_m)
+            res = process_recording(path, progress=progress, rate_hz=rate_hz, cutoff_hz=cutoff_hz,
+                                    wheel_radius_m=wheel_radius_m, inertia=inertia)
             df = res.signals.copy()
             df["cycle"] = res.cycle
             kinds.append("recording")
+            results.append(res)
+            tables.append(None)
             sync.append({
                 "input": str(path),
                 "gnss_latency_s": res.gnss_latency_s,
                 "gnss_latency_stderr_s": res.gnss_latency_stderr_s,
                 "gps_time_mapping": res.gps_time_mapping,
             })
+            res.warnings[:] = [_attachment_name(w, path) for w in res.warnings]
             notes.extend(f"{path.name}: {w}" for w in res.warnings)
             processing.append({"input": str(path), "wheel_radius_m": res.wheel_radius_m,
                                "wheel_radius_source": res.wheel_radius_source, "inertia": res.inertia,
@@ -87,6 +98,8 @@ def load_inputs(inputs, *, progress: bool = False, wheel_radius_m: float | None 
         elif suffix in TABLE_SUFFIXES:
             df = _read_table(path)
             kinds.append("table")
+            results.append(None)
+            tables.append(df)
             tr = (pd.to_numeric(df["wheel_radius_m"], errors="coerce").dropna().unique()
                   if "wheel_radius_m" in df.columns else [])
             if len(tr) > 1 or (len(tr) == 1 and wheel_radius_m is not None
@@ -107,6 +120,7 @@ def load_inputs(inputs, *, progress: bool = False, wheel_radius_m: float | None 
                 f"{path}: unknown input type {suffix!r}; give a table (.csv) or a recording "
                 f"({', '.join(RECORDING_SUFFIXES)})"
             )
+        df = df.copy()
         df["run"] = i
         frames.append(df)
     if not frames:
@@ -114,8 +128,16 @@ def load_inputs(inputs, *, progress: bool = False, wheel_radius_m: float | None 
     df = pd.concat(frames, ignore_index=True, sort=False)
     if "t_s" in df.columns and df["t_s"].isna().any():  # tables mixed with recordings
         df["t_s"] = df["t_s"].fillna(df.groupby("run").cumcount().astype(float))
-    return df, {"kinds": kinds, "time_sync": sync, "wheel_radius_m": radius, "wheel_width_m": width, "notes": notes,
-                "processing": processing}
+    return df, {"kinds": kinds, "time_sync": sync, "wheel_radius_m": radius, "wheel_width_m": width,
+                "notes": notes, "processing": processing, "results": results, "tables": tables}
+
+
+def _attachment_name(warning: str, path: Path) -> str:
+    """A warning about the recording's attached configuration names the attachment, not the
+    temporary directory it was unpacked to (which differs on every run: the report must not)."""
+    import re
+
+    return re.sub(r"\S*wheelsoil-cfg-[^/\s]+/", f"{path.name}:attached ", warning)
 
 
 def _time_sync_summary(sync: list) -> dict:
@@ -128,7 +150,295 @@ def _time_sync_summary(sync: list) -> dict:
     return out
 
 
-def _failure_report(out_dir: Path, inputs, terrain, wheel, slip_min, error: str) -> None:
+# ----------------------------------------------------------------------------- provenance
+
+_HIDDEN_KEYS = ("effect", "truth", "hidden_effect", "params", "family", "acceptable")
+
+
+_HIDDEN_OPTIONS = ("--effect", "--param", "--size")
+
+
+def _hide_effect(command: list) -> list:
+    """A ``wheelsoil simulate`` argument list with the hidden effect's options blanked
+    (``--effect X`` -> ``--effect (hidden)``; also ``--param``, ``--size`` and their ``=`` forms)."""
+    out, hide = [], False
+    for a in map(str, command):
+        if hide:
+            out.append("(hidden)")
+            hide = False
+        elif a in _HIDDEN_OPTIONS:
+            out.append(a)
+            hide = True
+        elif a.startswith(tuple(o + "=" for o in _HIDDEN_OPTIONS)):
+            out.append(a.split("=", 1)[0] + "=(hidden)")
+        else:
+            out.append(a)
+    return out
+
+
+def _version() -> str:
+    from wheelsoil import __version__
+
+    return __version__
+
+
+def _environment() -> dict:
+    """Versions of the interpreter and the numeric libraries (results depend on them)."""
+    import platform
+    from importlib.metadata import PackageNotFoundError, version
+
+    out = {"python": platform.python_version()}
+    for pkg in ("numpy", "scipy", "pandas", "matplotlib", "mcap", "cantools"):
+        try:
+            out[pkg] = version(pkg)
+        except PackageNotFoundError:
+            out[pkg] = None
+    return out
+
+
+def _vehicle_config_record(path: Path | None) -> dict:
+    """The vehicle configuration a recording was processed with: its source, wheel geometry and
+    mass/inertia, and the sha256 of vehicle.toml and of each DBC (the attached files, else the
+    shipped default)."""
+    import hashlib
+
+    from wheelsoil.daq.provenance import file_sha256
+
+    def sha(b: bytes) -> str:
+        return hashlib.sha256(b).hexdigest()
+
+    attached = {}
+    if path is not None and path.suffix.lower() == ".mcap":
+        try:
+            from wheelsoil.daq.recording import read_attachments
+
+            attached = read_attachments(path)
+        except (OSError, ValueError):
+            attached = {}
+    cfg = None
+    rec: dict = {}
+    if "vehicle.toml" in attached:
+        try:
+            from wheelsoil.daq.info import config_from_attachments
+
+            cfg = config_from_attachments(attached)
+        except (ValueError, OSError) as exc:
+            rec["warning"] = f"attached configuration unusable ({exc}); processing used the default"
+        if cfg is not None:
+            rec.update({"source": f"attached to {path.name}", "sha256": sha(attached["vehicle.toml"]),
+                        "dbcs": [{"name": n[4:], "sha256": sha(b)} for n, b in sorted(attached.items())
+                                 if n.startswith("dbc/")]})
+    if cfg is None:
+        from wheelsoil.daq import load_vehicle_config
+
+        cfg = load_vehicle_config()
+        src = Path(cfg.source) if cfg.source else None
+        rec.update({"source": f"shipped default {src.name if src else 'vehicle.toml'}",
+                    "sha256": file_sha256(src) if src and src.exists() else None,
+                    "dbcs": sorted(({"name": p.name, "sha256": file_sha256(p)}
+                                    for ps in cfg.buses.values() for p in ps), key=lambda d: d["name"])})
+    rec.update({"name": getattr(cfg, "name", ""), "wheel_radius_m": float(cfg.wheel_radius_m),
+                "wheel_width_m": float(cfg.wheel_width_m)})
+    for k in ("wheel_mass_kg", "wheel_inertia_kgm2"):  # interface B (proc)
+        v = getattr(cfg, k, None)
+        rec[k] = None if v is None else float(v)
+    return rec
+
+
+def _damaged(warnings) -> list:
+    keys = ("damaged", "crc", "corrupt", "truncat", "chunk")
+    return [w for w in warnings if any(k in w.lower() for k in keys)]
+
+
+def _find_key(obj, word: str):
+    """First value whose key contains ``word`` in nested dicts (None if absent)."""
+    if isinstance(obj, dict):
+        for k, v in obj.items():
+            if word in str(k).lower() and not isinstance(v, dict):
+                return v
+        for v in obj.values():
+            got = _find_key(v, word)
+            if got is not None:
+                return got
+    return None
+
+
+def _input_record(path: Path, kind: str, res, table) -> tuple[dict, dict]:
+    """(provenance entry, data-quality dict) of one input."""
+    from wheelsoil.daq.provenance import file_sha256
+
+    entry = {"path": str(path), "sha256": file_sha256(path), "size_bytes": path.stat().st_size}
+    if kind == "table":
+        entry["provenance"] = {"kind": "table"}
+        return entry, {"input": str(path), "kind": "table", "rows": int(len(table)) if table is not None else None}
+    info = None
+    if path.suffix.lower() == ".mcap":
+        from wheelsoil.daq.info import read_recording_info
+
+        try:
+            info = read_recording_info(path)
+        except (OSError, ValueError) as exc:
+            entry["provenance"] = {"kind": "unknown", "detail": f"recording info unreadable: {exc}"}
+    if info is not None:
+        prov = info.provenance
+        if prov is None:
+            prov = {"kind": "unknown", "detail": "the recording has no wheelsoil.provenance record"}
+        elif prov.get("kind") == "simulated":  # the hidden effect stays hidden
+            prov = {k: v for k, v in prov.items() if k not in _HIDDEN_KEYS}
+            if isinstance(prov.get("command"), list):
+                prov["command"] = _hide_effect(prov["command"])
+        entry["provenance"] = prov
+    elif "provenance" not in entry:
+        entry["provenance"] = {"kind": "log file", "format": path.suffix.lower().lstrip("."),
+                               "detail": "imported into a temporary recording for processing"}
+    entry["vehicle_config"] = _vehicle_config_record(path)
+    sig = res.signals
+    warns = list(res.warnings) + ([w for w in info.warnings if w not in res.warnings] if info else [])
+    imp = _import_record(info)
+    quality = {
+        "input": str(path),
+        "kind": "recording",
+        "duration_s": float(len(sig) / res.rate_hz) if res.rate_hz else None,
+        "rate_hz": res.rate_hz,
+        "cutoff_hz": res.cutoff_hz,
+        "wheel_radius_m": res.wheel_radius_m,
+        "wheel_radius_source": getattr(res, "wheel_radius_source", None),
+        "valid_share": float(sig["valid"].mean()) if len(sig) else None,
+        "lost_frames": {k: dict(v) for k, v in sorted((res.lost_frames or {}).items())},
+        "imported": entry["provenance"].get("kind") in ("imported", "log file") or imp is not None,
+        "rejected_frames": next((v for v in (_find_key(imp or {}, "rejected"),
+                                             _find_key(entry["provenance"], "rejected")) if v is not None),
+                                "; ".join(w for w in warns if "reject" in w.lower()) or None),
+        "import_record": imp,
+        "damaged_chunks": _damaged(warns),
+        "complete": None if info is None else bool(info.complete),
+        "kernel_rx_dropped": None if info is None else {
+            b: v.get("rx_dropped") for b, v in sorted(((info.status or {}).get("buses") or {}).items())},
+        "gnss_fix": _gnss_fix(res),
+        "gnss_latency_s": res.gnss_latency_s,
+        "gnss_latency_stderr_s": res.gnss_latency_stderr_s,
+        "latency_reference": res.latency_reference,
+        "inertia": dict(getattr(res, "inertia", {}) or {}),  # interface C (proc)
+        "excluded_spans": list(getattr(res, "excluded", []) or []),
+        "processing_quality": dict(getattr(res, "quality", {}) or {}),
+        "warnings": warns,
+    }
+    return entry, quality
+
+
+def _import_record(info) -> dict | None:
+    """The ``wheelsoil.import`` metadata record of an imported recording (values JSON-decoded)."""
+    import json
+
+    rec = ((info.metadata if info is not None else None) or {}).get("wheelsoil.import")
+    if not rec:
+        return None
+    out = {}
+    for k, v in rec.items():
+        try:
+            out[k] = json.loads(v)
+        except (TypeError, ValueError):
+            out[k] = v
+    return out
+
+
+def _gnss_fix(res) -> dict:
+    """GNSS fix quality as processing reports it (``quality["gnss_fix"]``), else what the GPS time
+    mapping tells (fixes used, outliers, residual)."""
+    q = getattr(res, "quality", None) or {}
+    if isinstance(q.get("gnss_fix"), dict):
+        return dict(q["gnss_fix"])
+    g = res.gps_time_mapping or {}
+    if not g:
+        return {"time_fixes": 0, "detail": "no GPS time mapping (see warnings)"}
+    return {"time_fixes_used": g.get("n"), "time_fix_outliers": g.get("n_outliers"),
+            "time_residual_rms_s": g.get("residual_rms_s")}
+
+
+def _terrain_setting(terrain, ter, wheel) -> dict:
+    from wheelsoil.daq.provenance import file_sha256
+    from wheelsoil.model import TERRAINS
+    from wheelsoil.model.report import _terrain_dict
+
+    out = {"argument": terrain if isinstance(terrain, str) else None}
+    if isinstance(terrain, str) and terrain in TERRAINS:
+        out["source"] = "built-in"
+    elif isinstance(terrain, str):
+        p = Path(terrain.partition("#")[0])
+        out["source"] = "file"
+        out["sha256"] = file_sha256(p) if p.exists() else None
+    else:
+        out["source"] = "Terrain object (library call)"
+    out["values"] = _terrain_dict(ter, wheel)
+    return out
+
+
+def _equivalent_command(inputs, terrain, out_dir, *, wheel_radius, wheel_width, slip_min, models, fit_terrain,
+                        sinkage, rate_hz, cutoff_hz, inertia) -> list | None:
+    """The ``wheelsoil fit`` argument list that repeats a library call (None: the terrain is an object)."""
+    if not isinstance(terrain, str):
+        return None
+    cmd = ["wheelsoil", "fit", *map(str, inputs), "--terrain", terrain, "-o", str(out_dir),
+           "--slip-min", repr(float(slip_min)), "--models", ",".join(models), "--sinkage", sinkage,
+           "--rate", repr(float(rate_hz))]
+    if cutoff_hz is not None:
+        cmd += ["--cutoff", repr(float(cutoff_hz))]
+    if wheel_radius is not None:
+        cmd += ["--wheel-radius", repr(float(wheel_radius))]
+    if wheel_width is not None:
+        cmd += ["--wheel-width", repr(float(wheel_width))]
+    if fit_terrain:
+        cmd.append("--fit-terrain")
+    if not inertia:
+        cmd.append("--no-inertia")
+    return cmd
+
+
+def build_provenance(inputs, info, *, command, terrain, ter, wheel, wheel_source, settings) -> tuple[dict, list]:
+    """The report's provenance (``version, command, cwd, environment, inputs, vehicle_config,
+    settings, created``) and the per-input data-quality dicts.
+
+    ``inputs``: the paths; ``info``: :func:`load_inputs`'s info; ``command``:
+    argument list; ``settings``: the fit's settings (this adds the terrain and
+    the wheel).  Reads each input once more for its sha256 and, for a recording,
+    its own provenance (``read_recording_info``).  Raises OSError for an input
+    that cannot be read.
+    """
+    import os
+    import time
+
+    entries, quality = [], []
+    for path, kind, res, table in zip(inputs, info["kinds"], info["results"], info["tables"]):
+        e, q = _input_record(Path(path), kind, res, table)
+        entries.append(e)
+        quality.append(q)
+    first_cfg = next((e["vehicle_config"] for e in entries if "vehicle_config" in e), None)
+    vc = dict(first_cfg) if first_cfg else {"source": "none (table input): the model's default wheel"}
+    vc["wheel_radius_used_m"] = wheel.radius
+    vc["wheel_width_used_m"] = wheel.width
+    vc["wheel_source"] = wheel_source
+    st = dict(settings)
+    res0 = next((r for r in info["results"] if r is not None), None)
+    if res0 is not None:
+        st["cutoff_hz_used"] = res0.cutoff_hz
+        st["rate_hz_used"] = res0.rate_hz
+        ine = getattr(res0, "inertia", None)
+        st["inertia_applied"] = bool(ine.get("applied")) if isinstance(ine, dict) and ine else False
+    st["terrain"] = _terrain_setting(terrain, ter, wheel)
+    prov = {
+        "version": _version(),
+        "command": list(command) if command is not None else None,
+        "cwd": os.getcwd(),
+        "environment": _environment(),
+        "inputs": entries,
+        "vehicle_config": vc,
+        "settings": st,
+        "created": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
+    }
+    return prov, quality
+
+
+def _failure_report(out_dir: Path, inputs, terrain, wheel, slip_min, error: str, provenance=None) -> None:
     """Write a report.json/report.html that says what could not be done."""
     import html
     import json
@@ -139,6 +449,7 @@ def _failure_report(out_dir: Path, inputs, terrain, wheel, slip_min, error: str)
     rep = _clean({
         "schema": SCHEMA,
         "input": [str(i) for i in inputs],
+        "provenance": provenance or {},
         "terrain": _terrain_dict(terrain, wheel),
         "wheel": {"radius_m": wheel.radius, "width_m": wheel.width},
         "samples_used": 0,
@@ -150,15 +461,22 @@ def _failure_report(out_dir: Path, inputs, terrain, wheel, slip_min, error: str)
         "diagnosis": {"effect": None, "model": None, "confidence": None,
                       "summary": f"Nothing could be fitted: {error}"},
         "gain": {"R0_n_before": None, "R0_n_after": None, "cv_R0_n_before": None, "cv_R0_n_after": None},
+        "flags": [],
         "not_done": [f"fit and diagnosis: {error}"],
     })
     (out_dir / "report.json").write_text(json.dumps(rep, indent=2, allow_nan=False), encoding="utf-8")
+    cmd = " ".join((provenance or {}).get("command") or [])
     (out_dir / "report.html").write_text(
-        "<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'><title>wheelsoil fit report</title></head>"
-        f"<body><h1>wheelsoil fit report</h1><p><b>Nothing could be fitted.</b></p><p>{html.escape(error)}</p>"
-        f"<p>Inputs: {html.escape(', '.join(map(str, inputs)))}</p></body></html>",
+        "<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'>"
+        "<meta name='viewport' content='width=device-width, initial-scale=1'><title>wheelsoil fit report</title>"
+        f"</head><body><h1>wheelsoil fit report</h1><p><b>Nothing could be fitted.</b></p><p>{html.escape(error)}</p>"
+        f"<p>Inputs: {html.escape(', '.join(map(str, inputs)))}</p>"
+        + (f"<p>Command: <code>{html.escape(cmd)}</code></p>" if cmd else "") + "</body></html>",
         encoding="utf-8",
     )
+
+
+DEFAULT_MODELS = ("vasilev", "lyasko", "ding", "terrain_mismatch")
 
 
 def run_fit(
@@ -172,7 +490,11 @@ def run_fit(
     models=None,
     fit_terrain: bool = False,
     sinkage: str = "eq10",
+    rate_hz: float = 100.0,
+    cutoff_hz: float | None = None,
+    inertia: bool = True,
     progress: bool = False,
+    command: list | None = None,
 ) -> dict:
     """Fit Wong's model and the candidates to the inputs, diagnose, write the report.
 
@@ -182,15 +504,25 @@ def run_fit(
     terrain : a built-in terrain slug, a TOML path, or a ``Terrain``.
     out_dir : report directory (``report.html``, ``report.json``, ``*.png``).
     wheel_radius, wheel_width : [m]; default: the vehicle config's (0.47/0.32)
-        for recordings, the model's ``DEFAULT_WHEEL`` for tables.
+        for recordings, the model's ``DEFAULT_WHEEL`` for tables.  The radius is
+        also the slip radius of Eq. (6) for recordings.
     slip_min : samples with s <= slip_min are not used (paper: 0.2 clay, 0.1 sand).
     models : candidates (default ``vasilev, lyasko, ding, terrain_mismatch``; Wong always).
     fit_terrain : fit the terrain parameters too (k_eq = kc/b + kphi, n, c, phi, K,
         those the data identify).
     sinkage : ``eq10`` or ``balance``.
+    rate_hz, cutoff_hz, inertia : processing of recordings (grid rate [Hz],
+        low-pass cutoff [Hz], None = processing's default; wheel inertia
+        compensation on/off).
     progress : tqdm progress bars on stderr.
+    command : the argument list that ran this (the CLI passes it); None: the
+        equivalent ``wheelsoil fit`` command is recorded.
 
-    Returns the report dict (``report.json``).
+    Returns the report dict (``report.json``), with its ``provenance``: the
+    version, command, working directory, inputs (sha256 and their own
+    provenance), vehicle configuration and DBCs, every setting and the
+    analysis time; re-running the command gives the same report.json except
+    ``provenance.created``.
 
     Raises
     ------
@@ -215,32 +547,80 @@ def run_fit(
 
         wheel_radius = check_wheel_radius(wheel_radius, "--wheel-radius")
     ter = terrain if isinstance(terrain, Terrain) else load_terrain(terrain)
-    models = list(models) if models else ["vasilev", "lyasko", "ding", "terrain_mismatch"]
+    models = list(models) if models else list(DEFAULT_MODELS)
     for m in models:
         if m not in CANDIDATES:
             raise ValueError(f"unknown model {m!r} in --models; choose from {', '.join(CANDIDATES)}")
     out = Path(out_dir)
-    df, info = load_inputs(inputs, progress=progress, wheel_radius_m=wheel_radius)
+    if command is None:
+        command = _equivalent_command(inputs, terrain, out_dir, wheel_radius=wheel_radius, wheel_width=wheel_width,
+                                      slip_min=slip_min, models=models, fit_terrain=fit_terrain, sinkage=sinkage,
+                                      rate_hz=rate_hz, cutoff_hz=cutoff_hz, inertia=inertia)
+    df, info = load_inputs(inputs, progress=progress, rate_hz=rate_hz, cutoff_hz=cutoff_hz,
+                           wheel_radius_m=wheel_radius, inertia=inertia)
     recording = "recording" in info["kinds"]
     r = wheel_radius or (info["wheel_radius_m"] if info["wheel_radius_m"] else DEFAULT_WHEEL.radius)
     b = wheel_width or (info["wheel_width_m"] if recording and info["wheel_width_m"] else DEFAULT_WHEEL.width)
     wheel = Wheel(float(r), float(b))
+    wheel_source = ("radius: " + ("command line" if wheel_radius else
+                                  "vehicle configuration" if recording else
+                                  "the table's wheel_radius_m column" if info["wheel_radius_m"] else "model default")
+                    + ", width: " + ("command line" if wheel_width else
+                                     "vehicle configuration" if recording else "model default"))
+    settings = {
+        "slip_min": float(slip_min),
+        "models": ["wong", *[m for m in models if m != "wong"]],
+        "fit_terrain": bool(fit_terrain),
+        "sinkage": sinkage,
+        "rate_hz": float(rate_hz),
+        "cutoff_hz": None if cutoff_hz is None else float(cutoff_hz),
+        "inertia": bool(inertia),
+        "wheel_radius_m": wheel.radius,
+        "wheel_width_m": wheel.width,
+    }
+    prov, quality = build_provenance(inputs, info, command=command, terrain=terrain, ter=ter, wheel=wheel,
+                                     wheel_source=wheel_source, settings=settings)
     source = inputs[0] if len(inputs) == 1 else f"{len(inputs)} inputs"
     try:
         data = prepare_data(df, slip_min=slip_min, source=source)
         diag = diagnose(data, ter, wheel, models=[m for m in models if m != "wong"], fit_terrain=fit_terrain,
                         sinkage=sinkage, progress=progress)
     except ValueError as exc:
-        _failure_report(out, inputs, ter, wheel, slip_min, str(exc))
+        _failure_report(out, inputs, ter, wheel, slip_min, str(exc), provenance=prov)
         raise ValueError(f"{exc} (a report saying so was written to {out / 'report.html'})") from None
+    _cap_for_time_base(diag, info)
+    prov["settings"]["hypotheses_tried"] = list(getattr(diag, "tried", None) or diag.fits)
+    prov["settings"]["diagnosis_thresholds"] = dict(getattr(diag, "thresholds", {}) or {})
+    prov["settings"]["cross_validation"] = getattr(data, "group_kind", None)
     notes = list(info["notes"])
     if wheel_radius is None or wheel_width is None:
         notes.append(f"wheel radius {wheel.radius} m, width {wheel.width} m "
                      + ("from the vehicle configuration" if recording else "(the model's default wheel)")
                      + " where not given.")
     ts = _time_sync_summary(info["time_sync"]) if recording else {"gnss_latency_s": None}
+    details = []
+    for path, res, q in zip(inputs, info["results"], quality):
+        d = {"path": path, "quality": q}
+        if res is not None:
+            d.update(signals=res.signals.assign(cycle=res.cycle), wheel_radius_m=res.wheel_radius_m,
+                     excluded=list(getattr(res, "excluded", []) or []))  # interface C (proc)
+        details.append(d)
     return write_report(diag, out, terrain=ter, wheel=wheel, inputs=inputs, time_sync=ts,
-                        extra_notes=notes, progress=progress)
+                        extra_notes=notes, progress=progress, provenance=prov, input_details=details)
+
+
+def _cap_for_time_base(diag, info) -> None:
+    """Confidence at most "low" when processing could not establish a reliable GNSS latency
+    for an input (``ProcessResult.quality["latency"]["reliable"]`` False): slip (Eq. 6) is
+    then in doubt by the latency's error, and so is every verdict built on it."""
+    from wheelsoil.model.diagnosis import cap_confidence
+
+    for path, res in zip(info["time_sync"], info["results"]):
+        lat = ((getattr(res, "quality", None) or {}).get("latency") or {}) if res is not None else {}
+        if lat and not lat.get("reliable", True):
+            cap_confidence(diag, "low", f"the GNSS latency of {Path(path['input']).name} is unreliable "
+                           f"({'; '.join(map(str, lat.get('reasons') or [])) or 'see the data-quality table'}): "
+                           "slip is in doubt")
 
 
 def _parse_models(text: str):
@@ -258,7 +638,11 @@ def _handler(args) -> int:
         models=_parse_models(args.models) if args.models else None,
         fit_terrain=args.fit_terrain,
         sinkage=args.sinkage,
+        rate_hz=args.rate,
+        cutoff_hz=args.cutoff,
+        inertia=not args.no_inertia,
         progress=not args.quiet,
+        command=["wheelsoil", *getattr(args, "argv", None)] if getattr(args, "argv", None) is not None else None,
     )
     d, g = rep["diagnosis"], rep["gain"]
 
@@ -287,13 +671,18 @@ inputs: a table CSV with columns slip, load_n [N], drawbar_pull_n [N] and option
 torque_nm [N m], sinkage_m [m] (one row per steady-state test point), or a recording
 (.mcap) that is processed first. Several inputs of one terrain are fitted jointly.
 
-output: DIR/report.html (self-contained, opens offline), DIR/report.json
-(schema wheelsoil.report/1), DIR/*.png.
+output: DIR/report.html (one self-contained file, opens offline, prints), DIR/report.json
+(schema wheelsoil.report/1, SI units), DIR/*.png (overview.png: the run against time with the
+excluded spans; dp_vs_slip, residuals, sinkage_vs_slip). Both carry the provenance: version,
+command, input sha256s and origins, vehicle configuration and DBCs, every setting; running the
+recorded command again gives the same report.json except the analysis time.
 
-verdict: 'none' (Wong's residuals show no significant structure), 'slip_sinkage',
-'terrain_mismatch' (lab K and phi re-fitted explain it), or 'unexplained'. A candidate
-must lower the cross-validated error by >= 25 % and the BIC by >= 10; see
-wheelsoil.model.diagnosis for the full rule.
+verdict (report.json diagnosis.effect): 'none' (Wong's residuals show no relevant
+structure), a named cause ('slip_sinkage', 'terrain_mismatch', 'stress_distribution',
+'terrain_drift') when it lowers the drawbar pull error out of sample, worsens no measured
+channel and is probable enough, or 'unexplained'; wheelsoil.model.diagnosis states the rule.
+The report defines every metric where it shows it and flags degenerate or physically
+inconsistent fits next to their coefficients.
 """
 
 
@@ -325,5 +714,11 @@ def register(subparsers) -> None:
                    "identify) for soils without lab values")
     p.add_argument("--sinkage", choices=("eq10", "balance"), default="eq10",
                    help="static sinkage from Eq. 10 (default) or from the vertical force balance")
+    p.add_argument("--rate", type=float, default=100.0, metavar="HZ",
+                   help="recordings: processing grid rate [Hz] (default 100)")
+    p.add_argument("--cutoff", type=float, default=None, metavar="HZ",
+                   help="recordings: zero-phase low-pass cutoff [Hz] (default: processing's 5 Hz)")
+    p.add_argument("--no-inertia", action="store_true",
+                   help="recordings: do not compensate the wheel's inertia (Dp = Fx, T = My as measured)")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bars")
     p.set_defaults(func=_handler)

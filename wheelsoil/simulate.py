@@ -700,6 +700,7 @@ def _write_mcap(run: SimulatedRun, path: Path, config=None) -> None:
                     part = batches[bus].select(slice(lo, hi))
                     writer.write_batch(part)
                     acc.update(part)
+            writer.flush()  # one chunk per batch interval, as the logger closes them (damage stays local)
         st = acc.stats
         writer.summary.update({"lost_frames": {k: int(v) for k, v in st.lost_frames.items()}})
 
