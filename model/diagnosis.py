@@ -66,7 +66,7 @@ decides with this rule (constants below; none was tuned on a benchmark):
    ``P_HIGH``, ``medium`` >= ``P_NAME``), capped at ``medium`` when the
    named model is physically inconsistent, when one of the generic
    alternatives for causes on no list (``dp_resistance``, ``radius``,
-   ``sensor_gain``, ``balance``) is also supported out of sample (with less
+   ``width``, ``sensor_gain``, ``balance``) is also supported out of sample (with less
    evidence: the data do not exclude an off-list cause), (model W / measured W outside
    ``LOAD_RATIO_TOL`` in a slip bin, Eq. 7, or static sinkage above D/6, the
    limit of Eq. 10's small-angle form), when there are fewer than
@@ -141,7 +141,7 @@ EFFECT_TITLES = {
 NULLS = {"vasilev": {"H": 0.0}, "lyasko": {"m1": 0.0, "m2": 0.0}, "ding": {"n1": 0.0},
          "vasilev+terrain": {"H": 0.0}, "ding+terrain": {"n1": 0.0}, "wong_reece": {"a1": 0.0, "a2": 0.0},
          "drift_linear": {"g_lnk": 0.0, "g_phi": 0.0, "g_c": 0.0, "g_lnK": 0.0}, "dp_resistance": {"R0": 0.0, "R1": 0.0},
-         "radius": {"rho": 0.0}, "sensor_gain": {"g_dp": 0.0, "g_t": 0.0}}
+         "radius": {"rho": 0.0}, "width": {"beta": 0.0}, "sensor_gain": {"g_dp": 0.0, "g_t": 0.0}}
 #: Hypotheses nested in a larger one: the larger one must beat each of them out of sample.
 NESTED = {"vasilev+terrain": ("terrain", "vasilev"), "ding+terrain": ("terrain", "ding"),
           "drift_linear": ("terrain",)}
@@ -648,12 +648,16 @@ def _flags(f: HypFit, cons: dict) -> list:
 # ----------------------------------------------------------------------------- separating measurements
 
 
-def _separating(effects: set, channels: set) -> str | None:
-    """The measurement that would tell the listed effects apart."""
+def _separating(effects: set, channels: set, names=()) -> str | None:
+    """The measurement that would tell the listed effects (and hypotheses ``names``) apart."""
     e = set(effects) - {"none", "unexplained"}
-    if len(e) <= 1 and "slip_sinkage" not in e:
-        return None
+    geometry = {"radius", "width"} & set(names)
     parts = []
+    if geometry and e & {"terrain_mismatch", "terrain_drift", "slip_sinkage"}:
+        parts.append("the tyre's loaded radius and contact width (footprint) under this load, or plate-sinkage and "
+                     "shear tests of this soil (a wheel-geometry error acts on the forces like a change of the soil)")
+    if len(e) <= 1 and "slip_sinkage" not in e:
+        return "; ".join(parts) or None
     if "slip_sinkage" in e and len(e) > 1:
         parts.append("the wheel's sinkage against slip" + (" over a wider slip range" if "sinkage_m" in channels else "")
                      + " (slip sinkage makes z grow with s; a terrain or stress change does not)")
@@ -874,8 +878,8 @@ def diagnose(
                            + ", ".join(remain) + ")")
         else:
             effect = fits[best].effect
-        sep = _separating({fits[k].effect for k in [best, *alternatives]} | ({fits[rivals[0]].effect} if rivals else set()),
-                          set(data.channels))
+        sep_names = [best, *alternatives, *rivals[:1]]
+        sep = _separating({fits[k].effect for k in sep_names}, set(data.channels), sep_names)
     # per-channel verdicts
     channels = {}
     for c in CHANNELS:

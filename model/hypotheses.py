@@ -33,6 +33,13 @@ The hypotheses (paper numbering for Eqs.; Wong = *Theory of Ground Vehicles*, 4t
 * ``radius``: not a listed cause either: the soil sees another wheel radius than
   the one slip was computed with (a deflecting tyre, a radius error): effect
   ``unexplained``.
+* ``width``: not a listed cause, the sibling of ``radius``: the soil sees another
+  contact width b (1 + beta) than the configured b (a bulging or deflecting tyre,
+  a wrong width in the configuration): effect ``unexplained``.  ``radius`` and
+  ``width`` together guard the terrain re-fit against wheel-geometry errors: with
+  Eqs. (2)-(10) b enters as b k_eq = kc + b kphi and b c, so a width error is
+  mimicked by a k_eq and c change, and the soil is not blamed when the geometry
+  explains the data as well.
 * ``sensor_gain``: not a listed cause: the transducer's Fx and My read with a
   gain error: effect ``unexplained``.
 * ``balance``: not a listed cause: the static sinkage from the vertical balance
@@ -442,6 +449,38 @@ class WheelRadius(Hypothesis):
         return wong_forces(terrain, wheel, load_n, s_e, sinkage=ctx.sinkage)
 
 
+class WheelWidth(Hypothesis):
+    """The soil sees a contact width b_e = b (1 + beta), while the model was given b.
+
+    Not a cause on our list: the sibling of :class:`WheelRadius` for the other wheel
+    dimension: a tyre whose sidewalls bulge or whose contact patch is narrower than its
+    nominal width, or a wrong width in the configuration.  The forces are Wong's
+    (Eqs. 1-10) for the wheel (r, b_e) on the lab terrain; the lab kc, kphi are kept,
+    so k_eq = kc/b_e + kphi follows the width (Eq. 2).  Effect ``unexplained``: a
+    listed cause it explains as well (a k_eq and c mismatch: the forces see b k_eq =
+    kc + b kphi and b c) is not named.  Not tried when the terrain is fitted in every
+    hypothesis (``--fit-terrain``): b is then not separable from k_eq and c.
+    """
+
+    name, effect, title = "width", "unexplained", "a contact width other than the configured one (no listed cause)"
+    source = "generic alternative: tyre contact width (Wong 2008 ch. 2, Eqs. 2 and 7-10 scale with b) or a width error"
+
+    def own_params(self, ctx):
+        return (HParam("beta", 0.0, -0.4, 0.6, "-", "relative change of the contact width the soil sees"),)
+
+    def available(self, ctx, has_x):
+        if ctx.fit_terrain:
+            return ("the terrain is fitted in every hypothesis, and the width is not separable from k_eq and c "
+                    "(the forces see b k_eq and b c)")
+        return super().available(ctx, has_x)
+
+    def forces(self, ctx, terrain, load_n, slip, x, p):
+        from .terrain import Wheel
+
+        wheel = Wheel(ctx.wheel.radius, ctx.wheel.width * (1.0 + p["beta"]))
+        return wong_forces(terrain, wheel, load_n, slip, sinkage=ctx.sinkage)
+
+
 class SensorGain(Hypothesis):
     """The transducer's drawbar pull and torque read (1 + g_dp) and (1 + g_t) times Wong's values.
 
@@ -486,7 +525,7 @@ class VerticalBalance(Hypothesis):
 HYPOTHESES: dict[str, Hypothesis] = {
     h.name: h
     for h in (Wong(), Vasilev(), Lyasko(), Ding(), TerrainMismatch(), VasilevTerrain(), DingTerrain(),
-              WongReece(), DriftLinear(), DrawbarResistance(), WheelRadius(), SensorGain(),
+              WongReece(), DriftLinear(), DrawbarResistance(), WheelRadius(), WheelWidth(), SensorGain(),
               VerticalBalance())
 }
 
