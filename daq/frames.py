@@ -133,16 +133,7 @@ class FrameBatch:
             return cls.empty(bus)
         ts = np.array([m.timestamp or 0.0 for m in msgs], np.float64)
         ids = np.array([m.arbitration_id & 0xFFFFFFFF for m in msgs], np.uint32)
-        fl = np.zeros(n, np.uint8)
-        for bit, attr in ((FLAG_EXTENDED, "is_extended_id"), (FLAG_REMOTE, "is_remote_frame"),
-                          (FLAG_ERROR, "is_error_frame"), (FLAG_FD, "is_fd"), (FLAG_BRS, "bitrate_switch"),
-                          (FLAG_ESI, "error_state_indicator")):
-            col = [getattr(m, attr) for m in msgs]
-            if any(col):
-                fl[np.array(col, bool)] |= bit
-        rx = [m.is_rx for m in msgs]
-        if not all(rx):
-            fl[~np.array(rx, bool)] |= FLAG_TX
+        fl = _flags_of(msgs)
         dlc = np.clip(np.array([m.dlc for m in msgs], np.int64), 0, 255).astype(np.uint8)
         datas = [m.data or b"" for m in msgs]
         lens = [len(d) for d in datas]
@@ -223,16 +214,7 @@ def checked_batch_from_messages(bus: str, msgs) -> tuple["FrameBatch", np.ndarra
     if max(idl) > 0xFFFFFFFF or min(idl) < 0:
         idl = [-1 if i < 0 else min(i, 0x100000000) for i in idl]
     ids = np.array(idl, np.int64)
-    fl = np.zeros(n, np.uint8)
-    for bit, attr in ((FLAG_EXTENDED, "is_extended_id"), (FLAG_REMOTE, "is_remote_frame"),
-                      (FLAG_ERROR, "is_error_frame"), (FLAG_FD, "is_fd"), (FLAG_BRS, "bitrate_switch"),
-                      (FLAG_ESI, "error_state_indicator")):
-        col = [getattr(m, attr) for m in msgs]
-        if any(col):
-            fl[np.array(col, bool)] |= bit
-    rx = [m.is_rx for m in msgs]
-    if not all(rx):
-        fl[~np.array(rx, bool)] |= FLAG_TX
+    fl = _flags_of(msgs)
     dll = [m.dlc for m in msgs]
     if max(dll) > 0xFFFF or min(dll) < 0:
         dll = [-1 if d < 0 else min(d, 0x10000) for d in dll]
@@ -328,3 +310,19 @@ def _widen(data: np.ndarray, width: int) -> np.ndarray:
     out = np.zeros((data.shape[0], width), np.uint8)
     out[:, : data.shape[1]] = data
     return out
+
+
+def _flags_of(msgs) -> np.ndarray:
+    """Flag bits (uint8, shape (N,)) of a list of python-can messages (extended, remote,
+    error, FD, BRS, ESI, and TX for frames not received)."""
+    fl = np.zeros(len(msgs), np.uint8)
+    for bit, attr in ((FLAG_EXTENDED, "is_extended_id"), (FLAG_REMOTE, "is_remote_frame"),
+                      (FLAG_ERROR, "is_error_frame"), (FLAG_FD, "is_fd"), (FLAG_BRS, "bitrate_switch"),
+                      (FLAG_ESI, "error_state_indicator")):
+        col = [getattr(m, attr) for m in msgs]
+        if any(col):
+            fl[np.array(col, bool)] |= bit
+    rx = [m.is_rx for m in msgs]
+    if not all(rx):
+        fl[~np.array(rx, bool)] |= FLAG_TX
+    return fl

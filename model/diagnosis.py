@@ -88,6 +88,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from pathlib import PurePath
 
 import numpy as np
 from scipy import stats
@@ -241,14 +242,15 @@ class Diagnosis:
         })
 
 
-def _clean(obj):
-    """numpy -> Python, non-finite floats -> None (valid JSON)."""
+def json_ready(obj):
+    """``obj`` with numpy types as Python ones, non-finite floats as None and paths as
+    strings (valid JSON); dicts, lists, tuples and arrays converted recursively. Never raises."""
     if isinstance(obj, dict):
-        return {str(k): _clean(v) for k, v in obj.items()}
+        return {str(k): json_ready(v) for k, v in obj.items()}
     if isinstance(obj, (list, tuple)):
-        return [_clean(v) for v in obj]
+        return [json_ready(v) for v in obj]
     if isinstance(obj, np.ndarray):
-        return [_clean(v) for v in obj.tolist()]
+        return [json_ready(v) for v in obj.tolist()]
     if isinstance(obj, (np.bool_, bool)):
         return bool(obj)
     if isinstance(obj, np.integer):
@@ -256,7 +258,12 @@ def _clean(obj):
     if isinstance(obj, (float, np.floating)):
         v = float(obj)
         return v if math.isfinite(v) else None
+    if isinstance(obj, PurePath):
+        return str(obj)
     return obj
+
+
+_clean = json_ready
 
 
 # ----------------------------------------------------------------------------- structure tests

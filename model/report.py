@@ -41,6 +41,7 @@ from pathlib import Path
 import numpy as np
 
 from .diagnosis import CHANNEL_TITLES, TITLES
+from .diagnosis import json_ready as _clean
 
 __all__ = ["write_report", "report_dict", "fmt", "fmt_param", "param_unit", "SCHEMA", "ALL_MODELS",
            "REQUIRED_KEYS", "CORRELATION_LIMIT", "CONDITION_LIMIT", "exclusion_masks"]
@@ -196,26 +197,6 @@ def _chan_unit(channel) -> str:
 
 
 # ============================================================================ JSON helpers
-
-
-def _clean(obj):
-    """Recursively convert numpy types to Python and non-finite floats to None (valid JSON)."""
-    if isinstance(obj, dict):
-        return {str(k): _clean(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [_clean(v) for v in obj]
-    if isinstance(obj, np.ndarray):
-        return [_clean(v) for v in obj.tolist()]
-    if isinstance(obj, (np.bool_, bool)):
-        return bool(obj)
-    if isinstance(obj, (np.integer,)):
-        return int(obj)
-    if isinstance(obj, (float, np.floating)):
-        v = float(obj)
-        return v if math.isfinite(v) else None
-    if isinstance(obj, Path):
-        return str(obj)
-    return obj
 
 
 def _terrain_dict(t, wheel) -> dict:
