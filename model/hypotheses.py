@@ -66,7 +66,7 @@ from typing import ClassVar, Mapping
 
 import numpy as np
 
-from .slip_sinkage import get_model
+from .slip_sinkage import Param, get_model
 from .wong import WheelForces, wong_forces
 
 __all__ = [
@@ -98,21 +98,14 @@ LIBRARY_PRIOR_WIDEN = 3.0
 
 
 @dataclass(frozen=True)
-class HParam:
-    """One parameter of a hypothesis.
-
-    ``name``; ``default`` (start value, SI); ``lower``/``upper`` the search box
-    (SI); ``unit``; ``doc``; ``prior`` ``(mean, sd)`` of a Gaussian prior or
-    None (flat inside the bounds); ``log``: the fitter works with ln(value)
-    (then bounds are of the value, the prior's mean and sd of ln(value)).
+class HParam(Param):
+    """One parameter of a hypothesis: a :class:`~wheelsoil.model.slip_sinkage.Param`
+    (``name``, ``default`` start value, ``lower``/``upper`` search box, ``unit``,
+    ``doc``; SI) plus ``prior`` ``(mean, sd)`` of a Gaussian prior or None (flat
+    inside the bounds) and ``log``: the fitter works with ln(value) (then bounds
+    are of the value, the prior's mean and sd of ln(value)).
     """
 
-    name: str
-    default: float
-    lower: float
-    upper: float
-    unit: str
-    doc: str
     prior: tuple | None = None
     log: bool = False
 

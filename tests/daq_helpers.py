@@ -8,10 +8,12 @@ field; ``compare_recordings`` / ``frame_differences`` live in
 from __future__ import annotations
 
 import os
+import shutil
 import signal
 import subprocess
 import sys
 import time
+from pathlib import Path
 
 import can
 import numpy as np
@@ -90,3 +92,15 @@ def stop_logger(p, sig=signal.SIGINT, timeout=30):
         p.kill()
         out, _ = p.communicate()
     return p.returncode, out
+
+
+def copy_default_vehicle(tmp_path) -> Path:
+    """Copy the shipped vehicle.toml and its DBC files into ``tmp_path``; returns the TOML's path."""
+    from wheelsoil.daq.config import default_vehicle_path
+
+    src = default_vehicle_path()
+    for f in src.parent.glob("*.dbc"):
+        shutil.copy(f, tmp_path / f.name)
+    dst = tmp_path / "vehicle.toml"
+    dst.write_text(src.read_text())
+    return dst

@@ -3,22 +3,16 @@ every error names the file and the key."""
 
 from __future__ import annotations
 
-import shutil
 from pathlib import Path
 
 import pytest
+from daq_helpers import copy_default_vehicle
 
 from wheelsoil.daq import load_vehicle_config
-from wheelsoil.daq.config import default_vehicle_path, unit_mismatch
+from wheelsoil.daq.config import unit_mismatch
 
 
-def _copy_default(tmp_path) -> Path:
-    src = default_vehicle_path()
-    for f in src.parent.glob("*.dbc"):
-        shutil.copy(f, tmp_path / f.name)
-    dst = tmp_path / "vehicle.toml"
-    dst.write_text(src.read_text())
-    return dst
+_copy_default = copy_default_vehicle
 
 
 @pytest.mark.parametrize("edit, match", [

@@ -1,13 +1,12 @@
 """Vehicle configuration: the shipped one, a user's edited copy, clear errors."""
 
 import math
-import shutil
 from pathlib import Path
 
 import pytest
+from daq_helpers import copy_default_vehicle
 
 from wheelsoil.daq import REQUIRED_SIGNALS, load_vehicle_config
-from wheelsoil.daq.config import default_vehicle_path
 
 
 def test_shipped_config_maps_every_quantity():
@@ -29,13 +28,7 @@ def test_shipped_config_maps_every_quantity():
     assert names[(0x9588322, True)] == "RT_SB_INS_Vel_Body_Axes"
 
 
-def _copy_default(tmp_path) -> Path:
-    src = default_vehicle_path()
-    for f in src.parent.glob("*.dbc"):
-        shutil.copy(f, tmp_path / f.name)
-    dst = tmp_path / "vehicle.toml"
-    dst.write_text(src.read_text())
-    return dst
+_copy_default = copy_default_vehicle
 
 
 def test_user_edits_only_the_toml(tmp_path):
