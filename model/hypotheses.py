@@ -47,7 +47,7 @@ The hypotheses (paper numbering for Eqs.; Wong = *Theory of Ground Vehicles*, 4t
 * ``drift_linear``: terrain drift.  The terrain changes along the run:
   repeated passes compact the soil (k_eq, c and phi grow with the number of
   passes, Wong ch. 2 on repetitive loading), or the wheel reaches another patch
-  of ground.  ln k_eq, phi, c and ln K vary linearly with the normalised travelled
+  of ground.  ln k_eq, n, phi, c and ln K vary linearly with the normalised travelled
   distance x in [-0.5, 0.5] (time when no distance is recorded) around a
   mid-run terrain that is itself re-fitted against the lab priors.  The forces
   at x are the linear interpolation of the exact forces of the start (x = -0.5)
@@ -350,16 +350,18 @@ class WongReece(Hypothesis):
 
 
 class DriftLinear(Hypothesis):
-    """Terrain drift: ln k_eq, phi, c and ln K linear in the normalised distance x (module doc)."""
+    """Terrain drift: ln k_eq, n, phi, c and ln K linear in the normalised distance x (module doc)."""
 
     name, effect, title = "drift_linear", "terrain_drift", "terrain drifting along the run"
     source = "repeated passes compact the soil (Wong 2008 ch. 2); linear drift in travelled distance"
     terrain_block = True
     needs_x = True
+    C_FLOOR_PA = 50.0  #: width of the smooth floor that keeps the start/end cohesion >= 0 [Pa]
 
     def own_params(self, ctx):
         return (
             HParam("g_lnk", 0.0, -1.5, 1.5, "-", "change of ln k_eq over the run (end - start)"),
+            HParam("g_n", 0.0, -0.5, 0.5, "-", "change of the sinkage exponent n over the run (end - start)"),
             HParam("g_phi", 0.0, -0.35, 0.35, "rad", "change of phi over the run (end - start)"),
             HParam("g_c", 0.0, -20e3, 20e3, "Pa", "change of cohesion over the run (end - start)"),
             HParam("g_lnK", 0.0, -1.5, 1.5, "-", "change of ln K over the run (end - start)"),
@@ -373,8 +375,11 @@ class DriftLinear(Hypothesis):
         for xe in (-0.5, 0.5):
             q = dict(base)
             q["k_eq"] = base["k_eq"] * math.exp(xe * base["g_lnk"])
+            q["n"] = base["n"] + xe * base["g_n"]
             q["phi"] = base["phi"] + xe * base["g_phi"]
-            q["c"] = max(base["c"] + xe * base["g_c"], 0.0)
+            # cohesion cannot be negative: a smooth floor at 0 (softplus, C_FLOOR_PA wide; exact
+            # to < 1e-8 Pa above 1 kPa) instead of a kink the Gauss-Newton steps cannot settle on
+            q["c"] = self.C_FLOOR_PA * float(np.logaddexp(0.0, (base["c"] + xe * base["g_c"]) / self.C_FLOOR_PA))
             q["K"] = base["K"] * math.exp(xe * base["g_lnK"])
             terrain = apply_terrain(ctx.terrain, q)
             out.append(wong_forces(terrain, ctx.wheel, load_n, slip, sinkage=ctx.sinkage))

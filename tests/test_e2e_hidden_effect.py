@@ -146,12 +146,16 @@ def test_verdict_survives_a_bus(tmp_path):
     v_bus = judge(run.info, reports["bus"])
     assert (v_bus["verdict"], v_bus["model"]) == (v_file["verdict"], v_file["model"]), _explain(reports["bus"], v_bus)
     # the bus added delivery jitter (a few ms on a loaded machine) and maybe UDP losses,
-    # nothing else: the same latency within processing's 10 ms, the same coefficients
+    # nothing else: the same latency within processing's 10 ms, the same coefficients (within 2 %
+    # or a tenth of their standard error, whichever is larger: a poorly determined coefficient
+    # moves with a few lost frames, by far less than its uncertainty)
     assert abs(reports["bus"]["time_sync"]["gnss_latency_s"] - run.info["gnss_latency_s"]) < 0.01
     m = v_file["model"]
     if m and m in reports["file"].get("models", {}) and reports["file"]["models"][m].get("params"):
         for k, val in reports["file"]["models"][m]["params"].items():
-            assert reports["bus"]["models"][m]["params"][k] == pytest.approx(val, rel=0.02, abs=1e-3)
+            se = reports["file"]["models"][m]["stderr"].get(k) or 0.0
+            got = reports["bus"]["models"][m]["params"][k]
+            assert got == pytest.approx(val, rel=0.02, abs=max(1e-3, 0.1 * se)), (k, got, val, se)
 
 
 def test_out_of_order_frame_does_not_shift_the_wheel_angle(tmp_path):
