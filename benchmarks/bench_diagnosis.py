@@ -16,6 +16,7 @@ half the effect size (at most 3 times), then on the next plausible run at the fu
     python benchmarks/bench_diagnosis.py                 # 64 seeds (0..63), 2 processes
     python benchmarks/bench_diagnosis.py --quick         # 6 seeds
     python benchmarks/bench_diagnosis.py --seed 17       # one row again
+    python benchmarks/bench_diagnosis.py --first 128 --seeds 128   # seeds 128..255
     python benchmarks/bench_diagnosis.py --front-wheels driven      # the 4x4's front wheels on FL/FR
 
 The FL/FR wheel-speed channels carry an idealised undriven reference wheel by default:
@@ -190,7 +191,10 @@ def report(rows: list[dict], wall_s: float, args) -> str:
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
                                  formatter_class=argparse.RawDescriptionHelpFormatter, epilog=__doc__)
-    ap.add_argument("--seeds", type=int, default=64, help="seeds 0..N-1 (default 64: each of the 16 effects 4 times)")
+    ap.add_argument("--seeds", type=int, default=64, help="N seeds from --first on (default 64: each of the 16 effects "
+                    "4 times)")
+    ap.add_argument("--first", type=int, default=0, help="first seed (default 0): --first 128 --seeds 128 runs "
+                    "seeds 128..255, seeds no one looked at while the rule was developed")
     ap.add_argument("--seed", type=int, action="append", default=None, help="run only this seed (repeatable)")
     ap.add_argument("--quick", action="store_true", help="6 seeds (a smoke run)")
     ap.add_argument("--jobs", type=int, default=2, help="worker processes, at most 2 (default 2)")
@@ -203,7 +207,7 @@ def main(argv=None) -> int:
     ap.add_argument("--keep", default=None, metavar="DIR", help="keep recordings, truths and reports here")
     args = ap.parse_args(argv)
     args.jobs = max(1, min(args.jobs, 2))
-    seeds = args.seed if args.seed else list(range(6 if args.quick else args.seeds))
+    seeds = args.seed if args.seed else list(range(args.first, args.first + (6 if args.quick else args.seeds)))
     print(f"bench_diagnosis: {len(seeds)} seeds, {args.duration:.0f} s runs, {args.jobs} process(es), "
           f"front wheels {args.front_wheels}")
     print("diagnosis thresholds as the code holds them (wheelsoil.model.diagnosis):",
