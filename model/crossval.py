@@ -124,10 +124,12 @@ class HypFit:
         return self.hypothesis.predict(self.ctx, load_n, slip, np.zeros(np.size(load_n)) if x is None else x,
                                        self.params)
 
-    def evidence(self, c_hat: float) -> float:
+    def evidence(self, c_hat: float, deff: float = 1.0) -> float:
         """Laplace log evidence with a given overdispersion ``c_hat`` (the diagnosis uses one
-        common value for all hypotheses, from the best fit; quasi-likelihood practice)."""
-        return _laplace(self.chi2_data, self.chi2_prior, self.info, self.hparams, self.n_data, c_hat)
+        common value for all hypotheses, from the best fit; quasi-likelihood practice) and design
+        effect ``deff`` >= 1 (cells correlated within a fold: the data weigh as ``n_data / deff``
+        independent cells, Kish 1965; the unit-information prior is unchanged by it)."""
+        return _laplace(self.chi2_data, self.chi2_prior, self.info, self.hparams, self.n_data / deff, c_hat * deff)
 
     @property
     def cv_R0_n(self) -> float | None:

@@ -679,8 +679,9 @@ recorded command again gives the same report.json except the analysis time.
 
 verdict (report.json diagnosis.effect): 'none' (Wong's residuals show no relevant
 structure), a named cause ('slip_sinkage', 'terrain_mismatch', 'stress_distribution',
-'terrain_drift') when it lowers the drawbar pull error out of sample, worsens no measured
-channel and is probable enough, or 'unexplained'; wheelsoil.model.diagnosis states the rule.
+'terrain_drift') when it lowers out of sample the error of the drawbar pull (or, when Wong's
+drawbar pull has none, of every channel that has one), worsens no measured channel and is
+probable enough, or 'unexplained'; wheelsoil.model.diagnosis states the rule.
 The report defines every metric where it shows it and flags degenerate or physically
 inconsistent fits next to their coefficients.
 """
