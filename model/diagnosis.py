@@ -54,7 +54,9 @@ decides with this rule (constants below; none was tuned on a benchmark):
 4. **Probabilities.**  Posterior probabilities of all hypotheses tried:
    Laplace evidence of each fit (lab priors as Gaussian priors, the
    unit-information prior for other parameters, one common overdispersion
-   c_hat from the best fit; :mod:`wheelsoil.model.crossval`) times equal
+   c_hat from the best fit, and the cells' design effect: cells of one
+   accelerate cycle are correlated, so the data weigh as the effective number
+   of independent cells, :func:`_design_effect`; :mod:`wheelsoil.model.crossval`) times equal
    prior mass per effect, split among its forms.  An effect's probability
    sums its hypotheses; a hypothesis whose effect parameters are null counts
    for the smaller model it then is (slip sinkage + terrain with a null slip

@@ -477,8 +477,9 @@ def _definitions(data, dd) -> dict:
         out["bic"] = ("Bayesian information criterion of the fit on the cell means: chi-square of the data divided "
                       "by the common overdispersion c_hat, plus the chi-square of the lab priors, plus k ln(number "
                       "of cells); lower is better; a difference of 10 or more is 'very strong' evidence (Kass & "
-                      "Raftery 1995). Shown as the difference to Wong; the probabilities (Laplace evidence) are "
-                      "the verdict's measure.")
+                      "Raftery 1995). Shown as the difference to Wong; the probabilities (Laplace evidence, the cells weighed "
+                      "by their design effect: the correlated cells of one cycle count as fewer independent ones) "
+                      "are the verdict's measure.")
     return out
 
 

@@ -206,3 +206,16 @@ def test_a_torque_gain_alone_is_not_named_a_listed_cause():
     _invariants(d)
     assert d.target_channels == ["torque_nm"]
     assert d.effect == "unexplained", d.summary
+
+
+def test_design_effect_counts_correlated_cells_of_one_cycle_as_fewer():
+    """Cells of one accelerate cycle that share a random offset (the soil of that patch) are not
+    independent: the evidence's design effect rises above 1 (Kish), and stays near 1 without."""
+    df = synthetic_data(SAND, W, "wong", duration_s=60.0, load_n=13000.0, seed=5)
+    d0 = diagnose(df, SAND, W, models=["terrain"])
+    shared = df.copy()
+    rng = np.random.default_rng(5)
+    offset = rng.normal(0.0, 150.0, shared["cycle"].max() + 1)
+    shared["drawbar_pull_n"] += offset[shared["cycle"].to_numpy()]
+    d1 = diagnose(shared, SAND, W, models=["terrain"])
+    assert d0.deff < 1.5 and d1.deff > 2.0, (d0.deff, d1.deff)
