@@ -71,10 +71,8 @@ decides with this rule (constants below; none was tuned on a benchmark):
    drawbar pull alone" that stands for causes on no list, or when an
    unsupported hypothesis of another effect has more evidence than the candidate (one whose
    effect parameters are null counts as the smaller model it reduces to).  If the candidate leaves relevant
-   significant structure (step 1 on its own residuals; a candidate that
-   re-fits the terrain, flexible enough to absorb most of a cause it does not
-   model, may leave no significant drawbar-pull structure at all) ->
-   ``unexplained`` with what was tried.  No supported hypothesis -> ``unexplained``.
+   significant structure (step 1 on its own residuals) -> ``unexplained``
+   with what was tried.  No supported hypothesis -> ``unexplained``.
 6. **Confidence** follows the effect's posterior probability (``high`` >=
    ``P_HIGH``, ``medium`` >= ``P_NAME``), capped at ``medium`` when the
    named model is physically inconsistent, when one of the generic
@@ -488,12 +486,9 @@ def _relevant(t: dict) -> bool:
     return t["effect"] >= MIN_EFFECT and t.get("effect_rel", float("inf")) >= MIN_REL
 
 
-def _significant_tests(tests: dict, n_tests: int, strict=()) -> list:
-    """Keys of the significant (Bonferroni) and relevant tests; in the channels ``strict`` any
-    significant structure counts, relevant or not."""
+def _significant_tests(tests: dict, n_tests: int) -> list:
     lvl = ALPHA / max(n_tests, 1)
-    return [k for k, t in tests.items() if np.isfinite(t["p"]) and t["p"] < lvl
-            and (_relevant(t) or t["channel"] in strict)]
+    return [k for k, t in tests.items() if np.isfinite(t["p"]) and t["p"] < lvl and _relevant(t)]
 
 
 def _detectable_only(tests: dict, n_tests: int) -> list:
@@ -892,10 +887,7 @@ def diagnose(
         pe = eprobs.get(fits[best].effect, 0.0)
         tests_b = _structure_cells(data, fits[best].cell_pred)
         structure[best] = tests_b
-        # a candidate that re-fits the five soil values is flexible enough to absorb most of a cause
-        # it does not model: in the drawbar pull it must leave no significant structure at all
-        strict = ("drawbar_pull_n",) if "drawbar_pull_n" in target and fits[best].hypothesis.terrain_block else ()
-        remain = _significant_tests(tests_b, len(tests_b), strict=strict)
+        remain = _significant_tests(tests_b, len(tests_b))
         if other_eff:
             effect = "unexplained"
             reasons.append("causes of different effects explain the data about equally well ("
