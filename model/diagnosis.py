@@ -174,7 +174,8 @@ class Diagnosis:
     binned (Wong's binned sample residuals per channel); sinkage_evidence;
     forms_distinguishable, indistinguishable_forms; confidence_reasons;
     thresholds; notes; failures; gain; fit_terrain; identifiability; tried;
-    c_hat (common overdispersion); paired (name -> channel -> paired test).
+    c_hat (common overdispersion); deff (the cells' design effect in the evidence);
+    paired (name -> channel -> paired test).
     """
 
     effect: str
@@ -1000,7 +1001,7 @@ def _design_effect(data: FitData, f: HypFit) -> float:
     groups = np.unique(fold)
     if data.kind == "table" or groups.size < 3:
         return 1.0
-    msb, msw, n_tot, m_sum = [], [], 0, 0.0
+    msb, msw, m_sum = [], [], 0.0
     for c, y in cells.channels.items():
         e = (y - f.cell_pred[c]) / np.sqrt(cells.var[c])
         ok = np.isfinite(e)
@@ -1016,7 +1017,6 @@ def _design_effect(data: FitData, f: HypFit) -> float:
         msb.append(float(np.sum(cnt[used] * (means[used] - grand) ** 2) / max(k - 1, 1)))
         lab = np.searchsorted(groups, g)
         msw.append(float(np.sum((e - means[lab]) ** 2) / max(e.size - k, 1)))
-        n_tot += e.size
         m_sum += e.size / k
     if not msb:
         return 1.0

@@ -378,7 +378,7 @@ class DriftLinear(Hypothesis):
             q["n"] = base["n"] + xe * base["g_n"]
             q["phi"] = base["phi"] + xe * base["g_phi"]
             # cohesion cannot be negative: a smooth floor at 0 (softplus, C_FLOOR_PA wide; exact
-            # to < 1e-8 Pa above 1 kPa) instead of a kink the Gauss-Newton steps cannot settle on
+            # to < 1e-6 Pa above 1 kPa) instead of a kink the Gauss-Newton steps cannot settle on
             q["c"] = self.C_FLOOR_PA * float(np.logaddexp(0.0, (base["c"] + xe * base["g_c"]) / self.C_FLOOR_PA))
             q["K"] = base["K"] * math.exp(xe * base["g_lnK"])
             terrain = apply_terrain(ctx.terrain, q)
