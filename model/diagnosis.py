@@ -853,9 +853,8 @@ def diagnose(
             why_not[k] = "worsens the " + ", ".join(CHANNEL_TITLES[c] for c in worse) + " out of sample"
         elif not _effective(f):
             why_not[k] = "its effect parameters are not distinguishable from zero (it reduces to a simpler model)"
-        elif _not_better_than_nested(data, fits, f, target):
-            why_not[k] = "does not predict better out of sample than " + _not_better_than_nested(data, fits, f, target) \
-                + ", which it contains"
+        elif nested := _not_better_than_nested(data, fits, f, target):
+            why_not[k] = f"does not predict better out of sample than {nested}, which it contains"
         elif _prior_conflict(f):
             why_not[k] = (f"needs the terrain far beyond the lab values' uncertainty (prior chi-square "
                           f"{f.chi2_prior:.3g} on {len(f.prior)} parameters; changed: "
@@ -955,11 +954,9 @@ def diagnose(
     if model in SLIP_SINKAGE_MODELS or (model and fits[model].effect == "slip_sinkage"):
         tie_forms = [k for k in alternatives if fits[k].effect == "slip_sinkage"]
         forms_dist = not tie_forms
-    if effect not in ("none", "unexplained") and tie_forms and not alternatives == tie_forms:
-        pass
     # confidence
     confidence, creasons = _confidence(effect, model, fits, eprobs, consistency, data, tests_w, sink_ev, reasons,
-                                       supported, probs, paired)
+                                       supported, probs, paired, target)
     chosen = fits.get(model) if model else None
     gain = {
         "R0_n_before": wong.metrics["R0_n"],
@@ -995,7 +992,8 @@ def _design_effect(data: FitData, f: HypFit) -> float:
     cells per fold and ``rho`` the intra-fold correlation of ``f``'s cell residuals (in noise
     units, all channels; one-way random-effects ANOVA estimate, floored at 0).  Cells of one
     accelerate cycle share its soil and speed: a model flexible enough to follow cycle-to-cycle
-    variation gains in-sample evidence it would not gain from independent data.  1 for tables."""
+    variation gains in-sample evidence it would not gain from independent data.  Returns a float
+    >= 1 (1 for tables or fewer than 3 folds); never raises."""
     cells = data.cells
     fold = f.cv["fold"] if f.cv is not None else cells.group
     groups = np.unique(fold)
@@ -1007,15 +1005,12 @@ def _design_effect(data: FitData, f: HypFit) -> float:
         ok = np.isfinite(e)
         if ok.sum() <= groups.size:
             continue
-        g = fold[ok]
         e = e[ok]
-        cnt = np.array([np.sum(g == k) for k in groups], float)
-        means = np.array([e[g == k].mean() if np.any(g == k) else 0.0 for k in groups])
-        used = cnt > 0
-        k = int(used.sum())
-        grand = e.mean()
-        msb.append(float(np.sum(cnt[used] * (means[used] - grand) ** 2) / max(k - 1, 1)))
-        lab = np.searchsorted(groups, g)
+        _, lab = np.unique(fold[ok], return_inverse=True)
+        cnt = np.bincount(lab).astype(float)
+        means = np.bincount(lab, weights=e) / cnt
+        k = cnt.size
+        msb.append(float(np.sum(cnt * (means - e.mean()) ** 2) / max(k - 1, 1)))
         msw.append(float(np.sum((e - means[lab]) ** 2) / max(e.size - k, 1)))
         m_sum += e.size / k
     if not msb:
@@ -1035,7 +1030,7 @@ def _target_channels(tests: dict, sig: list) -> list:
     return ["drawbar_pull_n"] if "drawbar_pull_n" in chans else chans
 
 
-def _not_better_than_nested(data, fits, f: HypFit, target=("drawbar_pull_n",)) -> str:
+def _not_better_than_nested(data, fits, f: HypFit, target) -> str:
     """The title of a nested hypothesis (:data:`NESTED`) that ``f`` does not beat out of sample
     (a ``target`` channel does not improve by the paired test, or a channel worsens), else ''."""
     for n in NESTED.get(f.name, ()):
@@ -1065,7 +1060,8 @@ def _changed_terrain(f: HypFit) -> list:
     return out
 
 
-def _confidence(effect, model, fits, eprobs, consistency, data, tests_w, sink_ev, reasons, supported, probs, paired):
+def _confidence(effect, model, fits, eprobs, consistency, data, tests_w, sink_ev, reasons, supported, probs, paired,
+                target):
     """Confidence word and its reasons (module doc, step 6)."""
     why: list[str] = []
     cap = 0  # 0 high, 1 medium, 2 low
@@ -1111,7 +1107,6 @@ def _confidence(effect, model, fits, eprobs, consistency, data, tests_w, sink_ev
         else:
             cap = max(cap, 1)
             why.append("measured sinkage does not grow significantly with slip")
-    target = _target_channels(tests_w, _significant_tests(tests_w, len(tests_w)))
     if "drawbar_pull_n" not in target:
         cap = max(cap, 1)
         why.append("Wong's drawbar pull has no relevant error: the cause rests on the "
