@@ -153,7 +153,7 @@ EFFECT_TITLES = {
 NULLS = {"vasilev": {"H": 0.0}, "lyasko": {"m1": 0.0, "m2": 0.0}, "ding": {"n1": 0.0},
          "vasilev+terrain": {"H": 0.0}, "ding+terrain": {"n1": 0.0}, "wong_reece": {"a1": 0.0, "a2": 0.0},
          "drift_linear": {"g_lnk": 0.0, "g_n": 0.0, "g_phi": 0.0, "g_c": 0.0, "g_lnK": 0.0}, "dp_resistance": {"R0": 0.0, "R1": 0.0},
-         "radius": {"rho": 0.0}, "width": {"beta": 0.0}, "sensor_gain": {"g_dp": 0.0, "g_t": 0.0}}
+         "radius": {"rho": 0.0}, "tyre": {"rho": 0.0}, "width": {"beta": 0.0}, "sensor_gain": {"g_dp": 0.0, "g_t": 0.0}}
 #: Hypotheses nested in a larger one: the larger one must beat each of them out of sample.
 NESTED = {"vasilev+terrain": ("terrain", "vasilev"), "ding+terrain": ("terrain", "ding"),
           "drift_linear": ("terrain",)}
@@ -575,13 +575,20 @@ def _effective(f: HypFit) -> bool:
     return bool(w2 > stats.chi2.ppf(level, len(names)))
 
 
-def _effect_of(f: HypFit) -> str:
-    """The effect a fit stands for: its own, or, when its effect parameters are null (not
+def _effect_of(f: HypFit, fits: dict, not_beaten: list = ()) -> str:
+    """The effect a fit stands for: its own; when its effect parameters are null (not
     :func:`_effective`), the effect of the smaller model it then is (slip sinkage + terrain and
-    drift with null slopes are a terrain re-fit; a null slip-sinkage form is Wong)."""
-    if f.name == "wong" or _effective(f):
+    drift with null slopes are a terrain re-fit; a null slip-sinkage form is Wong); when it
+    contains exactly one nested model (:data:`NESTED`) that it does not beat out of sample
+    (``not_beaten``), that model's effect (what it adds does not pay off on data it was not
+    fitted to: its in-sample evidence is the nested model's)."""
+    if f.name == "wong":
         return f.effect
-    return "terrain_mismatch" if f.name in NESTED and f.name != "terrain" and _effective_terrain(f) else "none"
+    if not _effective(f):
+        return "terrain_mismatch" if f.name in NESTED and _effective_terrain(f) else "none"
+    if len(not_beaten) == 1 and not_beaten[0] in fits:
+        return _effect_of(fits[not_beaten[0]], fits)
+    return f.effect
 
 
 def _effective_terrain(f: HypFit) -> bool:
@@ -681,7 +688,7 @@ def _flags(f: HypFit, cons: dict) -> list:
 def _separating(effects: set, channels: set, names=()) -> str | None:
     """The measurement that would tell the listed effects (and hypotheses ``names``) apart."""
     e = set(effects) - {"none", "unexplained"}
-    geometry = {"radius", "width"} & set(names)
+    geometry = {"radius", "tyre", "width"} & set(names)
     parts = []
     if geometry and e & {"terrain_mismatch", "terrain_drift", "slip_sinkage"}:
         parts.append("the tyre's loaded radius and contact width (footprint) under this load, or plate-sinkage and "
@@ -822,24 +829,26 @@ def diagnose(
     mx = max(lp.values())
     z = sum(math.exp(v - mx) for v in lp.values())
     probs = {k: math.exp(v - mx) / z for k, v in lp.items()}
-    eff_of = {k: _effect_of(f) for k, f in fits.items()}  # null effect parameters: the smaller model's
-    eprobs: dict[str, float] = {}
-    for k, p in probs.items():
-        eprobs[eff_of[k]] = eprobs.get(eff_of[k], 0.0) + p
     # structure of Wong's residuals
     tests_w = _structure_cells(data, wong.cell_pred)
     n_tests = len(tests_w)
     sig_w = _significant_tests(tests_w, n_tests)
     structured = bool(sig_w)
     structure = {"wong": tests_w}
-    # paired tests, support
+    target = _target_channels(tests_w, sig_w)
+    target_txt = " and ".join(CHANNEL_TITLES[c] for c in target) or "drawbar pull"
+    # paired tests; what each fit stands for (null effect parameters, or an added part that does
+    # not pay off out of sample: the smaller model's effect)
     paired = {k: _paired(data, wong, f) for k, f in fits.items() if k != "wong"}
+    not_beaten = {k: _not_better_than_nested(data, fits, f, target) for k, f in fits.items()}
+    eff_of = {k: _effect_of(f, fits, not_beaten[k]) for k, f in fits.items()}
+    eprobs: dict[str, float] = {}
+    for k, p in probs.items():
+        eprobs[eff_of[k]] = eprobs.get(eff_of[k], 0.0) + p
     consistency = {k: _consistency(f, data, wheel) for k, f in fits.items()}
     flags = [fl for k, f in fits.items() for fl in _flags(f, consistency[k])]
     supported = []
     why_not: dict[str, str] = {}
-    target = _target_channels(tests_w, sig_w)
-    target_txt = " and ".join(CHANNEL_TITLES[c] for c in target) or "drawbar pull"
     for k, f in fits.items():
         if k == "wong":
             continue
@@ -853,8 +862,9 @@ def diagnose(
             why_not[k] = "worsens the " + ", ".join(CHANNEL_TITLES[c] for c in worse) + " out of sample"
         elif not _effective(f):
             why_not[k] = "its effect parameters are not distinguishable from zero (it reduces to a simpler model)"
-        elif nested := _not_better_than_nested(data, fits, f, target):
-            why_not[k] = f"does not predict better out of sample than {nested}, which it contains"
+        elif not_beaten[k]:
+            why_not[k] = ("does not predict better out of sample than "
+                          + " or ".join(TITLES[n] for n in not_beaten[k]) + ", which it contains")
         elif _prior_conflict(f):
             why_not[k] = (f"needs the terrain far beyond the lab values' uncertainty (prior chi-square "
                           f"{f.chi2_prior:.3g} on {len(f.prior)} parameters; changed: "
@@ -1030,17 +1040,18 @@ def _target_channels(tests: dict, sig: list) -> list:
     return ["drawbar_pull_n"] if "drawbar_pull_n" in chans else chans
 
 
-def _not_better_than_nested(data, fits, f: HypFit, target) -> str:
-    """The title of a nested hypothesis (:data:`NESTED`) that ``f`` does not beat out of sample
-    (a ``target`` channel does not improve by the paired test, or a channel worsens), else ''."""
+def _not_better_than_nested(data, fits, f: HypFit, target) -> list:
+    """The nested hypotheses (:data:`NESTED`) that ``f`` does not beat out of sample (a
+    ``target`` channel does not improve by the paired test, or a channel worsens); [] if none."""
+    out = []
     for n in NESTED.get(f.name, ()):
         g = fits.get(n)
         if g is None or not g.success or g.cv is None:
             continue
         pr = _paired(data, g, f)
         if not all(pr[c]["improves"] for c in target) or any(r["worsens"] for r in pr.values()):
-            return TITLES[n]
-    return ""
+            out.append(n)
+    return out
 
 
 def _prior_conflict(f: HypFit) -> bool:

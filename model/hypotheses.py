@@ -425,15 +425,16 @@ class DrawbarResistance(Hypothesis):
 class WheelRadius(Hypothesis):
     """The soil sees a wheel of radius r (1 + rho), while slip was computed with r (Eq. 6).
 
-    Not a cause on our list: it stands for a deflecting tyre (Wong's equivalent rigid wheel
-    is larger than the tyre's radius) or a wrong radius in the configuration.  The forces are
+    Not a cause on our list: it stands for a wrong radius in the configuration or a rolling
+    radius that differs from the nominal one (slip changes with it; a deflecting tyre at the
+    same slip is :class:`TyreRadius`).  The forces are
     Wong's for the radius r_e = r (1 + rho) at the slip the soil sees,
     s_e = 1 - (1 - s) / (1 + rho) (the same V and omega, Eq. 6 with r_e), clipped at 0.
     Effect ``unexplained``: a listed cause it explains as well is not named.
     """
 
     name, effect, title = "radius", "unexplained", "a wheel radius other than the slip radius (no listed cause)"
-    source = "generic alternative: tyre deflection (Wong 2008 ch. 2 equivalent rigid wheel) or a radius error"
+    source = "generic alternative: a radius error (Eq. 6 with the radius the soil sees)"
 
     def own_params(self, ctx):
         return (HParam("rho", 0.0, -0.3, 0.5, "-", "relative change of the radius the soil sees"),)
@@ -445,6 +446,31 @@ class WheelRadius(Hypothesis):
         wheel = Wheel(ctx.wheel.radius * (1.0 + rho), ctx.wheel.width)
         s_e = np.clip(1.0 - (1.0 - np.asarray(slip, float)) / (1.0 + rho), 0.0, 0.999)
         return wong_forces(terrain, wheel, load_n, s_e, sinkage=ctx.sinkage)
+
+
+class TyreRadius(Hypothesis):
+    """A deflecting tyre: the soil sees Wong's equivalent rigid wheel of radius r (1 + rho) at
+    the measured slip (Eq. 6 with the tyre's rolling radius r, unchanged).
+
+    Not a cause on our list: the sibling of :class:`WheelRadius` for a tyre in the elastic
+    mode, whose contact arc is that of a larger rigid wheel while the tread still moves at
+    r omega (Wong, Theory of Ground Vehicles, 4th ed., ch. 2: the flexible tyre in the
+    elastic mode and its equivalent rigid wheel).  A radius error of the configuration changes the slip too
+    (:class:`WheelRadius`); a deflection does not.  Effect ``unexplained``: a listed cause it
+    explains as well is not named.
+    """
+
+    name, effect, title = "tyre", "unexplained", "a deflecting tyre: a larger equivalent rigid wheel (no listed cause)"
+    source = "generic alternative: Wong (2008) ch. 2, the flexible tyre's equivalent rigid wheel"
+
+    def own_params(self, ctx):
+        return (HParam("rho", 0.0, -0.3, 1.0, "-", "relative change of the radius the soil sees at the same slip"),)
+
+    def forces(self, ctx, terrain, load_n, slip, x, p):
+        from .terrain import Wheel
+
+        wheel = Wheel(ctx.wheel.radius * (1.0 + p["rho"]), ctx.wheel.width)
+        return wong_forces(terrain, wheel, load_n, slip, sinkage=ctx.sinkage)
 
 
 class WheelWidth(Hypothesis):
@@ -523,7 +549,7 @@ class VerticalBalance(Hypothesis):
 HYPOTHESES: dict[str, Hypothesis] = {
     h.name: h
     for h in (Wong(), Vasilev(), Lyasko(), Ding(), TerrainMismatch(), VasilevTerrain(), DingTerrain(),
-              WongReece(), DriftLinear(), DrawbarResistance(), WheelRadius(), WheelWidth(), SensorGain(),
+              WongReece(), DriftLinear(), DrawbarResistance(), WheelRadius(), TyreRadius(), WheelWidth(), SensorGain(),
               VerticalBalance())
 }
 
