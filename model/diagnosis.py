@@ -9,7 +9,8 @@ decides with this rule (constants below; none was tuned on a benchmark):
 1. **Structure.**  Wong's residuals on the cells, each divided by the
    channel's model-free cell noise, are tested against slip (quadratic and
    binned-means F-tests), the drawbar pull's also against load, and every
-   channel's against distance/time (linear + quadratic F-test).  In a time
+   channel's against distance/time (quadratic, binned means and a change
+   point: another patch of ground is a step).  In a time
    series the accelerate cycle is the independent unit for whatever is
    constant within it: the mean error is tested over the cycle means, the
    shape against slip and load within the cycles, the dependence on distance
@@ -286,15 +287,17 @@ _clean = json_ready
 # ----------------------------------------------------------------------------- structure tests
 
 
-def _structure_1d(s_u: np.ndarray, e_u: np.ndarray, degree: int = 2) -> dict:
+def _structure_1d(s_u: np.ndarray, e_u: np.ndarray, degree: int = 2, step: bool = False) -> dict:
     """F-tests of unit means ``e_u`` (in noise sigmas) against a coordinate ``s_u``.
 
-    A polynomial of ``degree`` against zero (no systematic error), and a
-    one-way ANOVA of up to 8 quantile bins against zero; ``p`` is their
+    A polynomial of ``degree`` against zero (no systematic error), a one-way
+    ANOVA of up to 8 quantile bins against zero and, with ``step``, a
+    change point (:func:`_step_test`: two levels, split between any two
+    neighbouring units, Bonferroni over the splits); ``p`` is their
     Bonferroni combination.  The residual scatter of the unit means about the
-    smooth is the noise reference (the test does not trust the sigma).
-    Returns dict ``p``, ``p_poly``, ``p_bins``, ``F``, ``units``, ``degree``,
-    ``effect`` (RMS of the fitted smooth), ``shape_p``, ``coef``.
+    fitted shape is the noise reference (the test does not trust the sigma).
+    Returns dict ``p``, ``p_poly``, ``p_bins``, ``p_step``, ``F``, ``units``,
+    ``degree``, ``effect`` (RMS of the fitted shape), ``shape_p``, ``coef``.
     Source: nested-model F-test (Seber & Wild, Nonlinear Regression, §5.3).
     """
     ok = np.isfinite(e_u) & np.isfinite(s_u)
@@ -341,10 +344,49 @@ def _structure_1d(s_u: np.ndarray, e_u: np.ndarray, degree: int = 2) -> dict:
             fitted_b = means[lab]
             if p_bins < p and np.mean(fitted_b**2) > np.mean(fitted**2):
                 fitted = fitted_b
-    p_comb = min(1.0, 2 * min(p, p_bins)) if np.isfinite(p_bins) else p
-    out.update(p=p_comb, p_poly=p, p_bins=p_bins, F=float(F), degree=d,
+    p_step = float("nan")
+    if step:
+        p_step, fitted_s = _step_test(s_u, e_u)
+        if np.isfinite(p_step) and p_step < min(p, p_bins if np.isfinite(p_bins) else 1.0) and \
+                np.mean(fitted_s**2) > np.mean(fitted**2):
+            fitted = fitted_s
+    ps_all = [q for q in (p, p_bins, p_step) if np.isfinite(q)]
+    p_comb = min(1.0, len(ps_all) * min(ps_all)) if ps_all else p
+    out.update(p=p_comb, p_poly=p, p_bins=p_bins, p_step=p_step, F=float(F), degree=d,
                effect=float(np.sqrt(np.mean(fitted**2))), shape_p=ps, coef=[float(c) for c in coef])
     return out
+
+
+def _step_test(s_u: np.ndarray, e_u: np.ndarray) -> tuple[float, np.ndarray]:
+    """Change-point F-test of unit means ``e_u`` (U,) ordered by ``s_u`` (U,): two levels (before
+    and after a split between neighbouring units, at least 2 units a side) against zero, the best
+    split, its p-value Bonferroni-corrected over the U - 3 splits (conservative for a maximum of
+    correlated statistics).  Another patch of ground from some point on is a step, which a
+    low-order polynomial and fixed bins smear into their noise reference.
+    Returns ``(p, fitted (U,))`` (p NaN for fewer than 5 units).
+    Source: change-point detection by maximal F over splits (Hawkins 1977, JASA 72:180;
+    Bonferroni bound as in Worsley 1979, JASA 74:365)."""
+    U = e_u.size
+    if U < 5:
+        return float("nan"), np.zeros_like(e_u)
+    order = np.argsort(s_u, kind="stable")
+    e = e_u[order]
+    rss0 = float(np.sum(e**2))
+    best_f, best_k = -1.0, None
+    for k in range(2, U - 1):
+        a, b = e[:k], e[k:]
+        rss1 = float(np.sum((a - a.mean()) ** 2) + np.sum((b - b.mean()) ** 2))
+        if rss1 <= 0:
+            best_f, best_k = float("inf"), k
+            break
+        f = ((rss0 - rss1) / 2.0) / (rss1 / (U - 2))
+        if f > best_f:
+            best_f, best_k = f, k
+    fitted = np.empty(U)
+    fitted[order[:best_k]] = e[:best_k].mean()
+    fitted[order[best_k:]] = e[best_k:].mean()
+    p = 0.0 if not np.isfinite(best_f) else float(stats.f.sf(best_f, 2, U - 2))
+    return min(1.0, (U - 3) * p), fitted
 
 
 def _unit_means(data: FitData, values: np.ndarray):
@@ -472,7 +514,7 @@ def _structure_cells(data: FitData, pred: dict) -> dict:
             tests[c] = t
             if cells.x is not None:
                 xg = np.bincount(inv, weights=cells.x[ok]) / cnt
-                tests[c + "@x"] = _structure_1d(xg, gm)
+                tests[c + "@x"] = _structure_1d(xg, gm, step=True)
             if c == "drawbar_pull_n" and np.std(cells.load_n) > 0.01 * abs(np.mean(cells.load_n)):
                 tests[c + "@load"] = _structure_1d(cells.load_n[ok], ec, degree=1)
         for k, t in tests.items():

@@ -219,3 +219,20 @@ def test_design_effect_counts_correlated_cells_of_one_cycle_as_fewer():
     shared["drawbar_pull_n"] += offset[shared["cycle"].to_numpy()]
     d1 = diagnose(shared, SAND, W, models=["terrain"])
     assert d0.deff < 1.5 and d1.deff > 2.0, (d0.deff, d1.deff)
+
+
+def test_a_step_along_the_run_is_found_and_noise_alone_is_not():
+    """Another patch of ground from some cycle on is a step in the cycle means: the change-point
+    test finds it where a quadratic and three fixed bins smear it into their noise reference; on
+    independent noise it keeps its level (Bonferroni over the splits is conservative)."""
+    from wheelsoil.model.diagnosis import ALPHA, _structure_1d
+
+    x = np.linspace(-0.5, 0.5, 10)
+    rng = np.random.default_rng(3)
+    e = np.where(np.arange(10) < 6, 2.0, -2.0) + 0.3 * rng.standard_normal(10)
+    with_step = _structure_1d(x, e, step=True)
+    assert with_step["p_step"] < ALPHA / 5 and with_step["p"] < ALPHA / 5
+    assert max(with_step["p_poly"], with_step["p_bins"]) > with_step["p_step"] * 100
+    assert with_step["effect"] > 1.5
+    null = [_structure_1d(x, rng.standard_normal(10), step=True)["p_step"] for _ in range(2000)]
+    assert np.mean(np.array(null) < ALPHA) <= 1.5 * ALPHA
