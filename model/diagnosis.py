@@ -52,6 +52,8 @@ decides with this rule (constants below; none was tuned on a benchmark):
    terrain re-fit, :data:`NESTED`) lowers the drawbar pull error below it out of
    sample by the same paired test and worsens no channel (what the extra part
    adds must pay off on data it was not fitted to, in the target channels).
+   The step drift is tried only when step 1's change-point test finds a step
+   along the run; the change point is then fixed where it was found.
 4. **Probabilities.**  Posterior probabilities of all hypotheses tried:
    Laplace evidence of each fit (lab priors as Gaussian priors, the
    unit-information prior for other parameters, one common overdispersion
@@ -61,7 +63,10 @@ decides with this rule (constants below; none was tuned on a benchmark):
    prior mass per effect, split among its forms.  An effect's probability
    sums its hypotheses; a hypothesis whose effect parameters are null counts
    for the smaller model it then is (slip sinkage + terrain with a null slip
-   sinkage is a terrain re-fit).
+   sinkage is a terrain re-fit), and so does one that does not beat, out of
+   sample, the one smaller model it contains (its added part does not pay
+   off).  The step drift's evidence pays for the choice of its change point
+   among the possible splits (a uniform prior over them).
 5. **Verdict.**  The supported hypothesis with the highest posterior is the
    candidate.  Its effect is named only if the effect's posterior probability
    is at least ``P_NAME``; otherwise the causes that explain the data about
@@ -98,6 +103,7 @@ inconsistent models.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 from pathlib import PurePath
@@ -153,11 +159,12 @@ EFFECT_TITLES = {
 #: Null values of each hypothesis' own effect parameters (the nested model they reduce to).
 NULLS = {"vasilev": {"H": 0.0}, "lyasko": {"m1": 0.0, "m2": 0.0}, "ding": {"n1": 0.0},
          "vasilev+terrain": {"H": 0.0}, "ding+terrain": {"n1": 0.0}, "wong_reece": {"a1": 0.0, "a2": 0.0},
-         "drift_linear": {"g_lnk": 0.0, "g_n": 0.0, "g_phi": 0.0, "g_c": 0.0, "g_lnK": 0.0}, "dp_resistance": {"R0": 0.0, "R1": 0.0},
+         "drift_linear": {"g_lnk": 0.0, "g_n": 0.0, "g_phi": 0.0, "g_c": 0.0, "g_lnK": 0.0},
+         "drift_step": {"g_lnk": 0.0, "g_n": 0.0, "g_phi": 0.0, "g_c": 0.0, "g_lnK": 0.0}, "dp_resistance": {"R0": 0.0, "R1": 0.0},
          "radius": {"rho": 0.0}, "tyre": {"rho": 0.0}, "width": {"beta": 0.0}, "sensor_gain": {"g_dp": 0.0, "g_t": 0.0}}
 #: Hypotheses nested in a larger one: the larger one must beat each of them out of sample.
 NESTED = {"vasilev+terrain": ("terrain", "vasilev"), "ding+terrain": ("terrain", "ding"),
-          "drift_linear": ("terrain",)}
+          "drift_linear": ("terrain",), "drift_step": ("terrain",)}
 #: The legacy default candidate list of the command line (pipeline); it means "all hypotheses".
 _LEGACY_DEFAULT = {"vasilev", "lyasko", "ding", "terrain_mismatch"}
 
@@ -808,13 +815,14 @@ def diagnose(
     prior = lab_prior(terrain, wheel, widen=LIBRARY_PRIOR_WIDEN if fit_terrain else 1.0)
     ctx = Context(terrain, wheel, sinkage, prior, fit_terrain, float(np.median(data.load_n)))
     if fit_terrain:
-        dup = [n for n in names if HYPOTHESES[n].terrain_block and n != "drift_linear"]
+        dup = [n for n in names if HYPOTHESES[n].terrain_block and not n.startswith("drift_")]
         if dup:
             names = [n for n in names if n not in dup]
             notes.append("with --fit-terrain the terrain is fitted in every hypothesis, so "
                          + ", ".join(dup) + " are not separate hypotheses (terrain_mismatch not tried: there are "
                          "no lab values to mismatch).")
     has_x = data.cells.x is not None
+    steps = None  # (change point, number of candidate splits) in Wong's residuals along the run
     tried = []
     fits: dict[str, HypFit] = {}
     bar = None
@@ -833,6 +841,10 @@ def diagnose(
             if bar is not None:
                 bar.update(1)
             continue
+        if name != "wong" and "wong" in fits and ctx.x_step is None and steps is None:
+            steps = _change_point(data, fits["wong"].cell_pred)
+            if steps is not None:
+                ctx = dataclasses.replace(ctx, x_step=steps[0])
         try:
             f = fit_hypothesis(h, ctx, data.cells, max_iter=max_iter)
             f = cross_validate(f, ctx, data.cells, data.group_kind)
@@ -864,6 +876,8 @@ def diagnose(
     c_hat = max(1.0, min(f.chi2_data / f.dof for f in ok_fits.values())) if ok_fits else 1.0
     deff = _design_effect(data, min(ok_fits.values(), key=lambda f: f.chi2_data / f.dof)) if ok_fits else 1.0
     logev = {k: f.evidence(c_hat, deff) for k, f in ok_fits.items()}
+    if "drift_step" in logev and steps is not None:  # the change point chosen among steps[1] splits
+        logev["drift_step"] -= math.log(steps[1])
     eff_count = {}
     for k in logev:
         eff_count[fits[k].effect] = eff_count.get(fits[k].effect, 0) + 1
@@ -1037,6 +1051,53 @@ def diagnose(
     diag._sig_w = sig_w  # noqa: SLF001
     diag.summary = _summary(diag)
     return diag
+
+
+def _change_point(data: FitData, pred: dict):
+    """The change point along the run in the residuals ``pred`` leaves (Wong's): the channel whose
+    cycle means show the most significant step (:func:`_step_test`, significant at ``ALPHA``
+    over the channels), the split refined over the cells between the two cycles around it
+    (least squares of two levels on the cell residuals of every channel, in noise units).
+    Returns ``(x_step, n_splits)`` (normalised drift coordinate, the number of candidate
+    splits), or None (a table, fewer than 5 cycles, or no significant step)."""
+    cells = data.cells
+    if data.kind == "table" or cells.x is None:
+        return None
+    ug, inv = np.unique(cells.group, return_inverse=True)
+    if ug.size < 5:
+        return None
+    cnt = np.bincount(inv).astype(float)
+    xg = np.bincount(inv, weights=cells.x) / cnt
+    best = None
+    E = []
+    for c, y in cells.channels.items():
+        e = (y - pred[c]) / cells.sigma[c]
+        if not np.isfinite(e).all():
+            continue
+        E.append(e)
+        gm = np.bincount(inv, weights=e) / cnt
+        p, fitted = _step_test(xg, gm)
+        if np.isfinite(p) and (best is None or p < best[0]):
+            best = (p, fitted)
+    if best is None or best[0] >= ALPHA / max(len(E), 1):
+        return None
+    fitted = best[1]
+    order = np.argsort(xg)
+    k = int(np.argmax(np.abs(np.diff(fitted[order])) > 0)) + 1  # first unit after the split
+    lo, hi = xg[order[k - 1]], xg[order[k]]
+    E = np.vstack(E)
+    xs = np.unique(cells.x[(cells.x >= lo - 0.5 * (hi - lo)) & (cells.x <= hi + 0.5 * (hi - lo))])
+    cand = 0.5 * (xs[1:] + xs[:-1]) if xs.size > 1 else np.array([0.5 * (lo + hi)])
+    sse = []
+    for x0 in cand:
+        m = cells.x > x0
+        r = 0.0
+        for e in E:
+            for part in (e[m], e[~m]):
+                if part.size:
+                    r += float(np.sum((part - part.mean()) ** 2))
+        sse.append(r)
+    return float(cand[int(np.argmin(sse))]), int(ug.size - 3)
 
 
 def _design_effect(data: FitData, f: HypFit) -> float:

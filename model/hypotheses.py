@@ -53,6 +53,10 @@ The hypotheses (paper numbering for Eqs.; Wong = *Theory of Ground Vehicles*, 4t
   at x are the linear interpolation of the exact forces of the start (x = -0.5)
   and end (x = 0.5) terrain (two kernel calls instead of one per cell; exact at
   the ends, the interpolation error is second order in the drift).
+* ``drift_step``: terrain drift as another patch of ground: the same five
+  values step at the change point that the diagnosis found in Wong's residuals
+  along the run (tried only when it found one); the forces on each side are
+  the exact forces of that side's terrain.
 
 Units: SI throughout (phi in rad, c in Pa, k_eq in N/m^(n+2)).
 """
@@ -115,7 +119,9 @@ class Context:
     """What every prediction needs: the lab (or library) ``terrain``, the ``wheel``,
     the ``sinkage`` mode (``eq10`` | ``balance``), the terrain ``prior``
     (name -> (mean, sd, log)), ``fit_terrain`` (the terrain is fitted in every
-    hypothesis, as a nuisance) and ``w_ref`` a reference load of the data [N]."""
+    hypothesis, as a nuisance), ``w_ref`` a reference load of the data [N] and
+    ``x_step`` the change point along the normalised drift coordinate that the
+    diagnosis found in Wong's residuals (None: none found)."""
 
     terrain: object
     wheel: object
@@ -123,6 +129,7 @@ class Context:
     prior: Mapping | None = None
     fit_terrain: bool = False
     w_ref: float | None = None
+    x_step: float | None = None
 
 
 def lab_prior(terrain, wheel, *, widen: float = 1.0) -> dict:
@@ -383,8 +390,8 @@ class DriftLinear(Hypothesis):
             q["K"] = base["K"] * math.exp(xe * base["g_lnK"])
             terrain = apply_terrain(ctx.terrain, q)
             out.append(wong_forces(terrain, ctx.wheel, load_n, slip, sinkage=ctx.sinkage))
-        x = np.asarray(x, float)
-        wa, wb = 0.5 - x, 0.5 + x  # linear interpolation between the start and end terrain
+        wb = self._weight_end(ctx, np.asarray(x, float))
+        wa = 1.0 - wb
         fa, fb = out
 
         def mix(field):
@@ -393,6 +400,39 @@ class DriftLinear(Hypothesis):
         return WheelForces(sinkage_m=mix("sinkage_m"), theta1_rad=mix("theta1_rad"),
                            load_model_n=mix("load_model_n"), drawbar_pull_n=mix("drawbar_pull_n"),
                            torque_nm=mix("torque_nm"))
+
+
+    def _weight_end(self, ctx, x):
+        """Weight (N,) of the end terrain at x: linear interpolation between start and end."""
+        return 0.5 + x
+
+
+class DriftStep(DriftLinear):
+    """Terrain drift: another patch of ground from the change point ``ctx.x_step`` on.
+
+    ln k_eq, n, phi, c and ln K step by (g_lnk, g_n, g_phi, g_c, g_lnK) at x_step, around a
+    terrain re-fitted against the lab priors (the mean of the two patches).  The change point is
+    the one the diagnosis found in Wong's residuals along the run (a change-point test over the
+    accelerate cycles, refined over the cells); its choice among the possible splits is paid
+    for in the evidence.  Not tried when no change point was found.
+    """
+
+    name, title = "drift_step", "another patch of ground from a point along the run"
+    source = "a change of soil along the track (Wong 2008 ch. 2); change point located by maximal F (Hawkins 1977)"
+    WIDTH = 1e-3  #: width of the logistic step in x (a hard step between neighbouring cells)
+
+    def own_params(self, ctx):
+        return tuple(HParam(p.name, p.default, p.lower, p.upper, p.unit, p.doc.replace("over the run (end - start)",
+                                                                                       "at the change point"))
+                     for p in super().own_params(ctx))
+
+    def available(self, ctx, has_x):
+        if ctx.x_step is None:
+            return "no change point along the run in Wong's residuals"
+        return super().available(ctx, has_x)
+
+    def _weight_end(self, ctx, x):
+        return 0.5 * (1.0 + np.tanh((x - float(ctx.x_step)) / (2.0 * self.WIDTH)))
 
 
 class DrawbarResistance(Hypothesis):
@@ -549,7 +589,7 @@ class VerticalBalance(Hypothesis):
 HYPOTHESES: dict[str, Hypothesis] = {
     h.name: h
     for h in (Wong(), Vasilev(), Lyasko(), Ding(), TerrainMismatch(), VasilevTerrain(), DingTerrain(),
-              WongReece(), DriftLinear(), DrawbarResistance(), WheelRadius(), TyreRadius(), WheelWidth(), SensorGain(),
+              WongReece(), DriftLinear(), DriftStep(), DrawbarResistance(), WheelRadius(), TyreRadius(), WheelWidth(), SensorGain(),
               VerticalBalance())
 }
 

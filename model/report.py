@@ -63,7 +63,7 @@ CONDITION_LIMIT = 100.0  #: condition number of the scaled Jacobian above this i
 _PALETTE = ("#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b", "#e377c2", "#17becf", "#bcbd22")
 COLORS = {"wong": "#444444", "vasilev": "#1f77b4", "lyasko": "#d62728", "ding": "#2ca02c",
           "terrain_mismatch": "#9467bd", "vasilev+terrain": "#17becf", "ding+terrain": "#bcbd22",
-          "wong_reece": "#8c564b", "drift_linear": "#e377c2"}
+          "wong_reece": "#8c564b", "drift_linear": "#e377c2", "drift_step": "#7f7f7f"}
 _CHANNEL_UNIT = {"drawbar_pull_n": "force", "torque_nm": "torque", "sinkage_m": "length_mm"}
 _CHANNEL_SUFFIX = {"drawbar_pull_n": "n", "torque_nm": "nm", "sinkage_m": "m"}
 

@@ -1,6 +1,5 @@
-"""The diagnosis on physical-simulator runs whose cause is a wheel geometry or a terrain
-mismatch that the slip-sinkage + terrain combinations can also fit (in process: simulate,
-write the MCAP, ``run_fit`` as a user would).
+"""The diagnosis on physical-simulator runs whose cause a simpler rule got wrong (in process:
+simulate, write the MCAP, ``run_fit`` as a user would).
 
 - A deflecting tyre (Wong's equivalent rigid wheel, larger than the tyre, at the same slip)
   is on no list: a 5-parameter terrain re-fit mimics it at one load, so without the
@@ -10,6 +9,9 @@ write the MCAP, ``run_fit`` as a user would).
 - A terrain mismatch (cohesion off) is also fitted by Vasil'ev + terrain and Ding + terrain,
   whose slip-sinkage part does not pay off out of sample: their evidence counts for the
   terrain re-fit they contain, so the mismatch is named.
+- Another patch of ground from some point of the run on is a step along the run: the
+  change-point test finds it in Wong's residuals and the step hypothesis (``drift_step``)
+  explains it where a linear drift cannot.
 """
 
 from __future__ import annotations
@@ -47,3 +49,13 @@ def test_a_terrain_mismatch_shared_with_slip_sinkage_combinations_is_named(tmp_p
     d = report["diagnosis"]
     assert d["effect"] == "terrain_mismatch", d["summary"]
     assert d["effect_probabilities"]["terrain_mismatch"] >= 0.9
+
+
+def test_another_patch_of_ground_is_a_terrain_drift_with_a_step(tmp_path):
+    run, report = _fit(tmp_path, "clay", effect="terrain_drift", wheel=(0.55, 0.40), added_load_n=3000.0,
+                       params={"changes": {"n": {"kind": "delta", "value": -0.09}}, "mode": "patch",
+                               "change_at": 0.62}, seed=9038)
+    d = report["diagnosis"]
+    assert d["effect"] == "terrain_drift", d["summary"]
+    assert d["model"] == "drift_step", d["summary"]
+    assert d["probabilities"]["drift_step"] > d["probabilities"].get("drift_linear", 0.0)
