@@ -841,10 +841,6 @@ def diagnose(
             if bar is not None:
                 bar.update(1)
             continue
-        if name != "wong" and "wong" in fits and ctx.x_step is None and steps is None:
-            steps = _change_point(data, fits["wong"].cell_pred)
-            if steps is not None:
-                ctx = dataclasses.replace(ctx, x_step=steps[0])
         try:
             f = fit_hypothesis(h, ctx, data.cells, max_iter=max_iter)
             f = cross_validate(f, ctx, data.cells, data.group_kind)
@@ -855,6 +851,10 @@ def diagnose(
             tried.append(name)
         except (ValueError, FloatingPointError, np.linalg.LinAlgError) as exc:
             failures.append(f"{h.title}: could not be fitted: {exc}")
+        if name == "wong" and name in fits and has_x:  # a step along the run: where the step drift puts it
+            steps = _change_point(data, fits["wong"].cell_pred)
+            if steps is not None:
+                ctx = dataclasses.replace(ctx, x_step=steps[0])
         if bar is not None:
             bar.update(1)
     if bar is not None:

@@ -69,7 +69,9 @@ def fit_model(data, terrain, wheel, model: str = "lyasko", *, slip_min: float = 
     data : pandas DataFrame (:func:`prepare_data`) or :class:`FitData`.
     terrain, wheel : lab terrain (prior centre) and wheel.
     model : a hypothesis name (``wong``, ``vasilev``, ``lyasko``, ``ding``, ``terrain``
-        (``terrain_mismatch``), ``vasilev+terrain``, ``ding+terrain``, ``wong_reece``, ``drift_linear``).
+        (``terrain_mismatch``), ``vasilev+terrain``, ``ding+terrain``, ``wong_reece``, ``drift_linear``
+        and the stand-ins of :data:`~wheelsoil.model.hypotheses.HYPOTHESES`; ``drift_step`` needs the
+        change point the diagnosis finds).
     terrain_params : non-empty -> the terrain (k_eq, n, c, phi, K) is fitted too, against the
         terrain's values as priors widened for a library entry (``--fit-terrain``); every terrain
         parameter is fitted (the prior keeps unidentified ones at their library value).
@@ -77,7 +79,8 @@ def fit_model(data, terrain, wheel, model: str = "lyasko", *, slip_min: float = 
     cv : also cross-validate (sets ``fit.cv``, jackknife standard errors).
 
     Returns :class:`~wheelsoil.model.crossval.HypFit` with ``predictions`` and ``metrics`` on the samples.
-    Raises ValueError for an unknown model or terrain parameter and bad data.
+    Raises ValueError for an unknown model or terrain parameter, a hypothesis not available on
+    these data (``drift_step``; a drift on a table) and bad data.
     """
     from .hypotheses import LIBRARY_PRIOR_WIDEN
 
@@ -90,6 +93,11 @@ def fit_model(data, terrain, wheel, model: str = "lyasko", *, slip_min: float = 
     ctx = Context(terrain, wheel, sinkage, lab_prior(terrain, wheel, widen=LIBRARY_PRIOR_WIDEN if fit_terrain else 1.0),
                   fit_terrain)
     h = get_hypothesis(model)
+    why = h.available(ctx, data.cells.x is not None)
+    if why:
+        raise ValueError(f"{h.title} ({h.name}) cannot be fitted on its own here: {why}"
+                         + (" (the diagnosis locates the change point; use wheelsoil.model.diagnose)"
+                            if h.name == "drift_step" else ""))
     f = fit_hypothesis(h, ctx, data.cells, max_iter=max_iter)
     if cv:
         f = _cv_cells(f, ctx, data.cells, data.group_kind)
