@@ -69,7 +69,12 @@ decides with this rule (constants below; none was tuned on a benchmark):
    among the possible splits (a uniform prior over them).
 5. **Verdict.**  The supported hypothesis with the highest posterior is the
    candidate.  Its effect is named only if the effect's posterior probability
-   is at least ``P_NAME``; otherwise the causes that explain the data about
+   is at least ``P_NAME`` and it beats, out of sample in the target channels
+   (paired test of step 2), every supported hypothesis of another listed
+   cause (two causes that predict new data equally well are not told apart
+   by the in-sample evidence alone: a Wong-Reece stress shift with 2
+   parameters fits a terrain mismatch as well as the 5-parameter terrain
+   re-fit and wins its Occam factor); otherwise the causes that explain the data about
    equally well are listed (``alternatives``) with the measurement that
    would separate them, and the verdict is ``unexplained`` (different effects
    are never merged into one named cause).  The same holds when the best
@@ -162,6 +167,8 @@ NULLS = {"vasilev": {"H": 0.0}, "lyasko": {"m1": 0.0, "m2": 0.0}, "ding": {"n1":
          "drift_linear": {"g_lnk": 0.0, "g_n": 0.0, "g_phi": 0.0, "g_c": 0.0, "g_lnK": 0.0},
          "drift_step": {"g_lnk": 0.0, "g_n": 0.0, "g_phi": 0.0, "g_c": 0.0, "g_lnK": 0.0}, "dp_resistance": {"R0": 0.0, "R1": 0.0},
          "radius": {"rho": 0.0}, "tyre": {"rho": 0.0}, "width": {"beta": 0.0}, "sensor_gain": {"g_dp": 0.0, "g_t": 0.0}}
+#: The listed causes (verdicts that name a cause).
+LISTED = ("slip_sinkage", "terrain_mismatch", "stress_distribution", "terrain_drift")
 #: Hypotheses nested in a larger one: the larger one must beat each of them out of sample.
 NESTED = {"vasilev+terrain": ("terrain", "vasilev"), "ding+terrain": ("terrain", "ding"),
           "drift_linear": ("terrain",), "drift_step": ("terrain",)}
@@ -949,6 +956,11 @@ def diagnose(
         # an unsupported hypothesis of another effect with more evidence than the candidate: ambiguous
         rivals = [k for k in probs if k not in supported and k != "wong" and eff_of[k] != fits[best].effect
                   and probs[k] > pb]
+        # a supported listed cause of another effect that the candidate does not beat out of sample
+        # explains the data as well where it matters, whatever the in-sample evidence says
+        alternatives += [k for k in supported if k != best and k not in alternatives and eff_of[k] in LISTED
+                         and eff_of[k] != fits[best].effect
+                         and not all(r["improves"] for c, r in _paired(data, fits[k], fits[best]).items() if c in target)]
         other_eff = {fits[k].effect for k in alternatives} - {fits[best].effect}
         pe = eprobs.get(fits[best].effect, 0.0)
         tests_b = _structure_cells(data, fits[best].cell_pred)

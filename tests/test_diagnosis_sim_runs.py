@@ -9,6 +9,9 @@ simulate, write the MCAP, ``run_fit`` as a user would).
 - A terrain mismatch (cohesion off) is also fitted by Vasil'ev + terrain and Ding + terrain,
   whose slip-sinkage part does not pay off out of sample: their evidence counts for the
   terrain re-fit they contain, so the mismatch is named.
+- A cohesion mismatch that a Wong-Reece stress shift fits as well out of sample (with
+  fewer parameters, so more in-sample evidence) must not be named a stress distribution:
+  a listed cause is named only over the other supported listed causes it beats out of sample.
 - Another patch of ground from some point of the run on is a step along the run: the
   change-point test finds it in Wong's residuals and the step hypothesis (``drift_step``)
   explains it where a linear drift cannot.
@@ -59,3 +62,11 @@ def test_another_patch_of_ground_is_a_terrain_drift_with_a_step(tmp_path):
     assert d["effect"] == "terrain_drift", d["summary"]
     assert d["model"] == "drift_step", d["summary"]
     assert d["probabilities"]["drift_step"] > d["probabilities"].get("drift_linear", 0.0)
+
+
+def test_a_terrain_mismatch_a_stress_shift_fits_as_well_is_not_named_a_stress_distribution(tmp_path):
+    run, report = _fit(tmp_path, "clay", effect="terrain_mismatch", wheel=(0.55, 0.40), added_load_n=3000.0,
+                       params={"changes": {"c": {"kind": "factor", "value": 0.72}}}, seed=436)
+    d = report["diagnosis"]
+    v = judge(run.info, report)
+    assert not v["wrong_cause"], d["summary"]
