@@ -1,5 +1,7 @@
 """The hypothesis registry: every cause one small class, null parameters reduce to its nested model."""
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -21,13 +23,17 @@ def _defaults(h):
 def test_every_hypothesis_has_an_effect_bounded_parameters_and_reduces_to_wong(name):
     h = HYPOTHESES[name]
     assert h.effect in EFFECTS and h.title and h.source
-    for q in h.parameters(CTX):
+    ctx = CTX
+    if name == "drift_step":  # needs the change point the diagnosis finds
+        assert h.available(CTX, True)
+        ctx = dataclasses.replace(CTX, x_step=0.1)
+    for q in h.parameters(ctx):
         assert q.lower <= q.default <= q.upper, q
         if q.prior:
             assert q.prior[1] > 0
-    if h.available(CTX, True):
-        pytest.skip(h.available(CTX, True))
-    f = h.predict(CTX, W, S, X, _defaults(h))
+    if h.available(ctx, True):
+        pytest.skip(h.available(ctx, True))
+    f = h.predict(ctx, W, S, X, _defaults(h))
     if name == "balance":  # a model-form alternative: the vertical balance holds instead
         np.testing.assert_allclose(f.load_model_n, W, rtol=1e-9)
         return
