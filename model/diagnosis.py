@@ -360,7 +360,7 @@ def _structure_1d(s_u: np.ndarray, e_u: np.ndarray, degree: int = 2, step: bool 
                 fitted = fitted_b
     p_step = float("nan")
     if step:
-        p_step, fitted_s = _step_test(s_u, e_u)
+        p_step, fitted_s, _ = _step_test(s_u, e_u)
         if np.isfinite(p_step) and p_step < min(p, p_bins if np.isfinite(p_bins) else 1.0) and \
                 np.mean(fitted_s**2) > np.mean(fitted**2):
             fitted = fitted_s
@@ -371,18 +371,19 @@ def _structure_1d(s_u: np.ndarray, e_u: np.ndarray, degree: int = 2, step: bool 
     return out
 
 
-def _step_test(s_u: np.ndarray, e_u: np.ndarray) -> tuple[float, np.ndarray]:
+def _step_test(s_u: np.ndarray, e_u: np.ndarray) -> tuple[float, np.ndarray, tuple]:
     """Change-point F-test of unit means ``e_u`` (U,) ordered by ``s_u`` (U,): two levels (before
     and after a split between neighbouring units, at least 2 units a side) against zero, the best
     split, its p-value Bonferroni-corrected over the U - 3 splits (conservative for a maximum of
     correlated statistics).  Another patch of ground from some point on is a step, which a
     low-order polynomial and fixed bins smear into their noise reference.
-    Returns ``(p, fitted (U,))`` (p NaN for fewer than 5 units).
+    Returns ``(p, fitted (U,), (s_before, s_after))``: the two coordinates the best split
+    lies between (p NaN, bounds NaN for fewer than 5 units).
     Source: change-point detection by maximal F over splits (Hawkins 1977, JASA 72:180;
     Bonferroni bound as in Worsley 1979, JASA 74:365)."""
     U = e_u.size
     if U < 5:
-        return float("nan"), np.zeros_like(e_u)
+        return float("nan"), np.zeros_like(e_u), (float("nan"), float("nan"))
     order = np.argsort(s_u, kind="stable")
     e = e_u[order]
     rss0 = float(np.sum(e**2))
@@ -400,7 +401,8 @@ def _step_test(s_u: np.ndarray, e_u: np.ndarray) -> tuple[float, np.ndarray]:
     fitted[order[:best_k]] = e[:best_k].mean()
     fitted[order[best_k:]] = e[best_k:].mean()
     p = 0.0 if not np.isfinite(best_f) else float(stats.f.sf(best_f, 2, U - 2))
-    return min(1.0, (U - 3) * p), fitted
+    s = s_u[order]
+    return min(1.0, (U - 3) * p), fitted, (float(s[best_k - 1]), float(s[best_k]))
 
 
 def _unit_means(data: FitData, values: np.ndarray):
@@ -1088,15 +1090,12 @@ def _change_point(data: FitData, pred: dict):
             continue
         E.append(e)
         gm = np.bincount(inv, weights=e) / cnt
-        p, fitted = _step_test(xg, gm)
+        p, _, bounds = _step_test(xg, gm)
         if np.isfinite(p) and (best is None or p < best[0]):
-            best = (p, fitted)
+            best = (p, bounds)
     if best is None or best[0] >= ALPHA / max(len(E), 1):
         return None
-    fitted = best[1]
-    order = np.argsort(xg)
-    k = int(np.argmax(np.abs(np.diff(fitted[order])) > 0)) + 1  # first unit after the split
-    lo, hi = xg[order[k - 1]], xg[order[k]]
+    lo, hi = best[1]
     E = np.vstack(E)
     xs = np.unique(cells.x[(cells.x >= lo - 0.5 * (hi - lo)) & (cells.x <= hi + 0.5 * (hi - lo))])
     cand = 0.5 * (xs[1:] + xs[:-1]) if xs.size > 1 else np.array([0.5 * (lo + hi)])

@@ -63,6 +63,8 @@ Units: SI throughout (phi in rad, c in Pa, k_eq in N/m^(n+2)).
 
 from __future__ import annotations
 
+import dataclasses
+
 import inspect
 import math
 from dataclasses import dataclass
@@ -401,7 +403,6 @@ class DriftLinear(Hypothesis):
                            load_model_n=mix("load_model_n"), drawbar_pull_n=mix("drawbar_pull_n"),
                            torque_nm=mix("torque_nm"))
 
-
     def _weight_end(self, ctx, x):
         """Weight (N,) of the end terrain at x: linear interpolation between start and end."""
         return 0.5 + x
@@ -422,8 +423,7 @@ class DriftStep(DriftLinear):
     WIDTH = 1e-3  #: width of the logistic step in x (a hard step between neighbouring cells)
 
     def own_params(self, ctx):
-        return tuple(HParam(p.name, p.default, p.lower, p.upper, p.unit, p.doc.replace("over the run (end - start)",
-                                                                                       "at the change point"))
+        return tuple(dataclasses.replace(p, doc=p.doc.replace("over the run (end - start)", "at the change point"))
                      for p in super().own_params(ctx))
 
     def available(self, ctx, has_x):
@@ -589,8 +589,8 @@ class VerticalBalance(Hypothesis):
 HYPOTHESES: dict[str, Hypothesis] = {
     h.name: h
     for h in (Wong(), Vasilev(), Lyasko(), Ding(), TerrainMismatch(), VasilevTerrain(), DingTerrain(),
-              WongReece(), DriftLinear(), DriftStep(), DrawbarResistance(), WheelRadius(), TyreRadius(), WheelWidth(), SensorGain(),
-              VerticalBalance())
+              WongReece(), DriftLinear(), DriftStep(), DrawbarResistance(), WheelRadius(), TyreRadius(), WheelWidth(),
+              SensorGain(), VerticalBalance())
 }
 
 
