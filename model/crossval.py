@@ -34,6 +34,7 @@ them (Kass & Wasserman 1995; Kass & Raftery 1995).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 
@@ -363,7 +364,7 @@ def _lab_terrain_variance(prob: _Problem, u, Jd, ctx: Context) -> np.ndarray:
         from .hypotheses import apply_terrain
 
         try:
-            ctx2 = Context(apply_terrain(t0, vals), ctx.wheel, ctx.sinkage, ctx.prior, False)
+            ctx2 = dataclasses.replace(ctx, terrain=apply_terrain(t0, vals), fit_terrain=False)
             f = prob.hyp.predict(ctx2, prob.cells.load_n, prob.cells.slip, prob.cells.x, prob.values(u))
             col = (prob.stack(f) - base) / prob.sd / h
         except ValueError:

@@ -146,6 +146,9 @@ class FitData:
     notes : list of plain-English notes on excluded rows and choices.
     n_input : rows before filtering; slip_min : threshold used.
     distance_m : (N,) travelled distance (contract C) or None.
+    load_static_n : the run's static wheel load [N]: the mean load over every valid row of the
+        time series, all slips (over whole accelerate-brake cycles the load transferred by
+        accelerating averages out); None for a table, or when the runs' means differ by > 2 %.
     cells : the :class:`Cells` the models are fitted to.
     """
 
@@ -164,6 +167,7 @@ class FitData:
     group_kind: str = "blocks"
     distance_m: np.ndarray | None = None
     cells: "Cells | None" = field(default=None, repr=False)
+    load_static_n: float | None = None
 
     @property
     def n(self) -> int:
@@ -254,6 +258,7 @@ def prepare_data(df, *, slip_min: float = 0.1, source: str = "data", n_blocks: i
         if (~valid).any():
             notes.append(f"{int((~valid).sum())} of {n_input} samples marked invalid by processing were excluded.")
         keep &= valid
+    valid_load = keep & np.isfinite(w) & (w > 0)  # rows the static load is taken over (all slips)
     bad = ~(np.isfinite(s) & np.isfinite(w) & np.isfinite(dp))
     if (bad & keep).any():
         rows = np.flatnonzero(bad & keep)
@@ -314,11 +319,9 @@ def prepare_data(df, *, slip_min: float = 0.1, source: str = "data", n_blocks: i
             elif n_ok:
                 notes.append(f"{col}: only {n_ok} of {n} used rows have a value; channel not used.")
     slip = s[keep]
-    run = (
-        pd.to_numeric(df["run"], errors="coerce").fillna(0).to_numpy(int)[keep]
-        if "run" in df.columns
-        else np.zeros(n, int)
-    )
+    run_all = pd.to_numeric(df["run"], errors="coerce").fillna(0).to_numpy(int) if "run" in df.columns \
+        else np.zeros(n_input, int)
+    run = run_all[keep]
     t_s = pd.to_numeric(df["t_s"], errors="coerce").to_numpy(float)[keep] if "t_s" in df.columns else None
     dist = pd.to_numeric(df["distance_m"], errors="coerce").to_numpy(float)[keep] if "distance_m" in df.columns else None
     if dist is not None and not np.all(np.isfinite(dist)):
@@ -351,8 +354,22 @@ def prepare_data(df, *, slip_min: float = 0.1, source: str = "data", n_blocks: i
         slip_min=float(slip_min),
         group_kind=group_kind,
         distance_m=dist,
+        load_static_n=_static_load(w, valid_load, run_all) if kind == "timeseries" else None,
     )
     return dataclasses_replace(data, cells=make_cells(data))
+
+
+def _static_load(w: np.ndarray, ok: np.ndarray, run: np.ndarray) -> float | None:
+    """The static wheel load [N] of a time series: the mean of the loads ``w`` (all rows) over
+    the rows ``ok`` (valid, finite positive load), whatever their slip (over accelerate-brake
+    cycles the load transferred by accelerating averages out).  None when no row qualifies or the
+    runs' (``run``) means differ by more than 2 % (no single static load)."""
+    if not ok.any():
+        return None
+    means = [float(np.mean(w[ok & (run == r)])) for r in np.unique(run[ok])]
+    if max(means) > 1.02 * min(means):
+        return None
+    return float(np.mean(w[ok]))
 
 
 def _cv_groups(df, keep, run, kind, n_blocks):

@@ -91,7 +91,7 @@ def fit_model(data, terrain, wheel, model: str = "lyasko", *, slip_min: float = 
         data = prepare_data(data, slip_min=slip_min)
     fit_terrain = bool(terrain_params)
     ctx = Context(terrain, wheel, sinkage, lab_prior(terrain, wheel, widen=LIBRARY_PRIOR_WIDEN if fit_terrain else 1.0),
-                  fit_terrain)
+                  fit_terrain, w_static=data.load_static_n)
     h = get_hypothesis(model)
     why = h.available(ctx, data.cells.x is not None)
     if why:
@@ -110,5 +110,5 @@ def fit_model(data, terrain, wheel, model: str = "lyasko", *, slip_min: float = 
 
 def cross_validate(data: FitData, fit: HypFit, terrain, wheel, *, sinkage: str = "eq10", **_ignored) -> HypFit:
     """Cross-validate a fitted model on ``data``'s cells (see :func:`wheelsoil.model.crossval.cross_validate`)."""
-    ctx = Context(terrain, wheel, sinkage, lab_prior(terrain, wheel), False)
+    ctx = Context(terrain, wheel, sinkage, lab_prior(terrain, wheel), False, w_static=data.load_static_n)
     return _cv_cells(fit, ctx, data.cells, data.group_kind)

@@ -121,9 +121,10 @@ class Context:
     """What every prediction needs: the lab (or library) ``terrain``, the ``wheel``,
     the ``sinkage`` mode (``eq10`` | ``balance``), the terrain ``prior``
     (name -> (mean, sd, log)), ``fit_terrain`` (the terrain is fitted in every
-    hypothesis, as a nuisance), ``w_ref`` a reference load of the data [N] and
+    hypothesis, as a nuisance), ``w_ref`` a reference load of the data [N],
     ``x_step`` the change point along the normalised drift coordinate that the
-    diagnosis found in Wong's residuals (None: none found)."""
+    diagnosis found in Wong's residuals (None: none found) and ``w_static`` the run's
+    static wheel load [N] (None: unknown, e.g. a table)."""
 
     terrain: object
     wheel: object
@@ -132,6 +133,7 @@ class Context:
     fit_terrain: bool = False
     w_ref: float | None = None
     x_step: float | None = None
+    w_static: float | None = None
 
 
 def lab_prior(terrain, wheel, *, widen: float = 1.0) -> dict:
@@ -462,6 +464,33 @@ class DrawbarResistance(Hypothesis):
                            drawbar_pull_n=f.drawbar_pull_n - r, torque_nm=f.torque_nm)
 
 
+class ZeroDrift(Hypothesis):
+    """The transducer's torque zero drifts along the run: T + o_t + d_t x.
+
+    Not a cause on our list: a strain-gauge bridge's zero moves with its temperature (a hub
+    warms up over a run).  The transducer measures Fx_w, Fz_w in its rotating frame and
+    processing turns them into the hub frame with the wheel angle (hardware.md), so their zero
+    offsets become once-per-revolution oscillations that the cells average out; My lies on
+    the axle and keeps its offset.  x is the normalised drift coordinate (-0.5 at the start,
+    +0.5 at the end), as in :class:`DriftLinear`.  A soil changing along the run shifts the
+    torque too, so a terrain drift this explains as well is not named.  Effect
+    ``unexplained``; needs a time series.
+    """
+
+    name, effect, title = "zero_drift", "unexplained", "the torque transducer's zero drifting along the run (no listed cause)"
+    source = "generic alternative: thermal zero drift of the force transducer's My bridge"
+    needs_x = True
+
+    def own_params(self, ctx):
+        return (HParam("o_t", 0.0, -1e6, 1e6, "N m", "torque offset mid-run"),
+                HParam("d_t", 0.0, -1e6, 1e6, "N m", "change of the torque offset over the run (end - start)"))
+
+    def forces(self, ctx, terrain, load_n, slip, x, p):
+        f = wong_forces(terrain, ctx.wheel, load_n, slip, sinkage=ctx.sinkage)
+        x = np.zeros(np.size(load_n)) if x is None else np.asarray(x, float)
+        return dataclasses.replace(f, torque_nm=f.torque_nm + p["o_t"] + p["d_t"] * x)
+
+
 class WheelRadius(Hypothesis):
     """The soil sees a wheel of radius r (1 + rho), while slip was computed with r (Eq. 6).
 
@@ -565,6 +594,52 @@ class SensorGain(Hypothesis):
                            drawbar_pull_n=f.drawbar_pull_n * (1.0 + p["g_dp"]), torque_nm=f.torque_nm * (1.0 + p["g_t"]))
 
 
+class LoadStiffness(Hypothesis):
+    """A pressure-sinkage modulus that depends on the load: k_eq(W) = k_eq (W / W_static)^beta.
+
+    Not a cause on our list: it stands for a soil response that changes with the wheel load
+    (Bekker's k_c, k_phi measured with plates smaller than the contact patch; the patch grows
+    with the load: Wong 2008 ch. 2, plate size; Reece 1965).  W_static is the run's static
+    wheel load (the mean load over the whole recording, :attr:`FitData.load_static_n`): the lab
+    value holds at the static load, and the load transferred while accelerating moves k_eq.
+    With a load that varies only a few per cent, this mimics a constant k_eq mismatch at the
+    driving load, which is why it is tried: a terrain mismatch it explains as well is not named.
+
+    The forces are Wong's (Eqs. 1-10) with k_eq taken at each cell's load, interpolated
+    quadratically in ln W between the kernel's forces at the smallest, middle and largest
+    load of the call (the moduli there differ by (W_max / W_min)^beta; interpolation error
+    of order (beta ln(W_max / W_min))^3 of the force's change).  Effect ``unexplained``.
+    Not tried without a static load (tables).
+    """
+
+    name, effect, title = "load_k", "unexplained", "a pressure-sinkage modulus that depends on the load (no listed cause)"
+    source = "generic alternative: load (contact-size) dependent k_eq (Wong 2008 ch. 2; Reece 1965)"
+
+    def own_params(self, ctx):
+        return (HParam("beta", 0.0, -20.0, 20.0, "-", "exponent of k_eq in W / W_static"),)
+
+    def available(self, ctx, has_x):
+        if ctx.w_static is None or not ctx.w_static > 0:
+            return "needs the run's static wheel load (a time series over whole accelerate-brake cycles)"
+        return None
+
+    def forces(self, ctx, terrain, load_n, slip, x, p):
+        u = np.log(load_n / float(ctx.w_static))
+        nodes = np.array([u.min(), 0.5 * (u.min() + u.max()), u.max()])
+        k0 = terrain.k_eq(ctx.wheel.width)
+        out = []
+        for un in nodes:
+            t = apply_terrain(terrain, {"k_eq": k0 * math.exp(p["beta"] * un)})
+            out.append(wong_forces(t, ctx.wheel, load_n, slip, sinkage=ctx.sinkage))
+        h = 0.5 * (nodes[2] - nodes[0])
+        if h <= 0:
+            return out[0]
+        q = (u - nodes[1]) / h  # Lagrange weights on -1, 0, 1
+        wts = (0.5 * q * (q - 1.0), 1.0 - q * q, 0.5 * q * (q + 1.0))
+        fields = ("sinkage_m", "theta1_rad", "load_model_n", "drawbar_pull_n", "torque_nm")
+        return WheelForces(**{fl: sum(w * getattr(f, fl) for w, f in zip(wts, out)) for fl in fields})
+
+
 class VerticalBalance(Hypothesis):
     """Wong's model with the static sinkage from the vertical balance Eq. (7) = W instead of
     Eq. (10)'s small-angle formula (kernel ``sinkage="balance"``); no parameters.
@@ -589,8 +664,8 @@ class VerticalBalance(Hypothesis):
 HYPOTHESES: dict[str, Hypothesis] = {
     h.name: h
     for h in (Wong(), Vasilev(), Lyasko(), Ding(), TerrainMismatch(), VasilevTerrain(), DingTerrain(),
-              WongReece(), DriftLinear(), DriftStep(), DrawbarResistance(), WheelRadius(), TyreRadius(), WheelWidth(),
-              SensorGain(), VerticalBalance())
+              WongReece(), DriftLinear(), DriftStep(), DrawbarResistance(), ZeroDrift(), WheelRadius(), TyreRadius(), WheelWidth(),
+              SensorGain(), LoadStiffness(), VerticalBalance())
 }
 
 

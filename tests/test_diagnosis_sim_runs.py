@@ -15,6 +15,13 @@ simulate, write the MCAP, ``run_fit`` as a user would).
 - Another patch of ground from some point of the run on is a step along the run: the
   change-point test finds it in Wong's residuals and the step hypothesis (``drift_step``)
   explains it where a linear drift cannot.
+- A soil whose stiffness follows the load (k_eq (W / W_static)^beta) is on no list: at the
+  driving load, a few per cent above the static one, it is a constant k_eq mismatch to a
+  terrain re-fit, which was named.  The load-dependence stand-in (``load_k``, referenced to
+  the run's static load) explains it as well, so no listed cause is named.
+- A transducer whose My zero drifts over the run is on no list: a terrain drift shifts the
+  torque along the run too and was named.  The zero-drift stand-in (``zero_drift``) explains
+  it as well, so no listed cause is named.
 """
 
 from __future__ import annotations
@@ -70,3 +77,22 @@ def test_a_terrain_mismatch_a_stress_shift_fits_as_well_is_not_named_a_stress_di
     d = report["diagnosis"]
     v = judge(run.info, report)
     assert not v["wrong_cause"], d["summary"]
+
+
+def test_a_load_dependent_soil_is_not_named_a_terrain_mismatch(tmp_path):
+    run, report = _fit(tmp_path, "sand", effect="load_dependent", wheel=(0.55, 0.40), added_load_n=3000.0,
+                       params={"beta": 2.7}, seed=9285)
+    d = report["diagnosis"]
+    v = judge(run.info, report)
+    assert not v["wrong_cause"], d["summary"]
+    p = d["probabilities"]
+    assert p.get("load_k", 0.0) >= p.get("terrain", 0.0), p
+
+
+def test_a_drifting_torque_zero_is_not_named_a_terrain_drift(tmp_path):
+    run, report = _fit(tmp_path, "clay", effect="zero_drift", wheel=(0.47, 0.32), added_load_n=0.0,
+                       params={"drift_nm": 200.0}, seed=9048)
+    d = report["diagnosis"]
+    v = judge(run.info, report)
+    assert not v["wrong_cause"], d["summary"]
+    assert d["effect"] == "unexplained", d["summary"]

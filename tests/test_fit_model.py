@@ -144,3 +144,18 @@ def test_nan_rows_are_dropped_with_a_note():
 def test_non_convergence_is_reported_not_hidden():
     f = fit_model(_table(8), SAND, DEFAULT_WHEEL, "lyasko", max_iter=1, cv=False)
     assert not f.success and "maximum" in f.message
+
+
+def test_the_static_load_is_the_mean_load_of_the_whole_time_series():
+    """W_static (the load_k stand-in's reference): the mean over every valid row, all slips;
+    None for a table or for runs at different static loads."""
+    df = synthetic_data(SAND, DEFAULT_WHEEL, "wong", {}, kind="timeseries", load_n=12000.0, seed=1)
+    w = df["load_n"].to_numpy()
+    assert prepare_data(df).load_static_n == pytest.approx(np.mean(w))
+    bad = df.copy()
+    bad.loc[:99, "valid"] = False
+    bad.loc[:99, "load_n"] = 1e6  # rows marked invalid do not count
+    assert prepare_data(bad).load_static_n == pytest.approx(np.mean(w[100:]))
+    assert prepare_data(_table(1)).load_static_n is None
+    two = pd.concat([df.assign(run=0), df.assign(run=1, load_n=df["load_n"] * 1.1)], ignore_index=True)
+    assert prepare_data(two).load_static_n is None

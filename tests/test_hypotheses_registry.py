@@ -27,6 +27,9 @@ def test_every_hypothesis_has_an_effect_bounded_parameters_and_reduces_to_wong(n
     if name == "drift_step":  # needs the change point the diagnosis finds
         assert h.available(CTX, True)
         ctx = dataclasses.replace(CTX, x_step=0.1)
+    if name == "load_k":  # needs the run's static load
+        assert h.available(CTX, True)
+        ctx = dataclasses.replace(CTX, w_static=12000.0)
     for q in h.parameters(ctx):
         assert q.lower <= q.default <= q.upper, q
         if q.prior:
@@ -54,6 +57,33 @@ def test_drift_changes_the_forces_along_the_run_only_with_a_slope():
     p["g_phi"] = np.radians(6.0)
     f = h.predict(CTX, W, np.full(5, 0.5), X, p)
     assert np.all(np.diff(f.drawbar_pull_n) > 0)  # friction grows along the run: more pull
+    assert h.available(CTX, False) and not h.available(CTX, True)
+
+
+def test_the_load_dependent_modulus_matches_the_kernel_at_each_load():
+    """load_k interpolates the kernel's forces in ln W; against Wong's forces with k_eq taken at each
+    sample's own load (W over +-6 % of the static load, beta = 3: k_eq over +-18 %)."""
+    h = HYPOTHESES["load_k"]
+    ctx = dataclasses.replace(CTX, w_static=12000.0)
+    w = np.linspace(11300.0, 12700.0, 7)
+    s = np.linspace(0.15, 0.85, 7)
+    f = h.predict(ctx, w, s, None, {"beta": 3.0})
+    k0 = SAND.k_eq(DEFAULT_WHEEL.width)
+    ref = [wong_forces(SAND.replace(kc=0.0, kphi=k0 * (w[i] / 12000.0) ** 3.0), DEFAULT_WHEEL, w[i], s[i])
+           for i in range(w.size)]
+    for field in ("drawbar_pull_n", "torque_nm", "sinkage_m"):
+        exact = np.array([getattr(r, field)[0] for r in ref])
+        change = np.max(np.abs(exact - getattr(wong_forces(SAND, DEFAULT_WHEEL, w, s), field)))
+        assert change > 0
+        np.testing.assert_allclose(getattr(f, field), exact, atol=0.01 * change)
+
+
+def test_the_torque_zero_drift_moves_the_torque_only():
+    h = HYPOTHESES["zero_drift"]
+    f = h.predict(CTX, W, S, X, {"o_t": 5.0, "d_t": 40.0})
+    ref = wong_forces(SAND, DEFAULT_WHEEL, W, S)
+    np.testing.assert_allclose(f.torque_nm - ref.torque_nm, 5.0 + 40.0 * X, atol=1e-9)
+    np.testing.assert_allclose(f.drawbar_pull_n, ref.drawbar_pull_n, rtol=1e-12)
     assert h.available(CTX, False) and not h.available(CTX, True)
 
 

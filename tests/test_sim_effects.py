@@ -113,7 +113,8 @@ def base_run():
 
 
 @pytest.mark.parametrize("effect,params", [("fx_gain", {"gain": 1.1}), ("my_gain", {"gain": 0.9}),
-                                           ("load_gain", {"gain": 1.05}), ("angle_offset", {"offset_deg": 1.0})])
+                                           ("load_gain", {"gain": 1.05}), ("angle_offset", {"offset_deg": 1.0}),
+                                           ("zero_drift", {"drift_nm": 80.0})])
 def test_sensor_effects_change_only_what_the_transducer_reports(base_run, effect, params):
     from wheelsoil.processing.decode import decode_batches
     from wheelsoil.daq import load_vehicle_config
@@ -129,6 +130,10 @@ def test_sensor_effects_change_only_what_the_transducer_reports(base_run, effect
         np.testing.assert_allclose(a.my_nm, 0.9 * b.my_nm)
     elif effect == "load_gain":
         np.testing.assert_allclose(a.load_measured_n, 1.05 * b.load_n)
+    elif effect == "zero_drift":  # My - its true value runs linearly from -40 to +40 N m
+        d = a.my_nm.to_numpy() - b.my_nm.to_numpy()
+        assert d[0] == pytest.approx(-40.0) and d[-1] == pytest.approx(40.0)
+        assert np.all(np.diff(d) >= -1e-9)
     else:  # the encoder's zero error leaks W into the hub Fx: Fx_meas - Fx = W sin(d) (cos d ~ 1)
         cfg = load_vehicle_config()
         dec = decode_batches(list(r.frame_batches().values()), cfg.buses,

@@ -507,7 +507,8 @@ def run_fit(
         for recordings, the model's ``DEFAULT_WHEEL`` for tables.  The radius is
         also the slip radius of Eq. (6) for recordings.
     slip_min : samples with s <= slip_min are not used (paper: 0.2 clay, 0.1 sand).
-    models : candidates (default ``vasilev, lyasko, ding, terrain_mismatch``; Wong always).
+    models : hypotheses to try (default: every hypothesis of the registry; the legacy list
+        ``vasilev, lyasko, ding, terrain_mismatch`` means the same; Wong always).
     fit_terrain : fit the terrain parameters too (k_eq = kc/b + kphi, n, c, phi, K,
         those the data identify).
     sinkage : ``eq10`` or ``balance``.
@@ -708,8 +709,13 @@ def register(subparsers) -> None:
                    help="wheel width [m] (default: vehicle config 0.32 for recordings, 0.32 for tables)")
     p.add_argument("--slip-min", type=float, default=0.1, metavar="S",
                    help="use samples with slip > S (default 0.1; the paper used 0.2 on clay, 0.1 on sand)")
+    from wheelsoil.model.hypotheses import HYPOTHESES
+
     p.add_argument("--models", default=None,
-                   help="comma list of candidates (default vasilev,lyasko,ding,terrain_mismatch; Wong always)")
+                   help="comma list of the hypotheses to try (default: every one in the registry: "
+                   + ", ".join(n for n in HYPOTHESES if n != "wong") + "; Wong always). Those whose effect is "
+                   "'unexplained' stand for causes on no list: leaving them out lets a listed cause be named "
+                   "where an off-list one explains the data as well")
     p.add_argument("--fit-terrain", action="store_true",
                    help="also fit terrain parameters (k_eq = kc/b + kphi, n, c, phi, K; those the data "
                    "identify) for soils without lab values")

@@ -16,7 +16,7 @@ Hidden effects (:data:`EFFECTS`, :mod:`wheelsoil.sim.effects`): in family
 (``none``, ``vasilev``, ``lyasko``, ``ding``, ``terrain_mismatch``,
 ``stress_distribution``, ``terrain_drift``) and out of family (``fx_gain``,
 ``my_gain``, ``load_gain``, ``angle_offset``, ``tyre_deflection``,
-``bulldozing``, ``load_dependent``, ``vertical_balance``, ``width_error``), each with the verdicts
+``bulldozing``, ``load_dependent``, ``vertical_balance``, ``width_error``, ``zero_drift``), each with the verdicts
 acceptable for it. The recording holds only what a logger would record: the
 vehicle configuration of the *simulated* wheel and a provenance record
 ``kind = "simulated"`` with the seed (never the effect); the truth goes to
@@ -334,6 +334,8 @@ def simulate_run(
         w_meas *= params["gain"]
     elif effect == "angle_offset":
         angle_err_deg = float(params["offset_deg"])
+    elif effect == "zero_drift":
+        my += params["drift_nm"] * ((t_rel - t_rel[0]) / (t_rel[-1] - t_rel[0]) - 0.5)
 
     start_s = 1765416600 + int(seed % 5000) * 3607 + rng.uniform(0, 1)  # a December morning, seeded
     gps_offset_s = float(rng.uniform(-2.0, 2.0))       # GPS - (host UTC + leap) at the start
@@ -888,6 +890,7 @@ effects (--effect; parameters with --param NAME=VALUE, the others drawn at --siz
     load_dependent       k_eq (W/W_static)^beta (beta)
     vertical_balance     true sinkage from the vertical balance Eq. 7, not Eq. 10
     width_error          the tyre's effective contact width is factor x b (factor)
+    zero_drift           the transducer's My zero drifts over the run (drift_nm, end - start)
 
 The recording holds only what a logger would record plus a provenance record
 (kind "simulated", the seed): the effect and its parameters go to --truth FILE
@@ -962,7 +965,7 @@ CLI_PARAMS = {
     "none": (), "vasilev": ("H",), "lyasko": ("m1", "m2"), "ding": ("n1",),
     "stress_distribution": ("a1", "a2"), "fx_gain": ("gain",), "my_gain": ("gain",), "load_gain": ("gain",),
     "angle_offset": ("offset_deg",), "tyre_deflection": ("kappa",), "bulldozing": ("factor",),
-    "load_dependent": ("beta",), "vertical_balance": (), "width_error": ("factor",),
+    "load_dependent": ("beta",), "vertical_balance": (), "width_error": ("factor",), "zero_drift": ("drift_nm",),
     "terrain_mismatch": ("k_eq", "n", "c", "phi", "K"), "terrain_drift": ("k_eq", "n", "c", "phi", "K"),
 }
 

@@ -42,11 +42,16 @@ Out of family (``unexplained`` always acceptable)
   ``width_error``      the tyre's effective contact width is b_e = f b, not the configured b
                        (bulging sidewalls, a lab/setup error in a wheel value no hypothesis
                        re-fits): Eqs. (2), (7)-(10) with b_e.
+  ``zero_drift``       the transducer's My zero drifts linearly with time over the run
+                       (a bridge warming up with the hub): My_meas = My + d (t / t_end - 1/2);
+                       drift d (``drift_nm``, end - start). Along the axle, so the wheel-angle
+                       transformation does not average it out as it does the rotating Fx_w, Fz_w
+                       zeros.
   ``vertical_balance`` the true static sinkage satisfies the vertical balance Eq. (7) = W
                        (with the shear term, at the sample's slip) instead of Eq. (10)'s
                        small-angle formula the models use.
 
-Sensor effects (``fx_gain``, ``my_gain``, ``load_gain``, ``angle_offset``) change only
+Sensor effects (``fx_gain``, ``my_gain``, ``load_gain``, ``angle_offset``, ``zero_drift``) change only
 what the transducer reports; the soil forces (and the vehicle) are Wong's.
 """
 
@@ -68,9 +73,9 @@ VERDICTS = ("none", "slip_sinkage", "terrain_mismatch", "stress_distribution", "
 
 IN_FAMILY = ("none", "vasilev", "lyasko", "ding", "terrain_mismatch", "stress_distribution", "terrain_drift")
 OUT_OF_FAMILY = ("fx_gain", "my_gain", "load_gain", "angle_offset", "tyre_deflection", "bulldozing",
-                 "load_dependent", "vertical_balance", "width_error")
+                 "load_dependent", "vertical_balance", "width_error", "zero_drift")
 EFFECTS = IN_FAMILY + OUT_OF_FAMILY
-SENSOR_EFFECTS = ("fx_gain", "my_gain", "load_gain", "angle_offset")
+SENSOR_EFFECTS = ("fx_gain", "my_gain", "load_gain", "angle_offset", "zero_drift")
 
 #: Acceptable verdicts per effect (contract F). See the module docstring for the one
 #: out-of-family effect with an in-family equivalent (load_gain).
@@ -91,6 +96,7 @@ ACCEPTABLE: dict[str, tuple[str, ...]] = {
     "load_dependent": ("unexplained",),
     "vertical_balance": ("unexplained",),
     "width_error": ("unexplained",),
+    "zero_drift": ("unexplained",),
 }
 
 #: Terrain parameters a mismatch / drift may change, with the relative (or absolute) range
@@ -110,7 +116,7 @@ PARAM_NAMES: dict[str, tuple[str, ...]] = {
     "terrain_mismatch": ("changes",), "terrain_drift": ("changes", "mode", "change_at"),
     "stress_distribution": ("a1", "a2"), "fx_gain": ("gain",), "my_gain": ("gain",), "load_gain": ("gain",),
     "angle_offset": ("offset_deg",), "tyre_deflection": ("kappa",), "bulldozing": ("factor",),
-    "load_dependent": ("beta",), "vertical_balance": (), "width_error": ("factor",),
+    "load_dependent": ("beta",), "vertical_balance": (), "width_error": ("factor",), "zero_drift": ("drift_nm",),
 }
 
 
@@ -198,6 +204,8 @@ def draw_effect(effect: str, rng: np.random.Generator, *, size: float | None = N
         p = {}
     elif effect == "width_error":
         p = {"factor": 1.0 + sign * _mag(u, 0.05, 0.30)}
+    elif effect == "zero_drift":  # 0.2-2 % of a 10 kN m channel over a run
+        p = {"drift_nm": sign * _mag(u, 20.0, 200.0, log=True)}
     p.update(given)
     p["size"] = u
     return p
