@@ -87,7 +87,7 @@ decides with this rule (constants below; none was tuned on a benchmark):
 6. **Confidence** follows the effect's posterior probability (``high`` >=
    ``P_HIGH``, ``medium`` >= ``P_NAME``), capped at ``medium`` when the
    named model is physically inconsistent, when one of the generic
-   alternatives for causes on no list (effect ``unexplained``: ``dp_resistance``, ``radius``,
+   alternatives for causes on no list (effect ``unexplained``: ``dp_resistance``, ``dp_drift``, ``radius``,
    ``tyre``, ``width``, ``sensor_gain``, ``zero_drift``, ``load_k``, ``balance``) is also supported out of sample (with less
    evidence: the data do not exclude an off-list cause), (model W / measured W outside
    ``LOAD_RATIO_TOL`` in a slip bin, Eq. 7, or static sinkage above D/6, the
@@ -168,7 +168,7 @@ NULLS = {"vasilev": {"H": 0.0}, "lyasko": {"m1": 0.0, "m2": 0.0}, "ding": {"n1":
          "drift_step": {"g_lnk": 0.0, "g_n": 0.0, "g_phi": 0.0, "g_c": 0.0, "g_lnK": 0.0}, "dp_resistance": {"R0": 0.0, "R1": 0.0},
          "radius": {"rho": 0.0}, "tyre": {"rho": 0.0}, "width": {"beta": 0.0}, "sensor_gain": {"g_dp": 0.0, "g_t": 0.0},
          "load_k": {"beta": 0.0},
-         "zero_drift": {"o_t": 0.0, "d_t": 0.0}}
+         "zero_drift": {"o_t": 0.0, "d_t": 0.0}, "dp_drift": {"R0": 0.0, "Rx": 0.0}}
 #: The listed causes (verdicts that name a cause).
 LISTED = ("slip_sinkage", "terrain_mismatch", "stress_distribution", "terrain_drift")
 #: Hypotheses nested in a larger one: the larger one must beat each of them out of sample.
@@ -753,12 +753,12 @@ def _separating(effects: set, channels: set, names=()) -> str | None:
     if geometry and e & {"terrain_mismatch", "terrain_drift", "slip_sinkage"}:
         parts.append("the tyre's loaded radius and contact width (footprint) under this load, or plate-sinkage and "
                      "shear tests of this soil (a wheel-geometry error acts on the forces like a change of the soil)")
-    if "zero_drift" in names and e & {"terrain_drift", "terrain_mismatch"}:
-        parts.append("the transducer's zeros with the wheel lifted before and after the run (a drifting torque "
-                     "zero moves them; the soil does not)")
+    if {"zero_drift", "dp_drift"} & set(names) and e & {"terrain_drift", "terrain_mismatch"}:
+        parts.append("the transducer's zeros with the wheel lifted before and after the run (a drifting zero "
+                     "moves them; the soil does not)")
     if "load_k" in names and e & {"terrain_mismatch", "terrain_drift", "slip_sinkage"}:
-        parts.append("the same slip sweep at a second static load (a load-dependent soil changes with it, a "
-                     "terrain mismatch does not)")
+        parts.append("the same slip sweep at a second static load (only a load-dependent soil changes its "
+                     "pressure-sinkage modulus with it)")
     if len(e) <= 1 and "slip_sinkage" not in e:
         return "; ".join(parts) or None
     if "slip_sinkage" in e and len(e) > 1:

@@ -464,6 +464,32 @@ class DrawbarResistance(Hypothesis):
                            drawbar_pull_n=f.drawbar_pull_n - r, torque_nm=f.torque_nm)
 
 
+class DrawbarDrift(Hypothesis):
+    """A resistance on the drawbar pull alone that changes along the run: Dp - (R0 + Rx x).
+
+    Not a cause on our list: the along-the-run sibling of :class:`DrawbarResistance` (an Fx
+    zero drifting in a transducer that reports hub-frame forces, a rut or berm in front of the
+    wheel that grows over the run) with torque and sinkage as Wong's.  x is the normalised
+    drift coordinate (-0.5 at the start, +0.5 at the end), as in :class:`DriftLinear`.  A soil
+    changing along the run moves the torque with the drawbar pull; when the torque shows no
+    such change, this explains the data as well and the terrain drift is not named.
+    Effect ``unexplained``; needs a time series.
+    """
+
+    name, effect, title = "dp_drift", "unexplained", "a Dp-only resistance changing along the run (no listed cause)"
+    source = "generic alternative: an Fx-only error drifting with time or distance; not a listed cause"
+    needs_x = True
+
+    def own_params(self, ctx):
+        return (HParam("R0", 0.0, -1e6, 1e6, "N", "extra resistance mid-run (negative: extra pull)"),
+                HParam("Rx", 0.0, -1e6, 1e6, "N", "its change over the run (end - start)"))
+
+    def forces(self, ctx, terrain, load_n, slip, x, p):
+        f = wong_forces(terrain, ctx.wheel, load_n, slip, sinkage=ctx.sinkage)
+        x = np.zeros(np.size(load_n)) if x is None else np.asarray(x, float)
+        return dataclasses.replace(f, drawbar_pull_n=f.drawbar_pull_n - (p["R0"] + p["Rx"] * x))
+
+
 class ZeroDrift(Hypothesis):
     """The transducer's torque zero drifts along the run: T + o_t + d_t x.
 
@@ -664,7 +690,7 @@ class VerticalBalance(Hypothesis):
 HYPOTHESES: dict[str, Hypothesis] = {
     h.name: h
     for h in (Wong(), Vasilev(), Lyasko(), Ding(), TerrainMismatch(), VasilevTerrain(), DingTerrain(),
-              WongReece(), DriftLinear(), DriftStep(), DrawbarResistance(), ZeroDrift(), WheelRadius(), TyreRadius(), WheelWidth(),
+              WongReece(), DriftLinear(), DriftStep(), DrawbarResistance(), DrawbarDrift(), ZeroDrift(), WheelRadius(), TyreRadius(), WheelWidth(),
               SensorGain(), LoadStiffness(), VerticalBalance())
 }
 

@@ -141,6 +141,20 @@ def test_terrain_drift_along_the_run_is_not_slip_sinkage():
     assert d.structure["wong"]["drawbar_pull_n@x"]["p"] < 0.01
 
 
+def test_a_drawbar_pull_drifting_alone_is_not_named_a_terrain_drift():
+    """An Fx offset growing along the run (300 N end to end), torque untouched: a soil changing
+    along the run would move the torque with it.  The Dp-only drift stand-in explains it as
+    well, so it is not named a terrain drift (a 5-slope terrain drift fitted it and was named,
+    at "high" on the default wheel in clay)."""
+    df = synthetic_data(SAND, W, "wong", duration_s=120.0, load_n=13000.0, seed=7)
+    x = df["distance_m"].to_numpy() / df["distance_m"].max() - 0.5
+    df["drawbar_pull_n"] += 300.0 * x
+    d = diagnose(df, SAND, W)
+    _invariants(d)
+    assert d.effect != "terrain_drift", d.summary
+    assert d.structure["wong"]["drawbar_pull_n@x"]["p"] < 0.01
+
+
 def test_parameters_at_a_bound_and_correlations_are_flagged():
     df = _table(seed=8)
     df["drawbar_pull_n"] += 200.0  # more pull than Wong: slip sinkage (which only lowers Dp) sits at H = 0
