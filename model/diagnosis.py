@@ -161,14 +161,6 @@ EFFECT_TITLES = {
     "stress_distribution": "a different normal-stress distribution", "terrain_drift": "terrain drifting along the run",
     "unexplained": "unexplained",
 }
-#: Null values of each hypothesis' own effect parameters (the nested model they reduce to).
-NULLS = {"vasilev": {"H": 0.0}, "lyasko": {"m1": 0.0, "m2": 0.0}, "ding": {"n1": 0.0},
-         "vasilev+terrain": {"H": 0.0}, "ding+terrain": {"n1": 0.0}, "wong_reece": {"a1": 0.0, "a2": 0.0},
-         "drift_linear": {"g_lnk": 0.0, "g_n": 0.0, "g_phi": 0.0, "g_c": 0.0, "g_lnK": 0.0},
-         "drift_step": {"g_lnk": 0.0, "g_n": 0.0, "g_phi": 0.0, "g_c": 0.0, "g_lnK": 0.0}, "dp_resistance": {"R0": 0.0, "R1": 0.0},
-         "radius": {"rho": 0.0}, "tyre": {"rho": 0.0}, "width": {"beta": 0.0}, "sensor_gain": {"g_dp": 0.0, "g_t": 0.0},
-         "load_k": {"beta": 0.0},
-         "zero_drift": {"o_t": 0.0, "d_t": 0.0}, "dp_drift": {"R0": 0.0, "Rx": 0.0}}
 #: The listed causes (verdicts that name a cause).
 LISTED = ("slip_sinkage", "terrain_mismatch", "stress_distribution", "terrain_drift")
 #: Hypotheses nested in a larger one: the larger one must beat each of them out of sample.
@@ -611,7 +603,7 @@ def _effective(f: HypFit) -> bool:
         idx = [list(f.params).index(p) for p in names]
         g = np.array([1 / f.params[p] if p in ("k_eq", "K") and f.params[p] > 0 else 1.0 for p in names])
     else:
-        nulls = NULLS.get(f.name, {})
+        nulls = f.hypothesis.nulls(f.ctx) if f.hypothesis is not None else {}
         if not nulls:
             return False
         names = list(nulls)

@@ -231,6 +231,11 @@ class Hypothesis:
         """The hypothesis' own parameters (besides the terrain block)."""
         return ()
 
+    def nulls(self, ctx: Context) -> dict[str, float]:
+        """The values of the own parameters at which the effect vanishes (the smaller model the
+        hypothesis then is): their defaults."""
+        return {q.name: q.default for q in self.own_params(ctx)}
+
     def parameters(self, ctx: Context) -> tuple[HParam, ...]:
         """All fitted parameters: own, then the terrain block when re-fitted."""
         own = self.own_params(ctx)
