@@ -49,7 +49,7 @@ decides with this rule (constants below; none was tuned on a benchmark):
    values (prior chi-square below its ``1 - PRIOR_CONFLICT_ALPHA`` quantile),
    and a hypothesis that contains a smaller one (slip sinkage + terrain
    contains the terrain re-fit and the slip-sinkage form; drift contains the
-   terrain re-fit, :data:`NESTED`) lowers the drawbar pull error below it out of
+   terrain re-fit: ``Hypothesis.nested``) lowers the drawbar pull error below it out of
    sample by the same paired test and worsens no channel (what the extra part
    adds must pay off on data it was not fitted to, in the target channels).
    The step drift is tried only when step 1's change-point test finds a step
@@ -163,9 +163,6 @@ EFFECT_TITLES = {
 }
 #: The listed causes (verdicts that name a cause).
 LISTED = ("slip_sinkage", "terrain_mismatch", "stress_distribution", "terrain_drift")
-#: Hypotheses nested in a larger one: the larger one must beat each of them out of sample.
-NESTED = {"vasilev+terrain": ("terrain", "vasilev"), "ding+terrain": ("terrain", "ding"),
-          "drift_linear": ("terrain",), "drift_step": ("terrain",)}
 #: The legacy default candidate list of the command line (pipeline); it means "all hypotheses".
 _LEGACY_DEFAULT = {"vasilev", "lyasko", "ding", "terrain_mismatch"}
 
@@ -631,13 +628,13 @@ def _effect_of(f: HypFit, fits: dict, not_beaten: list = ()) -> str:
     """The effect a fit stands for: its own; when its effect parameters are null (not
     :func:`_effective`), the effect of the smaller model it then is (slip sinkage + terrain and
     drift with null slopes are a terrain re-fit; a null slip-sinkage form is Wong); when it
-    contains exactly one nested model (:data:`NESTED`) that it does not beat out of sample
+    contains exactly one nested model (``Hypothesis.nested``) that it does not beat out of sample
     (``not_beaten``), that model's effect (what it adds does not pay off on data it was not
     fitted to: its in-sample evidence is the nested model's)."""
     if f.name == "wong":
         return f.effect
     if not _effective(f):
-        return "terrain_mismatch" if f.name in NESTED and _effective_terrain(f) else "none"
+        return "terrain_mismatch" if f.hypothesis.nested and _effective_terrain(f) else "none"
     if len(not_beaten) == 1 and not_beaten[0] in fits:
         return _effect_of(fits[not_beaten[0]], fits)
     return f.effect
@@ -1156,10 +1153,10 @@ def _target_channels(tests: dict, sig: list) -> list:
 
 
 def _not_better_than_nested(data, fits, f: HypFit, target) -> list:
-    """The nested hypotheses (:data:`NESTED`) that ``f`` does not beat out of sample (a
+    """The nested hypotheses (``Hypothesis.nested``) that ``f`` does not beat out of sample (a
     ``target`` channel does not improve by the paired test, or a channel worsens); [] if none."""
     out = []
-    for n in NESTED.get(f.name, ()):
+    for n in f.hypothesis.nested:
         g = fits.get(n)
         if g is None or not g.success or g.cv is None:
             continue

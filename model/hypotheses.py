@@ -217,6 +217,8 @@ class Hypothesis:
     ``needs_x``: needs a drift coordinate (time series only).
     ``core``: the slip-sinkage model core (``wheelsoil.model.get_model``) for
     the report's curves.
+    ``nested``: the registered hypotheses this one contains (the diagnosis asks it to beat each
+    of them out of sample: what it adds must pay off on data it was not fitted to).
     """
 
     name: ClassVar[str] = ""
@@ -226,6 +228,7 @@ class Hypothesis:
     core: ClassVar[str] = "wong"
     terrain_block: ClassVar[bool] = False
     needs_x: ClassVar[bool] = False
+    nested: ClassVar[tuple[str, ...]] = ()
 
     def own_params(self, ctx: Context) -> tuple[HParam, ...]:
         """The hypothesis' own parameters (besides the terrain block)."""
@@ -324,6 +327,7 @@ class VasilevTerrain(Vasilev):
 
     name, title = "vasilev+terrain", "Vasil'ev + terrain re-fitted"
     terrain_block = True
+    nested = ("terrain", "vasilev")
 
 
 class DingTerrain(Ding):
@@ -331,6 +335,7 @@ class DingTerrain(Ding):
 
     name, title = "ding+terrain", "Ding + terrain re-fitted"
     terrain_block = True
+    nested = ("terrain", "ding")
 
 
 def kernel_has_stress() -> bool:
@@ -372,6 +377,7 @@ class DriftLinear(Hypothesis):
     source = "repeated passes compact the soil (Wong 2008 ch. 2); linear drift in travelled distance"
     terrain_block = True
     needs_x = True
+    nested = ("terrain",)
     C_FLOOR_PA = 50.0  #: width of the smooth floor that keeps the start/end cohesion >= 0 [Pa]
 
     def own_params(self, ctx):
