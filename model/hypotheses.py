@@ -496,9 +496,7 @@ class DrawbarDrift(Hypothesis):
                 HParam("Rx", 0.0, -1e6, 1e6, "N", "its change over the run (end - start)"))
 
     def forces(self, ctx, terrain, load_n, slip, x, p):
-        f = wong_forces(terrain, ctx.wheel, load_n, slip, sinkage=ctx.sinkage)
-        x = np.zeros(np.size(load_n)) if x is None else np.asarray(x, float)
-        return dataclasses.replace(f, drawbar_pull_n=f.drawbar_pull_n - (p["R0"] + p["Rx"] * x))
+        return _wong_plus_linear(ctx, terrain, load_n, slip, x, "drawbar_pull_n", -p["R0"], -p["Rx"])
 
 
 class ZeroDrift(Hypothesis):
@@ -523,9 +521,15 @@ class ZeroDrift(Hypothesis):
                 HParam("d_t", 0.0, -1e6, 1e6, "N m", "change of the torque offset over the run (end - start)"))
 
     def forces(self, ctx, terrain, load_n, slip, x, p):
-        f = wong_forces(terrain, ctx.wheel, load_n, slip, sinkage=ctx.sinkage)
-        x = np.zeros(np.size(load_n)) if x is None else np.asarray(x, float)
-        return dataclasses.replace(f, torque_nm=f.torque_nm + p["o_t"] + p["d_t"] * x)
+        return _wong_plus_linear(ctx, terrain, load_n, slip, x, "torque_nm", p["o_t"], p["d_t"])
+
+
+def _wong_plus_linear(ctx, terrain, load_n, slip, x, field: str, mid: float, change: float) -> WheelForces:
+    """Wong's forces with ``mid + change x`` added to one output ``field`` (x: (N,) normalised drift
+    coordinate, None = 0)."""
+    f = wong_forces(terrain, ctx.wheel, load_n, slip, sinkage=ctx.sinkage)
+    x = np.zeros(np.size(load_n)) if x is None else np.asarray(x, float)
+    return dataclasses.replace(f, **{field: getattr(f, field) + mid + change * x})
 
 
 class WheelRadius(Hypothesis):
