@@ -64,7 +64,6 @@ Units: SI throughout (phi in rad, c in Pa, k_eq in N/m^(n+2)).
 from __future__ import annotations
 
 import dataclasses
-
 import inspect
 import math
 from dataclasses import dataclass
@@ -406,19 +405,18 @@ class DriftLinear(Hypothesis):
             terrain = apply_terrain(ctx.terrain, q)
             out.append(wong_forces(terrain, ctx.wheel, load_n, slip, sinkage=ctx.sinkage))
         wb = self._weight_end(ctx, np.asarray(x, float))
-        wa = 1.0 - wb
-        fa, fb = out
-
-        def mix(field):
-            return wa * getattr(fa, field) + wb * getattr(fb, field)
-
-        return WheelForces(sinkage_m=mix("sinkage_m"), theta1_rad=mix("theta1_rad"),
-                           load_model_n=mix("load_model_n"), drawbar_pull_n=mix("drawbar_pull_n"),
-                           torque_nm=mix("torque_nm"))
+        return _weighted_sum((1.0 - wb, wb), out)
 
     def _weight_end(self, ctx, x):
         """Weight (N,) of the end terrain at x: linear interpolation between start and end."""
         return 0.5 + x
+
+
+def _weighted_sum(weights, forces) -> WheelForces:
+    """Every field of the kernel outputs ``forces`` summed with per-sample ``weights`` (each (N,) or
+    scalar): the interpolation between kernel calls at different terrains."""
+    return WheelForces(**{fl.name: sum(w * getattr(f, fl.name) for w, f in zip(weights, forces))
+                          for fl in dataclasses.fields(WheelForces)})
 
 
 class DriftStep(DriftLinear):
@@ -676,9 +674,7 @@ class LoadStiffness(Hypothesis):
         if h <= 0:
             return out[0]
         q = (u - nodes[1]) / h  # Lagrange weights on -1, 0, 1
-        wts = (0.5 * q * (q - 1.0), 1.0 - q * q, 0.5 * q * (q + 1.0))
-        fields = ("sinkage_m", "theta1_rad", "load_model_n", "drawbar_pull_n", "torque_nm")
-        return WheelForces(**{fl: sum(w * getattr(f, fl) for w, f in zip(wts, out)) for fl in fields})
+        return _weighted_sum((0.5 * q * (q - 1.0), 1.0 - q * q, 0.5 * q * (q + 1.0)), out)
 
 
 class VerticalBalance(Hypothesis):
