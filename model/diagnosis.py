@@ -69,12 +69,15 @@ decides with this rule (constants below; none was tuned on a benchmark):
    among the possible splits (a uniform prior over them).
 5. **Verdict.**  The supported hypothesis with the highest posterior is the
    candidate.  Its effect is named only if the effect's posterior probability
-   is at least ``P_NAME`` and it beats, out of sample in the target channels
-   (paired test of step 2), every supported hypothesis of another listed
-   cause (two causes that predict new data equally well are not told apart
-   by the in-sample evidence alone: a Wong-Reece stress shift with 2
-   parameters fits a terrain mismatch as well as the 5-parameter terrain
-   re-fit and wins its Occam factor); otherwise the causes that explain the data about
+   is at least ``P_NAME`` and it holds, out of sample (paired test of step
+   2), against every supported hypothesis of another listed cause: it
+   improves on it in every target channel, or (the rival has less evidence
+   by more than ``BF_ALTERNATIVE``) its mean held-out gain over it is not
+   negative in any target channel and it worsens no measured channel against
+   it.  An Occam factor alone names no cause: a Wong-Reece stress shift with
+   2 parameters can out-score the 5-parameter terrain re-fit on a terrain
+   mismatch, and then predicts new data worse than the re-fit; decisive
+   evidence that new data do not contradict does.  Otherwise the causes that explain the data about
    equally well are listed (``alternatives``) with the measurement that
    would separate them, and the verdict is ``unexplained`` (different effects
    are never merged into one named cause).  The same holds when the best
@@ -587,6 +590,17 @@ def _paired(data: FitData, wong: HypFit, f: HypFit) -> dict:
     return out
 
 
+def _holds_against(data: FitData, f: HypFit, rival: HypFit, target) -> bool:
+    """True when ``f`` predicts new data at least as well as ``rival``, a supported hypothesis of another
+    listed cause with less evidence (module doc, step 5): out of sample (step 2's paired test of
+    ``f`` against ``rival``) ``f`` improves every target channel, or its mean held-out gain is not
+    negative in any target channel and it worsens no measured channel."""
+    pr = _paired(data, rival, f)
+    if all(pr[c]["improves"] for c in target):
+        return True
+    return all(pr[c]["gain_noise_var"] >= 0 for c in target) and not any(r["worsens"] for r in pr.values())
+
+
 def _effective(f: HypFit) -> bool:
     """True when the hypothesis' own effect parameters differ from their null values: joint Wald
     test ``d^T Sigma^-1 d`` against the chi-square quantile of the same level as |z| > WALD_Z
@@ -959,8 +973,7 @@ def diagnose(
         # a supported listed cause of another effect that the candidate does not beat out of sample
         # explains the data as well where it matters, whatever the in-sample evidence says
         alternatives += [k for k in supported if k != best and k not in alternatives and eff_of[k] in LISTED
-                         and eff_of[k] != fits[best].effect
-                         and not all(r["improves"] for c, r in _paired(data, fits[k], fits[best]).items() if c in target)]
+                         and eff_of[k] != fits[best].effect and not _holds_against(data, fits[best], fits[k], target)]
         other_eff = {fits[k].effect for k in alternatives} - {fits[best].effect}
         pe = eprobs.get(fits[best].effect, 0.0)
         tests_b = _structure_cells(data, fits[best].cell_pred)

@@ -12,6 +12,10 @@ simulate, write the MCAP, ``run_fit`` as a user would).
 - A cohesion mismatch that a Wong-Reece stress shift fits as well out of sample (with
   fewer parameters, so more in-sample evidence) must not be named a stress distribution:
   a listed cause is named only over the other supported listed causes it beats out of sample.
+- A large stress shift on the same clay: the terrain re-fit also lowers the drawbar pull error
+  but has far less evidence and does not predict new data better, so the stress distribution
+  is named (it need not beat the re-fit significantly out of sample: not being worse suffices
+  when the evidence is decisive).
 - Another patch of ground from some point of the run on is a step along the run: the
   change-point test finds it in Wong's residuals and the step hypothesis (``drift_step``)
   explains it where a linear drift cannot.
@@ -77,6 +81,14 @@ def test_a_terrain_mismatch_a_stress_shift_fits_as_well_is_not_named_a_stress_di
     d = report["diagnosis"]
     v = judge(run.info, report)
     assert not v["wrong_cause"], d["summary"]
+
+
+def test_a_stress_shift_the_terrain_refit_does_not_predict_better_is_named(tmp_path):
+    run, report = _fit(tmp_path, "clay", effect="stress_distribution", wheel=(0.55, 0.40), added_load_n=3000.0,
+                       params={"a1": 0.37, "a2": 0.0}, seed=9838)
+    d = report["diagnosis"]
+    assert d["effect"] == "stress_distribution", d["summary"]
+    assert d["probabilities"]["wong_reece"] > 10 * d["probabilities"].get("terrain", 0.0)
 
 
 def test_a_load_dependent_soil_is_not_named_a_terrain_mismatch(tmp_path):
