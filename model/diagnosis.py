@@ -970,8 +970,8 @@ def diagnose(
         # an unsupported hypothesis of another effect with more evidence than the candidate: ambiguous
         rivals = [k for k in probs if k not in supported and k != "wong" and eff_of[k] != fits[best].effect
                   and probs[k] > pb]
-        # a supported listed cause of another effect that the candidate does not beat out of sample
-        # explains the data as well where it matters, whatever the in-sample evidence says
+        # a supported listed cause of another effect that the candidate does not hold against out of
+        # sample explains the data as well where it matters, whatever the in-sample evidence says
         alternatives += [k for k in supported if k != best and k not in alternatives and eff_of[k] in LISTED
                          and eff_of[k] != fits[best].effect and not _holds_against(data, fits[best], fits[k], target)]
         other_eff = {fits[k].effect for k in alternatives} - {fits[best].effect}

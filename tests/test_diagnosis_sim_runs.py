@@ -11,7 +11,8 @@ simulate, write the MCAP, ``run_fit`` as a user would).
   terrain re-fit they contain, so the mismatch is named.
 - A cohesion mismatch that a Wong-Reece stress shift fits as well out of sample (with
   fewer parameters, so more in-sample evidence) must not be named a stress distribution:
-  a listed cause is named only over the other supported listed causes it beats out of sample.
+  a listed cause is named only over the other supported listed causes it holds against out of
+  sample (it improves on them, or has decisive evidence and predicts new data no worse).
 - A large stress shift on the same clay: the terrain re-fit also lowers the drawbar pull error
   but has far less evidence and does not predict new data better, so the stress distribution
   is named (it need not beat the re-fit significantly out of sample: not being worse suffices
