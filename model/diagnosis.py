@@ -614,7 +614,7 @@ def _effective(f: HypFit) -> bool:
         idx = [list(f.params).index(p) for p in names]
         g = np.array([1 / f.params[p] if p in ("k_eq", "K") and f.params[p] > 0 else 1.0 for p in names])
     else:
-        nulls = f.hypothesis.nulls(f.ctx) if f.hypothesis is not None else {}
+        nulls = f.hypothesis.nulls(f.ctx)
         if not nulls:
             return False
         names = list(nulls)
