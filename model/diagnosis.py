@@ -121,7 +121,7 @@ from scipy import stats
 
 from .crossval import HypFit, cross_validate, fit_hypothesis, sample_predictions
 from .data import CHANNELS, FitData, prepare_data
-from .hypotheses import EFFECTS, HYPOTHESES, Context, get_hypothesis, lab_prior
+from .hypotheses import EFFECTS, HYPOTHESES, Context, DriftStep, get_hypothesis, lab_prior
 from .hypotheses import LIBRARY_PRIOR_WIDEN
 
 __all__ = ["Diagnosis", "diagnose", "structure_test", "binned_residuals", "SLIP_SINKAGE_MODELS", "TITLES",
@@ -793,7 +793,7 @@ def diagnose(
     fit_terrain: bool = False,
     sinkage: str = "eq10",
     progress: bool = False,
-    max_iter: int = 200,
+    max_iter: int = 500,
 ) -> Diagnosis:
     """Diagnose what Wong's model gets wrong on measured data (rule in the module doc).
 
@@ -897,8 +897,10 @@ def diagnose(
     c_hat = max(1.0, min(f.chi2_data / f.dof for f in ok_fits.values())) if ok_fits else 1.0
     deff = _design_effect(data, min(ok_fits.values(), key=lambda f: f.chi2_data / f.dof)) if ok_fits else 1.0
     logev = {k: f.evidence(c_hat, deff) for k, f in ok_fits.items()}
-    if "drift_step" in logev and steps is not None:  # the change point chosen among steps[1] splits
-        logev["drift_step"] -= math.log(steps[1])
+    if steps is not None:  # the step forms' change point is chosen among steps[1] splits
+        for k in logev:
+            if isinstance(fits[k].hypothesis, DriftStep):
+                logev[k] -= math.log(steps[1])
     eff_count = {}
     for k in logev:
         eff_count[fits[k].effect] = eff_count.get(fits[k].effect, 0) + 1

@@ -57,6 +57,13 @@ The hypotheses (paper numbering for Eqs.; Wong = *Theory of Ground Vehicles*, 4t
   values step at the change point that the diagnosis found in Wong's residuals
   along the run (tried only when it found one); the forces on each side are
   the exact forces of that side's terrain.
+* ``drift_k_eq``, ``drift_n``, ``drift_c``, ``drift_phi``, ``drift_K`` and
+  ``drift_step_<value>``: terrain drift in one soil value (linear, or a step at
+  the change point), the other four at the lab values.  Two parameters (the
+  value's level against its lab prior, and its change) where the forms above
+  have ten: when one value moves, the Occam factor of the five-value forms
+  would hide the drift behind a two-parameter stand-in (``dp_drift``,
+  ``zero_drift``).
 
 Units: SI throughout (phi in rad, c in Pa, k_eq in N/m^(n+2)).
 """
@@ -84,6 +91,7 @@ __all__ = [
     "lab_prior",
     "TERRAIN_NAMES",
     "apply_terrain",
+    "DriftStep",
 ]
 
 #: The verdicts ``diagnosis.effect`` can take (contract D).
@@ -446,6 +454,60 @@ class DriftStep(DriftLinear):
         return 0.5 * (1.0 + np.tanh((x - float(ctx.x_step)) / (2.0 * self.WIDTH)))
 
 
+class DriftOne(DriftLinear):
+    """Terrain drift in one soil value: ``param`` (one of k_eq, n, c, phi, K) varies linearly along
+    the run around its own mid-run level (re-fitted against its lab prior); the other four stay
+    at the lab values.  Repeated passes or a slowly changing soil often move one value most
+    (Wong 2008 ch. 2); :class:`DriftLinear` lets all five drift and pays for ten parameters
+    where this pays for two.  With ``ctx.fit_terrain`` the whole terrain is re-fitted and only the
+    slope is this hypothesis' own.  The effect vanishes when the slope is zero (``nulls``): a
+    moved level alone is the terrain mismatch it contains (``nested``)."""
+
+    param: ClassVar[str] = ""
+    terrain_block = False
+
+    def own_params(self, ctx):
+        slope = next(q for q in super().own_params(ctx) if q.name == _SLOPE[self.param])
+        if ctx.fit_terrain:
+            return (slope,)
+        level = next(q for q in terrain_params(ctx) if q.name == self.param)
+        return (slope, level)
+
+    def nulls(self, ctx):
+        return {_SLOPE[self.param]: 0.0}
+
+    def predict(self, ctx, load_n, slip, x, p):
+        t = ctx.terrain
+        full = {"k_eq": t.k_eq(ctx.wheel.width), "n": t.n, "c": t.c, "phi": t.phi, "K": t.K}
+        full.update({g: 0.0 for g in _SLOPE.values()})
+        full.update(p)
+        return super().predict(ctx, load_n, slip, x, full)
+
+
+#: The drift slope of each terrain value (:class:`DriftLinear`'s parameter names).
+_SLOPE = {"k_eq": "g_lnk", "n": "g_n", "c": "g_c", "phi": "g_phi", "K": "g_lnK"}
+
+
+class DriftStepOne(DriftOne, DriftStep):
+    """Another patch of ground that differs in one soil value: ``param`` steps at the change point
+    (:class:`DriftStep`) around its own level; the other four stay at the lab values."""
+
+
+def _drift_one(name: str, step: bool = False) -> DriftOne:
+    """The one-value drift of terrain value ``name``: linear along the run, or a ``step``."""
+    if step:
+        cls = type(f"DriftStep_{name}", (DriftStepOne,), {
+            "param": name, "name": f"drift_step_{name}",
+            "title": f"another patch of ground with another {name} (the other soil values as in the lab)",
+            "source": "a change of soil along the track (Wong 2008 ch. 2); one soil value steps at the change point"})
+    else:
+        cls = type(f"Drift_{name}", (DriftOne,), {
+            "param": name, "name": f"drift_{name}",
+            "title": f"{name} drifting along the run (the other soil values as in the lab)",
+            "source": "repeated passes compact the soil (Wong 2008 ch. 2); linear drift of one soil value"})
+    return cls()
+
+
 class DrawbarResistance(Hypothesis):
     """An extra resistance on the drawbar pull only (torque and sinkage as Wong's): Dp - (R0 + R1 (W/W_ref - 1)).
 
@@ -701,7 +763,8 @@ class VerticalBalance(Hypothesis):
 HYPOTHESES: dict[str, Hypothesis] = {
     h.name: h
     for h in (Wong(), Vasilev(), Lyasko(), Ding(), TerrainMismatch(), VasilevTerrain(), DingTerrain(),
-              WongReece(), DriftLinear(), DriftStep(), DrawbarResistance(), DrawbarDrift(), ZeroDrift(), WheelRadius(), TyreRadius(), WheelWidth(),
+              WongReece(), DriftLinear(), DriftStep(), *(_drift_one(n) for n in TERRAIN_NAMES),
+              *(_drift_one(n, step=True) for n in TERRAIN_NAMES), DrawbarResistance(), DrawbarDrift(), ZeroDrift(), WheelRadius(), TyreRadius(), WheelWidth(),
               SensorGain(), LoadStiffness(), VerticalBalance())
 }
 
