@@ -121,7 +121,7 @@ from scipy import stats
 
 from .crossval import HypFit, cross_validate, fit_hypothesis, sample_predictions
 from .data import CHANNELS, FitData, prepare_data
-from .hypotheses import EFFECTS, HYPOTHESES, Context, DriftStep, get_hypothesis, lab_prior
+from .hypotheses import EFFECTS, HYPOTHESES, Context, DriftOne, DriftStep, get_hypothesis, lab_prior
 from .hypotheses import LIBRARY_PRIOR_WIDEN
 
 __all__ = ["Diagnosis", "diagnose", "structure_test", "binned_residuals", "SLIP_SINKAGE_MODELS", "TITLES",
@@ -648,7 +648,12 @@ def _effect_of(f: HypFit, fits: dict, not_beaten: list = ()) -> str:
     if f.name == "wong":
         return f.effect
     if not _effective(f):
-        return "terrain_mismatch" if f.hypothesis.nested and _effective_terrain(f) else "none"
+        # a one-value drift with a null slope is a one-value terrain re-fit: its level is judged as the
+        # terrain re-fit it is nested in judges the terrain (a step form's jackknife, folds with and
+        # without the change point, is no measure of a level)
+        moved = _effective_terrain(f) or (isinstance(f.hypothesis, DriftOne) and "terrain" in fits
+                                          and _effective(fits["terrain"]))
+        return "terrain_mismatch" if f.hypothesis.nested and moved else "none"
     if len(not_beaten) == 1 and not_beaten[0] in fits:
         return _effect_of(fits[not_beaten[0]], fits)
     return f.effect
@@ -810,7 +815,7 @@ def diagnose(
         ``terrain`` and the ``+terrain`` combinations are then not separate hypotheses.
     sinkage : ``eq10`` | ``balance`` (model core).
     progress : tqdm progress bar.
-    max_iter : Gauss-Newton iteration limit per fit (default 200; a fit that does not converge is
+    max_iter : Gauss-Newton iteration limit per fit (default 500; a fit that does not converge is
         reported in ``failures`` and left out of the verdict).
 
     Returns :class:`Diagnosis`.  Raises ValueError for bad data or an unknown hypothesis.

@@ -91,6 +91,7 @@ __all__ = [
     "lab_prior",
     "TERRAIN_NAMES",
     "apply_terrain",
+    "DriftOne",
     "DriftStep",
 ]
 
