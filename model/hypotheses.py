@@ -496,16 +496,13 @@ class DriftStepOne(DriftOne, DriftStep):
 
 def _drift_one(name: str, step: bool = False) -> DriftOne:
     """The one-value drift of terrain value ``name``: linear along the run, or a ``step``."""
-    if step:
-        cls = type(f"DriftStep_{name}", (DriftStepOne,), {
-            "param": name, "name": f"drift_step_{name}",
-            "title": f"another patch of ground with another {name} (the other soil values as in the lab)",
-            "source": "a change of soil along the track (Wong 2008 ch. 2); one soil value steps at the change point"})
-    else:
-        cls = type(f"Drift_{name}", (DriftOne,), {
-            "param": name, "name": f"drift_{name}",
-            "title": f"{name} drifting along the run (the other soil values as in the lab)",
-            "source": "repeated passes compact the soil (Wong 2008 ch. 2); linear drift of one soil value"})
+    title, source = ((f"another patch of ground with another {name}", "a change of soil along the track (Wong 2008 "
+                      "ch. 2); one soil value steps at the change point") if step else
+                     (f"{name} drifting along the run", "repeated passes compact the soil (Wong 2008 ch. 2); linear "
+                      "drift of one soil value"))
+    cls = type(f"Drift{'Step' if step else ''}_{name}", (DriftStepOne if step else DriftOne,), {
+        "param": name, "name": f"drift_{'step_' if step else ''}{name}",
+        "title": title + " (the other soil values as in the lab)", "source": source})
     return cls()
 
 
@@ -765,8 +762,8 @@ HYPOTHESES: dict[str, Hypothesis] = {
     h.name: h
     for h in (Wong(), Vasilev(), Lyasko(), Ding(), TerrainMismatch(), VasilevTerrain(), DingTerrain(),
               WongReece(), DriftLinear(), DriftStep(), *(_drift_one(n) for n in TERRAIN_NAMES),
-              *(_drift_one(n, step=True) for n in TERRAIN_NAMES), DrawbarResistance(), DrawbarDrift(), ZeroDrift(), WheelRadius(), TyreRadius(), WheelWidth(),
-              SensorGain(), LoadStiffness(), VerticalBalance())
+              *(_drift_one(n, step=True) for n in TERRAIN_NAMES), DrawbarResistance(), DrawbarDrift(), ZeroDrift(),
+              WheelRadius(), TyreRadius(), WheelWidth(), SensorGain(), LoadStiffness(), VerticalBalance())
 }
 
 
