@@ -210,9 +210,24 @@ def predict_cells(fit: HypFit, ctx: Context, cells: Cells):
     return fit.hypothesis.predict(ctx, cells.load_n, cells.slip, cells.x, fit.params)
 
 
+def _equilibrate(A):
+    """``(D A D, d)`` with ``D = diag(d)``, ``d = 1/sqrt(diag A)`` (1 where the diagonal is not
+    positive): the parameters are in SI units of very different scale (c in Pa next to phi in
+    rad: information 1e-3 against 1e7), so an eigen-decomposition or a relative pseudo-inverse
+    cut-off of ``A`` itself loses the weakly determined directions to rounding; on the unit
+    diagonal they keep their precision (Jacobi scaling, Golub & Van Loan, Matrix Computations,
+    3rd ed., section 3.5.2)."""
+    dg = np.diag(A)
+    d = np.where(dg > 0, 1.0 / np.sqrt(np.where(dg > 0, dg, 1.0)), 1.0)
+    return A * np.outer(d, d), d
+
+
 def _inv(A):
+    """Pseudo-inverse of a symmetric positive semi-definite (k, k) matrix, on its equilibrated
+    form (:func:`_equilibrate`); NaN where it cannot be formed."""
     try:
-        return np.linalg.pinv(A, rcond=1e-12, hermitian=True)
+        As, d = _equilibrate(A)
+        return np.linalg.pinv(As, rcond=1e-12, hermitian=True) * np.outer(d, d)
     except np.linalg.LinAlgError:  # pragma: no cover
         return np.full(A.shape, np.nan)
 
@@ -316,9 +331,10 @@ def _logdet_psd(A) -> float:
     """log det of a symmetric positive semi-definite matrix over its non-null eigen-directions."""
     if A.size == 0:
         return 0.0
-    w = np.linalg.eigvalsh(A)
+    As, d = _equilibrate(A)
+    w = np.linalg.eigvalsh(As)
     keep = w > 1e-12 * max(float(w.max()), 1e-300)
-    return float(np.sum(np.log(w[keep])))
+    return float(np.sum(np.log(w[keep])) - 2.0 * np.sum(np.log(d)))
 
 
 def _laplace(chi2_d, chi2_p, info, params, m, c_hat) -> float:

@@ -119,7 +119,7 @@ from pathlib import PurePath
 import numpy as np
 from scipy import stats
 
-from .crossval import HypFit, cross_validate, fit_hypothesis, sample_predictions
+from .crossval import HypFit, _inv, cross_validate, fit_hypothesis, sample_predictions
 from .data import CHANNELS, FitData, prepare_data
 from .hypotheses import EFFECTS, HYPOTHESES, Context, DriftOne, DriftStep, get_hypothesis, lab_prior
 from .hypotheses import LIBRARY_PRIOR_WIDEN
@@ -633,7 +633,7 @@ def _effective(f: HypFit) -> bool:
     cov = cov * np.outer(scale, scale)
     if not np.all(np.isfinite(cov)):
         return False
-    w2 = float(d @ np.linalg.pinv(cov) @ d)
+    w2 = float(d @ _inv(cov) @ d)
     level = 1 - 2 * stats.norm.sf(WALD_Z)
     return bool(w2 > stats.chi2.ppf(level, len(names)))
 
@@ -731,8 +731,7 @@ def _flags(f: HypFit, cons: dict) -> list:
         out.append({"model": f.name, "parameter": p, "kind": "at_bound",
                     "detail": f"{p} = {f.params[p]:.4g} {f.units.get(p, '')} is on a bound of its search box"})
     if f.result is not None and f.k >= 2:
-        info = f.info[0] + f.info[1]
-        cov = np.linalg.pinv(info)
+        cov = _inv(f.info[0] + f.info[1])
         sd = np.sqrt(np.clip(np.diag(cov), 0, None))
         with np.errstate(invalid="ignore", divide="ignore"):
             corr = cov / np.outer(sd, sd)

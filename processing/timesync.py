@@ -156,7 +156,9 @@ def estimate_latency(t_gnss_s: np.ndarray, v_gnss: np.ndarray, t_ref_s: np.ndarr
     resid = v_g[m] - (a * np.interp(t_g - tau, t_r, v_r)[m] + b)
     n = int(np.count_nonzero(m))
     s2 = float(resid @ resid) / max(n - 3, 1)
-    info = float(slope @ slope)
+    # a gap in the reference (lost frames: NaN) spreads to its neighbours' gradient; the
+    # information comes from the points where the slope is defined
+    info = float(np.sum(slope[np.isfinite(slope)] ** 2))
     if info <= 0:
         raise ValueError("the reference speed never changes: the latency cannot be estimated")
     rho = float(np.corrcoef(resid[:-1], resid[1:])[0, 1]) if n > 3 else 0.0

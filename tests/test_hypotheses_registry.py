@@ -113,3 +113,23 @@ def test_a_new_cause_is_one_small_class():
     df["drawbar_pull_n"] += 500.0
     f = fit_hypothesis(Offset(), CTX, prepare_data(df).cells)
     assert abs(f.params["d"] - 500.0) < 4 * f.stderr["d"] + 20.0
+
+
+@pytest.mark.parametrize("param", ["k_eq", "n", "c", "phi", "K"])
+def test_one_value_terrain_mismatch_moves_only_its_value(param):
+    """terrain_<p> is Wong's model with that one lab value replaced (the others as in the lab), and is
+    not tried with --fit-terrain (every hypothesis then re-fits the whole terrain)."""
+    h = HYPOTHESES[f"terrain_{param}"]
+    assert h.effect == "terrain_mismatch" and [q.name for q in h.parameters(CTX)] == [param]
+    (q,) = h.parameters(CTX)
+    assert q.prior == CTX.prior[param][:2]
+    value = q.default * 1.3 if param != "phi" else q.default + np.radians(3.0)
+    f = h.predict(CTX, W, S, None, {param: value})
+    base = {"k_eq": SAND.k_eq(DEFAULT_WHEEL.width), "n": SAND.n, "c": SAND.c, "phi": SAND.phi, "K": SAND.K}
+    base[param] = value
+    ref = wong_forces(SAND.replace(kc=0.0, kphi=base["k_eq"], n=base["n"], c=base["c"], phi=base["phi"], K=base["K"]),
+                      DEFAULT_WHEEL, W, S)
+    np.testing.assert_allclose(f.drawbar_pull_n, ref.drawbar_pull_n, rtol=1e-9)
+    np.testing.assert_allclose(f.torque_nm, ref.torque_nm, rtol=1e-9)
+    assert np.max(np.abs(f.drawbar_pull_n - h.predict(CTX, W, S, None, _defaults(h)).drawbar_pull_n)) > 1.0
+    assert h.available(dataclasses.replace(CTX, fit_terrain=True), True)

@@ -39,3 +39,22 @@ def test_free_rolling_fronts_still_the_reference(truth, tmp_path):
     res = process_recording(info["path"])
     assert res.gnss_latency_s == pytest.approx(0.1, abs=0.005)
     assert res.latency_reference.startswith("front wheels")
+
+
+def test_lost_reference_samples_leave_a_finite_standard_error():
+    """Gaps in the reference (lost frames: NaN) must not turn the estimate's standard error into
+    NaN: the vehicle-dynamics estimate (GNSS dV/dt against the filtered Fx, which has NaN gaps)
+    was dropped as 'no finite standard error' and a wrong slip-traction latency was applied."""
+    from wheelsoil.processing.timesync import estimate_latency
+
+    rng = np.random.default_rng(3)
+    t_ref = np.arange(0.0, 120.0, 0.01)
+    v_ref = 5.0 + 2.0 * np.sin(0.5 * t_ref) + np.sin(1.3 * t_ref)
+    for start in rng.integers(100, t_ref.size - 100, size=40):  # 40 gaps of 5-30 samples
+        v_ref[start:start + rng.integers(5, 30)] = np.nan
+    t_g = np.arange(0.0, 120.0, 0.05)
+    v_true = 5.0 + 2.0 * np.sin(0.5 * (t_g - 0.12)) + np.sin(1.3 * (t_g - 0.12))
+    v_g = v_true + rng.normal(0.0, 0.02, t_g.size)
+    est = estimate_latency(t_g, v_g, t_ref, v_ref)
+    assert np.isfinite(est.stderr_s) and 0 < est.stderr_s < 0.01
+    assert abs(est.latency_s - 0.12) < 3 * est.stderr_s + 0.002
