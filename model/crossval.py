@@ -47,6 +47,8 @@ from .solver import FitResult, gauss_newton
 __all__ = ["HypFit", "fit_hypothesis", "cross_validate", "predict_cells", "FIT_FTOL"]
 
 FIT_FTOL = 1e-8  #: relative cost change that ends a fit (statistically negligible)
+FIT_MAX_ITER = 500  #: Gauss-Newton iteration limit of a fit (the ten-parameter drifts need ~200-250;
+#: a fit stopped before it converged is left out of the verdict)
 CV_MAX_ITER = 4  #: Gauss-Newton iterations of a warm-started fold refit (one fold moves the optimum
 #: little and Gauss-Newton converges quadratically near it: 2-3 steps reach the fold's optimum)
 MAX_FOLDS = 10  #: more accelerate cycles than this are merged into this many contiguous folds
@@ -232,8 +234,8 @@ def _inv(A):
         return np.full(A.shape, np.nan)
 
 
-def fit_hypothesis(hyp: Hypothesis, ctx: Context, cells: Cells, *, max_iter: int = 200, eps: float = 1e-6,
-                   terrain_uncertainty: bool = True) -> HypFit:
+def fit_hypothesis(hyp: Hypothesis, ctx: Context, cells: Cells, *, max_iter: int = FIT_MAX_ITER,
+                   eps: float = 1e-6, terrain_uncertainty: bool = True) -> HypFit:
     """Fit ``hyp`` to ``cells`` (module doc).  Returns :class:`HypFit`.
 
     ``terrain_uncertainty``: add the lab terrain's prior variance to the

@@ -119,7 +119,7 @@ from pathlib import PurePath
 import numpy as np
 from scipy import stats
 
-from .crossval import HypFit, _inv, cross_validate, fit_hypothesis, sample_predictions
+from .crossval import FIT_MAX_ITER, HypFit, _inv, cross_validate, fit_hypothesis, sample_predictions
 from .data import CHANNELS, FitData, prepare_data
 from .hypotheses import EFFECTS, HYPOTHESES, Context, DriftOne, DriftStep, get_hypothesis, lab_prior
 from .hypotheses import LIBRARY_PRIOR_WIDEN
@@ -797,7 +797,7 @@ def diagnose(
     fit_terrain: bool = False,
     sinkage: str = "eq10",
     progress: bool = False,
-    max_iter: int = 500,
+    max_iter: int = FIT_MAX_ITER,
 ) -> Diagnosis:
     """Diagnose what Wong's model gets wrong on measured data (rule in the module doc).
 
@@ -814,7 +814,7 @@ def diagnose(
         ``terrain`` and the ``+terrain`` combinations are then not separate hypotheses.
     sinkage : ``eq10`` | ``balance`` (model core).
     progress : tqdm progress bar.
-    max_iter : Gauss-Newton iteration limit per fit (default 500; a fit that does not converge is
+    max_iter : Gauss-Newton iteration limit per fit (default ``FIT_MAX_ITER``; a fit that does not converge is
         reported in ``failures`` and left out of the verdict).
 
     Returns :class:`Diagnosis`.  Raises ValueError for bad data or an unknown hypothesis.

@@ -17,7 +17,7 @@ from typing import Sequence
 
 import numpy as np
 
-from .crossval import HypFit, cross_validate as _cv_cells, fit_hypothesis, sample_predictions
+from .crossval import FIT_MAX_ITER, HypFit, cross_validate as _cv_cells, fit_hypothesis, sample_predictions
 from .data import CHANNELS, Cells, FitData, cell_noise, estimate_noise, make_cells, prepare_data, synthetic_data
 from .hypotheses import HYPOTHESES, Context, get_hypothesis, lab_prior
 from .solver import FitResult, gauss_newton
@@ -60,7 +60,7 @@ def _metrics(measured, predicted) -> dict:
 
 
 def fit_model(data, terrain, wheel, model: str = "lyasko", *, slip_min: float = 0.1,
-              terrain_params: Sequence[str] = (), sinkage: str = "eq10", max_iter: int = 200,
+              terrain_params: Sequence[str] = (), sinkage: str = "eq10", max_iter: int = FIT_MAX_ITER,
               cv: bool = True) -> HypFit:
     """Fit one hypothesis by name to measured data (cell means, penalised Gauss–Newton).
 
