@@ -330,7 +330,8 @@ def fit_hypothesis(hyp: Hypothesis, ctx: Context, cells: Cells, *, max_iter: int
 
 
 def _logdet_psd(A) -> float:
-    """log det of a symmetric positive semi-definite matrix over its non-null eigen-directions."""
+    """log det of a symmetric positive semi-definite (k, k) matrix over its non-null
+    eigen-directions, taken on its equilibrated form (:func:`_equilibrate`) and scaled back."""
     if A.size == 0:
         return 0.0
     As, d = _equilibrate(A)
