@@ -121,7 +121,7 @@ from scipy import stats
 
 from .crossval import FIT_MAX_ITER, HypFit, _inv, cross_validate, fit_hypothesis, sample_predictions
 from .data import CHANNELS, FitData, prepare_data
-from .hypotheses import EFFECTS, HYPOTHESES, Context, DriftOne, DriftStep, get_hypothesis, lab_prior
+from .hypotheses import EFFECTS, HYPOTHESES, Context, DriftStep, get_hypothesis, lab_prior
 from .hypotheses import LIBRARY_PRIOR_WIDEN
 
 __all__ = ["Diagnosis", "diagnose", "structure_test", "binned_residuals", "SLIP_SINKAGE_MODELS", "TITLES",
@@ -640,20 +640,23 @@ def _effective(f: HypFit) -> bool:
 
 def _effect_of(f: HypFit, fits: dict, not_beaten: list = ()) -> str:
     """The effect a fit stands for: its own; when its effect parameters are null (not
-    :func:`_effective`), the effect of the smaller model it then is (slip sinkage + terrain and
-    drift with null slopes are a terrain re-fit; a null slip-sinkage form is Wong); when it
+    :func:`_effective`), the effect of the smaller model it then is (``Hypothesis.nested[0]``,
+    when fitted: slip sinkage + terrain and drift with null slopes are a terrain re-fit; else a
+    terrain mismatch when its own terrain part moved; a null slip-sinkage form is Wong); when it
     contains exactly one nested model (``Hypothesis.nested``) that it does not beat out of sample
     (``not_beaten``), that model's effect (what it adds does not pay off on data it was not
     fitted to: its in-sample evidence is the nested model's)."""
     if f.name == "wong":
         return f.effect
     if not _effective(f):
-        # a one-value drift with a null slope is a one-value terrain re-fit: its level is judged as the
-        # terrain re-fit it is nested in judges the terrain (a step form's jackknife, folds with and
-        # without the change point, is no measure of a level)
-        moved = _effective_terrain(f) or (isinstance(f.hypothesis, DriftOne) and "terrain" in fits
-                                          and _effective(fits["terrain"]))
-        return "terrain_mismatch" if f.hypothesis.nested and moved else "none"
+        # with null effect parameters the fit is the smaller model it reduces to (``nested[0]``: a
+        # drift with null slopes is that terrain re-fit, slip sinkage + terrain with a null slip
+        # sinkage is the terrain re-fit), and stands for what that model's own fit stands for (a step
+        # form's jackknife, folds with and without the change point, is no measure of a level)
+        nested = f.hypothesis.nested
+        if nested and nested[0] in fits:
+            return _effect_of(fits[nested[0]], fits)
+        return "terrain_mismatch" if nested and _effective_terrain(f) else "none"
     if len(not_beaten) == 1 and not_beaten[0] in fits:
         return _effect_of(fits[not_beaten[0]], fits)
     return f.effect

@@ -233,7 +233,8 @@ class Hypothesis:
     ``core``: the slip-sinkage model core (``wheelsoil.model.get_model``) for
     the report's curves.
     ``nested``: the registered hypotheses this one contains (the diagnosis asks it to beat each
-    of them out of sample: what it adds must pay off on data it was not fitted to).
+    of them out of sample: what it adds must pay off on data it was not fitted to); the first is
+    the one it reduces to when its own effect parameters are null (``nulls``).
     """
 
     name: ClassVar[str] = ""
@@ -502,7 +503,8 @@ class DriftOne(DriftLinear):
     (Wong 2008 ch. 2); :class:`DriftLinear` lets all five drift and pays for ten parameters
     where this pays for two.  With ``ctx.fit_terrain`` the whole terrain is re-fitted and only the
     slope is this hypothesis' own.  The effect vanishes when the slope is zero (``nulls``): a
-    moved level alone is the terrain mismatch it contains (``nested``)."""
+    moved level alone is the one-value terrain mismatch it contains (``nested``:
+    ``terrain_<param>``)."""
 
     param: ClassVar[str] = ""
     terrain_block = False
@@ -541,7 +543,7 @@ def _drift_one(name: str, step: bool = False) -> DriftOne:
                      (f"{name} drifting along the run", "repeated passes compact the soil (Wong 2008 ch. 2); linear "
                       "drift of one soil value"))
     cls = type(f"Drift{'Step' if step else ''}_{name}", (DriftStepOne if step else DriftOne,), {
-        "param": name, "name": f"drift_{'step_' if step else ''}{name}",
+        "param": name, "name": f"drift_{'step_' if step else ''}{name}", "nested": (f"terrain_{name}",),
         "title": title + " (the other soil values as in the lab)", "source": source})
     return cls()
 
