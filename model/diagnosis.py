@@ -48,8 +48,9 @@ decides with this rule (constants below; none was tuned on a benchmark):
    re-fits the terrain, the fitted terrain does not conflict with the lab
    values (prior chi-square below its ``1 - PRIOR_CONFLICT_ALPHA`` quantile),
    and a hypothesis that contains a smaller one (slip sinkage + terrain
-   contains the terrain re-fit and the slip-sinkage form; drift contains the
-   terrain re-fit: ``Hypothesis.nested``) lowers the drawbar pull error below it out of
+   contains the terrain re-fit and the slip-sinkage form; a drift contains the
+   terrain re-fit it varies, a one-value drift the one-value re-fit:
+   ``Hypothesis.nested``) lowers the drawbar pull error below it out of
    sample by the same paired test and worsens no channel (what the extra part
    adds must pay off on data it was not fitted to, in the target channels).
    The step drift is tried only when step 1's change-point test finds a step
