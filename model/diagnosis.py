@@ -860,13 +860,14 @@ def diagnose(
         from tqdm import tqdm
 
         bar = tqdm(total=len(all_names), desc="fitting hypotheses", unit="model", leave=False)
+    not_tried: dict[str, list] = {}  # reason -> hypotheses (one note per reason)
     for name in all_names:
         h = HYPOTHESES[name]
         if bar is not None:
             bar.set_postfix_str(name)
         why = h.available(ctx, has_x)
         if why:
-            notes.append(f"{h.title} ({name}) not tried: {why}.")
+            not_tried.setdefault(why, []).append(name)
             if bar is not None:
                 bar.update(1)
             continue
@@ -888,6 +889,7 @@ def diagnose(
             bar.update(1)
     if bar is not None:
         bar.close()
+    notes += [f"not tried ({why}): {', '.join(ns)}." for why, ns in not_tried.items()]
     if "wong" not in fits:
         raise ValueError("Wong's model could not be evaluated on these data: " + "; ".join(failures))
     from .fit import _metrics
