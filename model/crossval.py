@@ -21,7 +21,8 @@ Standard errors (all in :attr:`HypFit.stderr`):
   larger: cycle-to-cycle variation is invisible inside one fit.
 
 :func:`cross_validate` refits the hypothesis without each fold (accelerate
-cycle, or slip-rank fold of a table), warm-started at the full-data optimum,
+cycle, or slip-rank fold of a table; beyond ``MAX_FOLDS`` cycles, contiguous blocks of
+cycles), warm-started at the full-data optimum,
 and predicts the held-out cells: the out-of-sample residuals the verdict's
 paired tests use.
 
@@ -51,7 +52,11 @@ FIT_MAX_ITER = 500  #: Gauss-Newton iteration limit of a fit (the ten-parameter 
 #: a fit stopped before it converged is left out of the verdict)
 CV_MAX_ITER = 4  #: Gauss-Newton iterations of a warm-started fold refit (one fold moves the optimum
 #: little and Gauss-Newton converges quadratically near it: 2-3 steps reach the fold's optimum)
-MAX_FOLDS = 10  #: more accelerate cycles than this are merged into this many contiguous folds
+MAX_FOLDS = 20  #: more accelerate cycles than this are merged into this many contiguous folds.
+#: The cycles are the independent units of the diagnosis' paired test over folds: merging them
+#: only lowers its power (an exact signed-rank p over n folds is at least 2**-n, and an effect
+#: confined to the end of a run gains in few folds); the cap bounds the cost of the refits
+#: (linear in the folds) for long recordings
 
 
 def cv_folds(group: np.ndarray) -> np.ndarray:

@@ -23,7 +23,8 @@ decides with this rule (constants below; none was tuned on a benchmark):
 2. **Out of sample, per channel, paired.**  For every hypothesis H and
    measured channel c, the per-fold difference of held-out squared errors
    (Wong minus H, in units of that channel's noise variance) is tested
-   one-sided over the folds (the folds are the independent units) with the
+   one-sided over the folds (the folds are the independent units: each
+   accelerate cycle is its own fold, up to ``MAX_FOLDS`` of them) with the
    Wilcoxon signed-rank test (exact), the test recommended for comparing two
    predictors over a few folds (Demsar 2006, JMLR 7: squared-error
    differences are skewed and heteroscedastic, a drift gains most in the
@@ -120,7 +121,7 @@ from pathlib import PurePath
 import numpy as np
 from scipy import stats
 
-from .crossval import FIT_MAX_ITER, HypFit, _inv, cross_validate, fit_hypothesis, sample_predictions
+from .crossval import FIT_MAX_ITER, MAX_FOLDS, HypFit, _inv, cross_validate, fit_hypothesis, sample_predictions
 from .data import CHANNELS, FitData, prepare_data
 from .hypotheses import EFFECTS, HYPOTHESES, Context, DriftStep, get_hypothesis, lab_prior
 from .hypotheses import LIBRARY_PRIOR_WIDEN
@@ -153,7 +154,7 @@ THRESHOLDS = {
     "alpha": ALPHA, "worsen_alpha": WORSEN_ALPHA, "min_effect_sigma": MIN_EFFECT, "min_effect_rel": MIN_REL,
     "min_gain_noise_var": MIN_GAIN, "p_name": P_NAME, "p_high": P_HIGH, "bf_alternative": BF_ALTERNATIVE,
     "wald_z": WALD_Z, "prior_conflict_alpha": PRIOR_CONFLICT_ALPHA, "load_ratio_tol": LOAD_RATIO_TOL, "min_units_high": MIN_UNITS_HIGH,
-    "corr_flag": CORR_FLAG, "cond_flag": COND_FLAG,
+    "corr_flag": CORR_FLAG, "cond_flag": COND_FLAG, "max_folds": MAX_FOLDS,
 }
 
 SLIP_SINKAGE_MODELS = ("vasilev", "lyasko", "ding")

@@ -159,3 +159,19 @@ def test_the_static_load_is_the_mean_load_of_the_whole_time_series():
     assert prepare_data(_table(1)).load_static_n is None
     two = pd.concat([df.assign(run=0), df.assign(run=1, load_n=df["load_n"] * 1.1)], ignore_index=True)
     assert prepare_data(two).load_static_n is None
+
+
+def test_cv_folds_keep_each_cycle_up_to_the_cap_then_merge_whole_cycles():
+    """Each accelerate cycle is its own fold (the paired test's independent unit) up to
+    ``MAX_FOLDS``; more cycles are merged into ``MAX_FOLDS`` contiguous blocks of whole cycles."""
+    from wheelsoil.model.crossval import MAX_FOLDS, cv_folds
+
+    few = np.repeat(np.arange(MAX_FOLDS) * 7 + 3, 5)  # arbitrary labels, 5 cells per cycle
+    fold = cv_folds(few)
+    assert np.unique(fold).size == MAX_FOLDS
+    assert all(np.unique(fold[few == g]).size == 1 for g in np.unique(few))
+    many = np.repeat(np.arange(3 * MAX_FOLDS + 1), 4)
+    fold = cv_folds(many)
+    assert np.unique(fold).size == MAX_FOLDS
+    assert all(np.unique(fold[many == g]).size == 1 for g in np.unique(many))  # cycles stay whole
+    assert np.all(np.diff(fold) >= 0)  # contiguous blocks along the run
