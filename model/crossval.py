@@ -45,7 +45,7 @@ from .data import CHANNELS, Cells, FitData
 from .hypotheses import Context, Hypothesis
 from .solver import FitResult, gauss_newton
 
-__all__ = ["HypFit", "fit_hypothesis", "cross_validate", "predict_cells", "FIT_FTOL"]
+__all__ = ["HypFit", "fit_hypothesis", "cross_validate", "predict_cells", "inv_psd", "FIT_FTOL"]
 
 FIT_FTOL = 1e-8  #: relative cost change that ends a fit (statistically negligible)
 FIT_MAX_ITER = 500  #: Gauss-Newton iteration limit of a fit (the ten-parameter drifts need ~200-250;
@@ -229,9 +229,13 @@ def _equilibrate(A):
     return A * np.outer(d, d), d
 
 
-def _inv(A):
-    """Pseudo-inverse of a symmetric positive semi-definite (k, k) matrix, on its equilibrated
-    form (:func:`_equilibrate`); NaN where it cannot be formed."""
+def inv_psd(A: np.ndarray) -> np.ndarray:
+    """Pseudo-inverse of a symmetric positive semi-definite (k, k) matrix (an information matrix:
+    covariance = its inverse), computed on the Jacobi-equilibrated form ``D A D`` (unit diagonal,
+    :func:`_equilibrate`) and scaled back, so that parameters of very different SI scale (c in
+    Pa beside phi in rad) keep their weakly determined directions (Golub & Van Loan,
+    *Matrix Computations* §3.5.2, equilibration).  Returns (k, k); all NaN where the
+    decomposition fails (never raises)."""
     try:
         As, d = _equilibrate(A)
         return np.linalg.pinv(As, rcond=1e-12, hermitian=True) * np.outer(d, d)
@@ -286,7 +290,7 @@ def fit_hypothesis(hyp: Hypothesis, ctx: Context, cells: Cells, *, max_iter: int
     if k:
         Jd, Jp = J[:m], J[m:]
         A = Jd.T @ Jd / c_hat + Jp.T @ Jp
-        cov_u = _inv(A)
+        cov_u = inv_psd(A)
         cn = np.linalg.norm(J, axis=0)
         if np.all(cn > 0):
             sv = np.linalg.svd(J / cn, compute_uv=False)
@@ -399,7 +403,7 @@ def _lab_terrain_variance(prob: _Problem, u, Jd, ctx: Context) -> np.ndarray:
     if not cols:
         return np.zeros(k)
     Jt = np.column_stack(cols)
-    S = -_inv(Jd.T @ Jd) @ (Jd.T @ Jt)
+    S = -inv_psd(Jd.T @ Jd) @ (Jd.T @ Jt)
     return np.sum(S**2 * np.square(sds)[None, :], axis=1)
 
 

@@ -7,7 +7,7 @@ nats too large for the terrain re-fit.  Both are computed on the equilibrated ma
 
 import numpy as np
 
-from wheelsoil.model.crossval import _inv, _logdet_psd
+from wheelsoil.model.crossval import inv_psd, _logdet_psd
 
 
 #: The terrain re-fit's posterior information (data with the design effect, plus the lab prior) on
@@ -42,7 +42,7 @@ def test_logdet_is_exact_on_badly_scaled_information():
 
 def test_covariance_keeps_the_weakly_determined_direction():
     B, d, A = _terrain_like_information()
-    se = np.sqrt(np.diag(_inv(A)))
+    se = np.sqrt(np.diag(inv_psd(A)))
     exact = np.sqrt(np.diag(np.linalg.inv(B))) / d
     np.testing.assert_allclose(se, exact, rtol=1e-6)
 
@@ -54,4 +54,4 @@ def test_null_directions_are_left_out_not_inflated():
     Z = np.zeros((6, 6))
     Z[:5, :5] = A
     assert abs(_logdet_psd(Z) - _logdet_psd(A)) < 1e-9
-    assert _inv(Z)[5, 5] == 0.0
+    assert inv_psd(Z)[5, 5] == 0.0
