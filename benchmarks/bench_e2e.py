@@ -34,7 +34,7 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
 
     from wheelsoil.model import load_terrain
-    from wheelsoil.simulate import SCENARIOS, simulate_run, write_simulation
+    from wheelsoil.simulate import SCENARIOS, simulate_run, write_simulation, write_vehicle_config
 
     exe = [sys.executable, "-m", "wheelsoil"]
     with tempfile.TemporaryDirectory() as tmp:
@@ -57,7 +57,10 @@ def main(argv=None) -> int:
         mcap = tmp / "run.mcap"
         if args.format != "mcap":
             t, c = time.perf_counter(), child_cpu()
-            subprocess.run(exe + ["import", str(src), "-o", str(mcap)], check=True, capture_output=True)
+            # a .log/.blf carries no vehicle configuration: the simulated wheel's is given, as a user would
+            vehicle = write_vehicle_config(run, tmp / "vehicle.toml")
+            subprocess.run(exe + ["import", str(src), "-o", str(mcap), "--vehicle", str(vehicle)], check=True,
+                           capture_output=True)
             times["import"], cpu["import"] = time.perf_counter() - t, child_cpu() - c
         t, c = time.perf_counter(), child_cpu()
         res = subprocess.run(exe + ["fit", str(mcap), "--terrain", "clay", "-o", str(tmp / "report")],

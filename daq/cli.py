@@ -222,13 +222,18 @@ def _cmd_import(args) -> int:
     from .recording import check_output
 
     check_output(args.output, args.inputs, overwrite=args.overwrite)
+    config = _config(args.vehicle)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
         res = import_log(args.inputs, args.output, channel_map=parse_channel_map(args.map),
-                         config=_config(args.vehicle), **_overwrite_kw(import_log, args))
+                         config=config, **_overwrite_kw(import_log, args))
     _print_warnings(res.warnings)
     print(_safe(f"imported {res.total} frames ({_counts(res.frames)}) into "
                 f"{res.output}" + (f"; skipped {res.skipped} unparsable line(s)" if res.skipped else "")))
+    if args.vehicle is None:  # a log file carries no vehicle: slip (Eq. 6) is computed with this wheel
+        print(_safe(f"note: attached the shipped vehicle configuration ({config.source}: wheel radius "
+                    f"{config.wheel_radius_m:g} m, width {config.wheel_width_m:g} m); give --vehicle TOML "
+                    "if the run used another wheel"))
     return 0
 
 

@@ -203,3 +203,17 @@ def test_imported_recording_says_imported_with_source_hash_and_not_the_import_ho
     rec = info.metadata["wheelsoil.import"]
     assert json.loads(rec["frames"]) == 300 and json.loads(rec["rejected"]) == 0
     assert json.loads(rec["truncated"]) is False
+
+
+def test_import_says_which_vehicle_configuration_it_attached(tmp_path, good_log, capsys):
+    """A log file carries no vehicle: slip (Eq. 6) will use the attached wheel, so ``import`` says which
+    one it attached when no --vehicle was given, and says nothing of the kind when one was."""
+    from wheelsoil.daq.config import default_vehicle_path, load_vehicle_config
+
+    assert cli("import", good_log, "-o", tmp_path / "a.mcap") == 0
+    out = capsys.readouterr().out
+    shipped = load_vehicle_config()
+    assert "shipped vehicle configuration" in out and f"wheel radius {shipped.wheel_radius_m:g} m" in out
+    assert "--vehicle" in out
+    assert cli("import", good_log, "-o", tmp_path / "b.mcap", "--vehicle", default_vehicle_path()) == 0
+    assert "shipped vehicle configuration" not in capsys.readouterr().out
