@@ -87,6 +87,23 @@ def _fit_names(diag) -> list:
     return sorted({_canon(k) for k in (getattr(diag, "fits", {}) or {})}, key=_model_order)
 
 
+#: a fitted model with a lower posterior probability gets no panel of its own in dp_vs_slip.png
+FIG_MIN_PROBABILITY = 0.01
+#: always drawn: Wong and the paper's three slip-sinkage forms (paper Figs. 4-5)
+FIG_ALWAYS = ("wong", "vasilev", "lyasko", "ding")
+
+
+def _figure_names(diag) -> list:
+    """The models drawn in ``dp_vs_slip.png``, in display order: :data:`FIG_ALWAYS`, the chosen
+    model, the listed alternatives and every other fit with posterior probability at least
+    :data:`FIG_MIN_PROBABILITY` (the rest are in the models table; one panel each for 34
+    hypotheses would be unreadable)."""
+    probs = {_canon(k): v for k, v in (getattr(diag, "probabilities", {}) or {}).items()}
+    keep = set(FIG_ALWAYS) | {_canon(k) for k in [getattr(diag, "model", None), *(getattr(diag, "alternatives", []) or [])]
+                              if k}
+    return [k for k in _fit_names(diag) if k in keep or probs.get(k, 0.0) >= FIG_MIN_PROBABILITY]
+
+
 def _title(name) -> str:
     return TITLES.get(name, str(name).replace("_", " ")) if name is not None else "none"
 
@@ -875,8 +892,12 @@ def _figures(diag, wheel, out_dir: Path, plt) -> tuple:
     curves = _model_curves(diag, wheel, grid, load)
     files, notes = [], {}
 
-    # 1. Dp vs slip, one panel per model (paper Figs. 4-5)
-    names = _fit_names(diag)
+    # 1. Dp vs slip, one panel per model that matters (paper Figs. 4-5)
+    names = _figure_names(diag)
+    left = len(_fit_names(diag)) - len(names)
+    if left:
+        notes["dp_vs_slip.png"] = [f"{left} other fitted model(s), each with posterior probability below "
+                                   f"{FIG_MIN_PROBABILITY:.0%}, are in the models table, not drawn"]
     ncol = 3 if len(names) > 2 else len(names)
     nrow = int(math.ceil(len(names) / ncol))
     fig, axes = plt.subplots(nrow, ncol, figsize=(5.6 * ncol, 4.6 * nrow), squeeze=False, sharey=True)
@@ -1416,7 +1437,9 @@ def _html(rep: dict, figs: list, overviews: list) -> str:
         parts.append(_table(hdr, rows))
     parts.append("<h2>Figures</h2>")
     captions = {
-        "dp_vs_slip.png": "Drawbar pull against slip, one panel per model (paper Figs. 4-5): grey dots measured, "
+        "dp_vs_slip.png": "Drawbar pull against slip, one panel per model (paper Figs. 4-5: Wong, the three slip-sinkage "
+                          f"forms, the chosen model, its alternatives and any other with posterior >= "
+                          f"{FIG_MIN_PROBABILITY:.0%}): grey dots measured, "
                           "crosses the model at each sample's measured load, line the model at the median load.",
         "residuals.png": "Wong's error (measured - model) per channel against slip (with binned means of independent "
                          "units and 95 % confidence intervals), load and time.",

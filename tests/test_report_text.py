@@ -163,3 +163,23 @@ def test_table_input_terrain_fitted_and_held_fixed_match_the_table(tmp_path):
     row = re.search(r"<tr><td>" + re.escape(html.escape(_title(chosen), quote=True)) + r"</td>(.*?)</tr>", coef)
     cells = re.findall(r"<td>(.*?)</td>", row.group(1))
     assert cells[1] == (", ".join(fitted) or "-") and cells[2] == (", ".join(held) or "-")
+
+
+def test_dp_vs_slip_draws_the_paper_forms_the_verdict_and_probable_models_only():
+    """One panel per fitted model is unreadable with 34 hypotheses: Wong, the paper's three forms, the
+    chosen model, its alternatives and models with posterior >= FIG_MIN_PROBABILITY are drawn."""
+    from types import SimpleNamespace
+
+    from wheelsoil.model.report import FIG_ALWAYS, FIG_MIN_PROBABILITY, _figure_names
+
+    fits = dict.fromkeys(["wong", "vasilev", "lyasko", "ding", "terrain", "terrain_c", "drift_c", "wong_reece",
+                          "zero_drift", "balance"])
+    low = FIG_MIN_PROBABILITY / 10
+    probs = {"terrain_c": 0.5, "drift_c": 0.3, "wong_reece": 1.5 * FIG_MIN_PROBABILITY, "terrain": low,
+             "zero_drift": low, "balance": low, "wong": 0.0}
+    diag = SimpleNamespace(fits=fits, probabilities=probs, model="drift_c", alternatives=["zero_drift"])
+    names = _figure_names(diag)
+    assert set(FIG_ALWAYS) <= set(names)
+    assert {"drift_c", "zero_drift", "terrain_c", "wong_reece"} <= set(names)  # chosen, alternative, probable
+    assert "terrain_mismatch" not in names and "balance" not in names  # improbable, not listed
+    assert names[0] == "wong"
