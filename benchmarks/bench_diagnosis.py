@@ -115,7 +115,8 @@ def thresholds() -> dict:
 
 
 def _pct(a, b):
-    return "n/a" if b == 0 else f"{100.0 * a / b:.0f} % ({a}/{b})"
+    """``a/b`` as a percentage with the counts; one decimal, so that 52/55 (94.5 %) never reads as 95 %."""
+    return "n/a" if b == 0 else f"{100.0 * a / b:.1f} % ({a}/{b})"
 
 
 def report(rows: list[dict], wall_s: float, args) -> str:

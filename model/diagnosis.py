@@ -1296,8 +1296,12 @@ def _summary(d: Diagnosis) -> str:
     parts = []
     units_word = "independent rows" if data.kind == "table" else "independent cycle x slip cells"
     chans = ", ".join(CHANNEL_TITLES[c] for c in data.channels)
-    parts.append(f"{data.n} samples with {data.slip_min:g} < s < 1 ({data.n_units} {units_word}, "
-                 f"{len(np.unique(data.cells.group))} cross-validation folds: {data.group_kind}) were fitted against {chans}.")
+    n_groups = len(np.unique(data.cells.group))
+    n_folds = (wong.cv or {}).get("n_groups") or n_groups
+    folds = (f"{n_groups} cross-validation folds: {data.group_kind}" if n_folds == n_groups else
+             f"{n_groups} {data.group_kind} in {n_folds} cross-validation folds of contiguous {data.group_kind}")
+    parts.append(f"{data.n} samples with {data.slip_min:g} < s < 1 ({data.n_units} {units_word}, {folds}) "
+                 f"were fitted against {chans}.")
     b = d.binned["drawbar_pull_n"]
     if b["mean"]:
         i = int(np.argmax(np.abs(b["mean"])))

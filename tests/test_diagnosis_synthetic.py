@@ -250,3 +250,16 @@ def test_a_step_along_the_run_is_found_and_noise_alone_is_not():
     assert with_step["effect"] > 1.5
     null = [_structure_1d(x, rng.standard_normal(10), step=True)["p_step"] for _ in range(2000)]
     assert np.mean(np.array(null) < ALPHA) <= 1.5 * ALPHA
+
+
+def test_summary_counts_cycles_and_the_folds_they_were_merged_into(monkeypatch):
+    """More accelerate cycles than MAX_FOLDS are merged into MAX_FOLDS folds; the summary says both."""
+    import wheelsoil.model.crossval as cv
+
+    df = synthetic_data(SAND, W, "wong", duration_s=40.0, load_n=13000.0, seed=0)
+    monkeypatch.setattr(cv, "MAX_FOLDS", 2)
+    d = diagnose(df, SAND, W)
+    cycles = np.unique(d.data.cells.group).size
+    assert cycles > 2
+    assert d.fits["wong"].cv["n_groups"] == 2
+    assert f"{cycles} {d.data.group_kind} in 2 cross-validation folds" in d.summary
