@@ -1299,7 +1299,7 @@ def _summary(d: Diagnosis) -> str:
     n_groups = len(np.unique(data.cells.group))
     n_folds = (wong.cv or {}).get("n_groups") or n_groups
     folds = (f"{n_groups} cross-validation folds: {data.group_kind}" if n_folds == n_groups else
-             f"{n_groups} {data.group_kind} in {n_folds} cross-validation folds of contiguous {data.group_kind}")
+             f"{n_groups} {data.group_kind} merged into {n_folds} contiguous cross-validation folds")
     parts.append(f"{data.n} samples with {data.slip_min:g} < s < 1 ({data.n_units} {units_word}, {folds}) "
                  f"were fitted against {chans}.")
     b = d.binned["drawbar_pull_n"]

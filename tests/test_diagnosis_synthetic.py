@@ -262,4 +262,4 @@ def test_summary_counts_cycles_and_the_folds_they_were_merged_into(monkeypatch):
     cycles = np.unique(d.data.cells.group).size
     assert cycles > 2
     assert d.fits["wong"].cv["n_groups"] == 2
-    assert f"{cycles} {d.data.group_kind} in 2 cross-validation folds" in d.summary
+    assert f"{cycles} {d.data.group_kind} merged into 2 contiguous cross-validation folds" in d.summary
