@@ -985,8 +985,9 @@ def diagnose(
         pb = probs.get(best, 0.0)
         alternatives = [k for k in supported if k != best and probs.get(k, 0.0) * BF_ALTERNATIVE >= pb]
         # an unsupported hypothesis of another effect with more evidence than the candidate: ambiguous
-        rivals = [k for k in probs if k not in supported and k != "wong" and eff_of[k] != fits[best].effect
-                  and probs[k] > pb]
+        # (the most probable first: it is the one the reason and the separating measurement name)
+        rivals = sorted((k for k in probs if k not in supported and k != "wong" and eff_of[k] != fits[best].effect
+                         and probs[k] > pb), key=lambda k: -probs[k])
         # a supported listed cause of another effect that the candidate does not hold against out of
         # sample explains the data as well where it matters, whatever the in-sample evidence says
         alternatives += [k for k in supported if k != best and k not in alternatives and eff_of[k] in LISTED
