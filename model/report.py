@@ -40,7 +40,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .diagnosis import CHANNEL_TITLES, TITLES
+from .diagnosis import CHANNEL_TITLES, SLIP_SINKAGE_MODELS, TITLES
 from .diagnosis import json_ready as _clean
 
 __all__ = ["write_report", "report_dict", "fmt", "fmt_param", "param_unit", "SCHEMA", "ALL_MODELS",
@@ -90,18 +90,18 @@ def _fit_names(diag) -> list:
 #: a fitted model with a lower posterior probability gets no panel of its own in dp_vs_slip.png
 FIG_MIN_PROBABILITY = 0.01
 #: always drawn: Wong and the paper's three slip-sinkage forms (paper Figs. 4-5)
-FIG_ALWAYS = ("wong", "vasilev", "lyasko", "ding")
+FIG_ALWAYS = ("wong", *SLIP_SINKAGE_MODELS)
 
 
-def _figure_names(diag) -> list:
-    """The models drawn in ``dp_vs_slip.png``, in display order: :data:`FIG_ALWAYS`, the chosen
-    model, the listed alternatives and every other fit with posterior probability at least
-    :data:`FIG_MIN_PROBABILITY` (the rest are in the models table; one panel each for 34
-    hypotheses would be unreadable)."""
+def _figure_names(diag, names: list) -> list:
+    """The models of ``names`` (:func:`_fit_names`) drawn in ``dp_vs_slip.png``, in that order:
+    :data:`FIG_ALWAYS`, the chosen model, the listed alternatives and every other fit with
+    posterior probability at least :data:`FIG_MIN_PROBABILITY` (the rest are in the models
+    table; one panel each for 34 hypotheses would be unreadable)."""
     probs = {_canon(k): v for k, v in (getattr(diag, "probabilities", {}) or {}).items()}
     keep = set(FIG_ALWAYS) | {_canon(k) for k in [getattr(diag, "model", None), *(getattr(diag, "alternatives", []) or [])]
                               if k}
-    return [k for k in _fit_names(diag) if k in keep or probs.get(k, 0.0) >= FIG_MIN_PROBABILITY]
+    return [k for k in names if k in keep or probs.get(k, 0.0) >= FIG_MIN_PROBABILITY]
 
 
 def _title(name) -> str:
@@ -893,8 +893,9 @@ def _figures(diag, wheel, out_dir: Path, plt) -> tuple:
     files, notes = [], {}
 
     # 1. Dp vs slip, one panel per model that matters (paper Figs. 4-5)
-    names = _figure_names(diag)
-    left = len(_fit_names(diag)) - len(names)
+    fitted = _fit_names(diag)
+    names = _figure_names(diag, fitted)
+    left = len(fitted) - len(names)
     if left:
         notes["dp_vs_slip.png"] = [f"{left} other fitted model(s), each with posterior probability below "
                                    f"{FIG_MIN_PROBABILITY:.0%}, are in the models table, not drawn"]

@@ -170,7 +170,7 @@ def test_dp_vs_slip_draws_the_paper_forms_the_verdict_and_probable_models_only()
     chosen model, its alternatives and models with posterior >= FIG_MIN_PROBABILITY are drawn."""
     from types import SimpleNamespace
 
-    from wheelsoil.model.report import FIG_ALWAYS, FIG_MIN_PROBABILITY, _figure_names
+    from wheelsoil.model.report import FIG_ALWAYS, FIG_MIN_PROBABILITY, _figure_names, _fit_names
 
     fits = dict.fromkeys(["wong", "vasilev", "lyasko", "ding", "terrain", "terrain_c", "drift_c", "wong_reece",
                           "zero_drift", "balance"])
@@ -178,7 +178,7 @@ def test_dp_vs_slip_draws_the_paper_forms_the_verdict_and_probable_models_only()
     probs = {"terrain_c": 0.5, "drift_c": 0.3, "wong_reece": 1.5 * FIG_MIN_PROBABILITY, "terrain": low,
              "zero_drift": low, "balance": low, "wong": 0.0}
     diag = SimpleNamespace(fits=fits, probabilities=probs, model="drift_c", alternatives=["zero_drift"])
-    names = _figure_names(diag)
+    names = _figure_names(diag, _fit_names(diag))
     assert set(FIG_ALWAYS) <= set(names)
     assert {"drift_c", "zero_drift", "terrain_c", "wong_reece"} <= set(names)  # chosen, alternative, probable
     assert "terrain_mismatch" not in names and "balance" not in names  # improbable, not listed
