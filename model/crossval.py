@@ -207,9 +207,16 @@ class _Problem:
             r = np.concatenate([r, (np.asarray(u, float)[self.prior_idx] - self.prior_mu) / self.prior_sd])
         return r
 
-    def solve(self, x0=None, max_iter=60, eps=1e-6):
+    def solve(self, x0=None, max_iter=60, eps=1e-6, jac0=None, covariance=True):
         return gauss_newton(self.fun, self.x0 if x0 is None else x0, bounds=(self.lo, self.hi), x_scale=self.sc,
-                            names=self.names, eps=eps, max_iter=max_iter, ftol=FIT_FTOL, absolute_sigma=True)
+                            names=self.names, eps=eps, max_iter=max_iter, ftol=FIT_FTOL, absolute_sigma=True,
+                            jac0=jac0, covariance=covariance)
+
+    def data_rows(self, keep: np.ndarray) -> np.ndarray:
+        """Boolean mask over this problem's data rows: those of the cells ``keep`` (n_cells,),
+        i.e. the rows of the problem on ``cells.subset(keep)`` (every cell's prediction depends on
+        that cell alone, so that problem's Jacobian is these rows of this one's)."""
+        return np.tile(np.asarray(keep, bool), len(self.chans))[self.ok]
 
 
 def predict_cells(fit: HypFit, ctx: Context, cells: Cells):
@@ -422,6 +429,8 @@ def cross_validate(fit: HypFit, ctx: Context, cells: Cells, group_kind: str = ""
     held = {c: np.full(cells.n, np.nan) for c in fit.cell_pred}
     fold_params = []
     failed = 0
+    full = _Problem(fit.hypothesis, ctx, cells) if fit.k and fit.result is not None else None
+    J_full = None if full is None else fit.result.jac
     for g in groups:
         test = fold == g
         if fit.k == 0 or groups.size < 2:
@@ -430,8 +439,12 @@ def cross_validate(fit: HypFit, ctx: Context, cells: Cells, group_kind: str = ""
             continue
         train = cells.subset(~test)
         prob = _Problem(fit.hypothesis, ctx, train)
+        # the refit starts at the full-data optimum, where the Jacobian is the full fit's, on the
+        # training cells' rows (and the prior rows)
+        jac0 = None if J_full is None else np.vstack([J_full[:full.m_data][full.data_rows(~test)],
+                                                      J_full[full.m_data:]])
         try:
-            res = prob.solve(x0=fit.u, max_iter=CV_MAX_ITER, eps=1e-4)
+            res = prob.solve(x0=fit.u, max_iter=CV_MAX_ITER, eps=1e-4, jac0=jac0, covariance=False)
             u = res.x if np.all(np.isfinite(res.x)) and np.isfinite(res.cost) else fit.u
             if u is fit.u:
                 failed += 1

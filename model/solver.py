@@ -140,6 +140,8 @@ def gauss_newton(
     names: Sequence[str] | None = None,
     absolute_sigma: bool = False,
     ftol: float = 1e-12,
+    jac0: np.ndarray | None = None,
+    covariance: bool = True,
 ) -> FitResult:
     """Bounded Gauss–Newton with Levenberg–Marquardt damping.
 
@@ -169,6 +171,14 @@ def gauss_newton(
     absolute_sigma : if True the covariance is ``(J^T J)^-1`` (sigma taken as the
         true noise); otherwise it is scaled by the reduced chi-square.
     ftol : relative cost-change tolerance.
+    jac0 : (m, p) Jacobian of the weighted residuals ``fun(x) / sigma`` at ``x0``
+        when the caller already has it (a warm start from a fit on a superset
+        of the residuals: its rows); saves the first Jacobian evaluation
+        (p calls of ``fun`` with forward differences).
+    covariance : False when only the optimum is wanted (a cross-validation
+        refit): the Jacobian is not evaluated at the last point, and ``jac``,
+        ``covariance``, ``stderr``, ``correlation`` and ``condition_number``
+        are NaN.
 
     Returns
     -------
@@ -177,8 +187,8 @@ def gauss_newton(
     Raises
     ------
     ValueError
-        Shapes disagree, ``x0`` is not finite, ``lower > upper``, or ``sigma``
-        is not positive.
+        Shapes disagree (``jac0`` included), ``x0`` is not finite, ``lower > upper``,
+        or ``sigma`` is not positive.
     """
     x0 = np.atleast_1d(np.asarray(x0, dtype=float)).copy()
     p = x0.size
@@ -235,7 +245,12 @@ def gauss_newton(
     else:
         cost = 0.5 * float(r @ r)
         lam = 1e-3
-        J = jac_w(x, r)
+        if jac0 is not None and np.array_equal(x, x0):
+            J = np.asarray(jac0, dtype=float)
+            if J.shape != (m, p):
+                raise ValueError(f"gauss_newton: jac0 has shape {J.shape}, expected {(m, p)}")
+        else:
+            J = jac_w(x, r)
         for it in range(1, max_iter + 1):
             Js = J * d
             g = Js.T @ r
@@ -281,18 +296,22 @@ def gauss_newton(
             dcost = cost - cost_new
             x, r, cost = x_new, r_new, cost_new
             lam = max(lam / 10.0, 1e-15)
-            J = jac_w(x, r)
             if np.linalg.norm(step_u) <= eps * (np.linalg.norm(x / d) + eps):
                 status, message = 1, f"relative step below eps={eps:g}"
-                break
-            if dcost <= ftol * max(cost, 1e-300):
+            elif dcost <= ftol * max(cost, 1e-300):
                 status, message = 2, f"relative cost change below ftol={ftol:g}"
+            if covariance or (status == 0 and it < max_iter):
+                J = jac_w(x, r)  # at the new point: the next step's, or the covariance's
+            if status:
                 break
     if p == 0 or not np.all(np.isfinite(J)):
         J = np.nan_to_num(J)
     cost = 0.5 * float(r @ r) if np.all(np.isfinite(r)) else float("nan")
     dof = m - p
-    cov, cond = _covariance(J, d, cost, dof, absolute_sigma)
+    if covariance:
+        cov, cond = _covariance(J, d, cost, dof, absolute_sigma)
+    else:  # J may be from an earlier point: none of it is returned
+        J, cov, cond = np.full((m, p), np.nan), np.full((p, p), np.nan), float("nan")
     se = np.sqrt(np.clip(np.diag(cov), 0, None)) if p else np.zeros(0)
     se = np.where(np.isfinite(np.diag(cov)), se, np.nan) if p else se
     with np.errstate(invalid="ignore", divide="ignore"):

@@ -57,6 +57,26 @@ def test_analytic_jacobian_matches_finite_differences():
     np.testing.assert_allclose(list(a.stderr.values()), list(b.stderr.values()), rtol=1e-4)
 
 
+def test_warm_refit_with_the_start_jacobian_and_no_covariance_finds_the_same_optimum():
+    """A cross-validation refit: start at a fit on all data, pass that fit's Jacobian rows
+    (jac0) and skip the covariance; the optimum is the plain refit's, with fewer calls."""
+    y = _data(3)
+    full = gauss_newton(lambda x: _decay(x) - y, [1.0, 1.0, 0.0], eps=1e-10)
+    keep = np.arange(T.size) % 5 != 0  # one fold out
+
+    def fold(x):
+        return (_decay(x) - y)[keep]
+
+    plain = gauss_newton(fold, full.x, eps=1e-10)
+    warm = gauss_newton(fold, full.x, eps=1e-10, jac0=full.jac[keep], covariance=False)
+    np.testing.assert_allclose(warm.x, plain.x, rtol=1e-7)
+    assert warm.nfev < plain.nfev
+    assert np.isnan(warm.covariance).all() and np.isnan(warm.jac).all()
+    assert np.isfinite(plain.covariance).all()
+    with pytest.raises(ValueError, match="jac0 has shape"):
+        gauss_newton(fold, full.x, jac0=full.jac)
+
+
 def test_recovers_truth_within_two_standard_errors_in_90_percent_of_seeds():
     truth = np.array([3.0, 0.7, 0.5])
     hits, total = 0, 0

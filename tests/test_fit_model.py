@@ -175,3 +175,23 @@ def test_cv_folds_keep_each_cycle_up_to_the_cap_then_merge_whole_cycles():
     assert np.unique(fold).size == MAX_FOLDS
     assert all(np.unique(fold[many == g]).size == 1 for g in np.unique(many))  # cycles stay whole
     assert np.all(np.diff(fold) >= 0)  # contiguous blocks along the run
+
+
+def test_a_folds_residual_rows_are_the_full_problems_rows_of_its_cells():
+    """cross_validate starts each fold's refit with the full fit's Jacobian rows
+    (``_Problem.data_rows``): they must be exactly the fold problem's rows, channel by channel,
+    with the missing sinkage values left out of both."""
+    df = _table(4, noise_z_m=0.005)
+    df.loc[df.index[::7], "sinkage_m"] = np.nan
+    data = prepare_data(df)
+    ctx = _ctx()
+    h = get_hypothesis("vasilev+terrain")
+    full = _Problem(h, ctx, data.cells)
+    keep = np.arange(data.cells.n) % 4 != 1
+    fold = _Problem(h, ctx, data.cells.subset(keep))
+    u = full.x0 + 0.01
+    r_full, r_fold = full.fun(u), fold.fun(u)
+    assert fold.m_data == int(full.data_rows(keep).sum())
+    # equal up to rounding (the kernel's blocked sums see other neighbours)
+    np.testing.assert_allclose(r_fold[:fold.m_data], r_full[:full.m_data][full.data_rows(keep)], rtol=1e-12)
+    np.testing.assert_array_equal(r_fold[fold.m_data:], r_full[full.m_data:])  # the prior rows
