@@ -418,8 +418,9 @@ def cross_validate(fit: HypFit, ctx: Context, cells: Cells, group_kind: str = ""
     """Leave-one-fold-out refits (folds: :func:`cv_folds` of ``cells.group``), held-out cell predictions.
 
     Each fold is refitted from the full-data optimum (at most ``CV_MAX_ITER``
-    Gauss-Newton iterations) without the fold's cells; its cells are then
-    predicted.  Sets ``fit.cv`` (see :class:`HypFit`) and raises the
+    Gauss-Newton iterations, the first with the full fit's Jacobian rows of
+    the training cells, no covariance at the end) without the fold's cells;
+    its cells are then predicted.  Sets ``fit.cv`` (see :class:`HypFit`) and raises the
     standard errors to the jackknife over folds where that is larger (with
     >= 5 folds).  A fold whose refit fails is predicted with the full fit and
     counted in ``failed_folds``.  Returns ``fit`` (modified in place).
