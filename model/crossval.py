@@ -430,8 +430,12 @@ def cross_validate(fit: HypFit, ctx: Context, cells: Cells, group_kind: str = ""
     held = {c: np.full(cells.n, np.nan) for c in fit.cell_pred}
     fold_params = []
     failed = 0
-    full = _Problem(fit.hypothesis, ctx, cells) if fit.k and fit.result is not None else None
-    J_full = None if full is None else fit.result.jac
+    full, J_full = None, None
+    if fit.k and fit.result is not None:  # the full fit's Jacobian, if the fit is of these cells and ctx
+        full = _Problem(fit.hypothesis, ctx, cells)
+        r = full.fun(fit.u)
+        if fit.result.jac.shape == (r.size, fit.k) and np.allclose(r, fit.result.weighted_residuals, atol=1e-9):
+            J_full = fit.result.jac
     for g in groups:
         test = fold == g
         if fit.k == 0 or groups.size < 2:

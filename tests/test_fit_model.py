@@ -192,6 +192,21 @@ def test_a_folds_residual_rows_are_the_full_problems_rows_of_its_cells():
     u = full.x0 + 0.01
     r_full, r_fold = full.fun(u), fold.fun(u)
     assert fold.m_data == int(full.data_rows(keep).sum())
-    # equal up to rounding (the kernel's blocked sums see other neighbours)
+    # equal up to rounding (the kernel's matrix products run on blocks of other sizes)
     np.testing.assert_allclose(r_fold[:fold.m_data], r_full[:full.m_data][full.data_rows(keep)], rtol=1e-12)
     np.testing.assert_array_equal(r_fold[fold.m_data:], r_full[full.m_data:])  # the prior rows
+
+
+def test_a_fit_of_other_cells_is_cross_validated_without_its_jacobian():
+    """fit.cross_validate is public: a fit made on other cells must not lend its Jacobian rows
+    (shape or residuals differ), and its folds still refit."""
+    from wheelsoil.model.crossval import cross_validate
+
+    data = prepare_data(_table(6))
+    ctx = _ctx()
+    h = get_hypothesis("lyasko")
+    half = fit_hypothesis(h, ctx, data.cells.subset(np.arange(data.cells.n) % 2 == 0))
+    same = cross_validate(fit_hypothesis(h, ctx, data.cells), ctx, data.cells)
+    other = cross_validate(half, ctx, data.cells)
+    assert other.cv["failed_folds"] == 0 and same.cv["failed_folds"] == 0
+    assert other.cv["n_groups"] == same.cv["n_groups"] >= 5
