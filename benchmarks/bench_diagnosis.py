@@ -41,7 +41,8 @@ from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 
-def run_seed(seed: int, duration_s: float, front_wheels: str, keep_dir: str | None = None) -> dict:
+def run_seed(seed: int, duration_s: float, front_wheels: str, keep_dir: str | None = None,
+             soil_variability: float | None = None) -> dict:
     """Simulate, fit and judge one seed; returns a row dict (never raises: errors are rows)."""
     from wheelsoil.pipeline import run_fit
     from wheelsoil.simulate import draw_case, judge, simulate_run, write_simulation
@@ -66,7 +67,8 @@ def run_seed(seed: int, duration_s: float, front_wheels: str, keep_dir: str | No
             row.update(terrain=terrain, wheel=list(sc["wheel"]), added_load_n=sc["added_load_n"])
             row["notes"].append(f"moved to {terrain} {sc['wheel'][0]}x{sc['wheel'][1]} +{sc['added_load_n']:.0f} N")
         try:
-            run = simulate_run(terrain, duration_s=duration_s, front_wheels=front_wheels, **case)
+            extra = {} if soil_variability is None else {"soil_variability": soil_variability}
+            run = simulate_run(terrain, duration_s=duration_s, front_wheels=front_wheels, **case, **extra)
             break
         except ValueError as exc:
             row["notes"].append(f"refused at size {case['size']:.3f}: {str(exc)[:60]}")
@@ -204,13 +206,17 @@ def main(argv=None) -> int:
                     help="FL/FR wheel-speed channels: an idealised undriven reference wheel (default: what "
                     "processing's GNSS-latency estimate assumes, so the bench scores the diagnosis) or the "
                     "4x4's driven wheels (physical; scores processing's latency estimate too)")
+    ap.add_argument("--soil-variability", type=float, default=None, metavar="SD",
+                    help="relative sd of c, kc, kphi along the track (random field, 3 m correlation; default: "
+                    "the simulator's 0.02): a rougher field than the rule was developed on")
     ap.add_argument("--json", default=None, metavar="FILE", help="also write the rows as JSON")
     ap.add_argument("--keep", default=None, metavar="DIR", help="keep recordings, truths and reports here")
     args = ap.parse_args(argv)
     args.jobs = max(1, min(args.jobs, 2))
     seeds = args.seed if args.seed else list(range(args.first, args.first + (6 if args.quick else args.seeds)))
     print(f"bench_diagnosis: {len(seeds)} seeds, {args.duration:.0f} s runs, {args.jobs} process(es), "
-          f"front wheels {args.front_wheels}")
+          f"front wheels {args.front_wheels}"
+          + ("" if args.soil_variability is None else f", soil variability {args.soil_variability:g}"))
     print("diagnosis thresholds as the code holds them (wheelsoil.model.diagnosis):",
           json.dumps(thresholds(), sort_keys=True))
     sys.stdout.flush()
@@ -218,11 +224,12 @@ def main(argv=None) -> int:
     rows = []
     if args.jobs == 1:
         for s in seeds:
-            rows.append(run_seed(s, args.duration, args.front_wheels, args.keep))
+            rows.append(run_seed(s, args.duration, args.front_wheels, args.keep, args.soil_variability))
             print(f"  seed {s}: {rows[-1]['effect']} -> {rows[-1]['verdict']} ({rows[-1].get('confidence')})", flush=True)
     else:
         with ProcessPoolExecutor(max_workers=args.jobs) as pool:
-            futs = {s: pool.submit(run_seed, s, args.duration, args.front_wheels, args.keep) for s in seeds}
+            futs = {s: pool.submit(run_seed, s, args.duration, args.front_wheels, args.keep, args.soil_variability)
+                    for s in seeds}
             for s in seeds:
                 rows.append(futs[s].result())
                 print(f"  seed {s}: {rows[-1]['effect']} -> {rows[-1]['verdict']} ({rows[-1].get('confidence')})",
