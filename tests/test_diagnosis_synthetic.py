@@ -263,3 +263,27 @@ def test_summary_counts_cycles_and_the_folds_they_were_merged_into(monkeypatch):
     assert cycles > 2
     assert d.fits["wong"].cv["n_groups"] == 2
     assert f"{cycles} {d.data.group_kind} merged into 2 contiguous cross-validation folds" in d.summary
+
+
+def test_none_on_rough_ground_is_not_high():
+    """Rough ground: each accelerate cycle on its own soil, Dp offset by a random 15 % of its
+    magnitude.  Whatever the verdict, 'none' cannot be 'high' when the cycles' scatter leaves
+    room for a relevant mean error (equivalence bound); on even ground that reason is absent."""
+    df = synthetic_data(SAND, W, "wong", duration_s=120.0, load_n=13000.0, seed=11)
+    even = diagnose(df, SAND, W)
+    _invariants(even)
+    assert even.effect == "none", even.summary
+    assert not any("scatter too much" in r for r in even.confidence_reasons)
+    rng = np.random.default_rng(11)
+    cyc = df["cycle"].to_numpy()
+    ids = np.unique(cyc[cyc >= 0])
+    size = float(np.sqrt(np.mean(df["drawbar_pull_n"].to_numpy() ** 2)))
+    offset = dict(zip(ids, rng.normal(0.0, 0.15 * size, ids.size)))
+    rough = df.copy()
+    rough["drawbar_pull_n"] += np.array([offset.get(c, 0.0) for c in cyc])
+    d = diagnose(rough, SAND, W)
+    _invariants(d)
+    assert d.effect in ("none", "unexplained"), d.summary
+    if d.effect == "none":
+        assert d.confidence != "high"
+        assert any("scatter too much" in r for r in d.confidence_reasons), d.confidence_reasons
