@@ -11,13 +11,15 @@ an MCAP recording; the real pipeline fits it as a user would
 recording); ``judge(truth, report)`` scores ``report["diagnosis"]`` (effect, confidence,
 model) against the truth's acceptable verdicts. The diagnosis' thresholds are whatever the
 code holds (printed, never changed here). A run the vehicle could not drive is re-drawn with
-half the effect size (at most 3 times), then on the next plausible run at the full size (noted).
+half the effect size (at most 3 times), then on the next plausible run at the full size (noted;
+with ``--terrains``, the next soil of the list).
 
     python benchmarks/bench_diagnosis.py                 # 64 seeds (0..63), 2 processes
     python benchmarks/bench_diagnosis.py --quick         # 6 seeds
     python benchmarks/bench_diagnosis.py --seed 17       # one row again
     python benchmarks/bench_diagnosis.py --first 128 --seeds 128   # seeds 128..255
     python benchmarks/bench_diagnosis.py --front-wheels driven      # the 4x4's front wheels on FL/FR
+    python benchmarks/bench_diagnosis.py --terrains library         # soils the rule was not developed on
 
 The FL/FR wheel-speed channels carry an idealised undriven reference wheel by default:
 processing estimates the GNSS latency against them as free-rolling wheels, which the 4x4's
@@ -41,38 +43,50 @@ from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 
+def _runs_to_try(terrain: str, case: dict, terrains: list[str] | None) -> list[tuple]:
+    """(terrain, wheel, added load) to try in order: the drawn run, then the next plausible ones
+    (the next scenarios; with ``terrains``, the next terrains of the list on the same wheel)."""
+    from wheelsoil.simulate import SCENARIOS
+
+    here = (terrain, tuple(case["wheel"]), case["added_load_n"])
+    if terrains:
+        i = terrains.index(terrain)
+        return [here] + [(terrains[(i + k) % len(terrains)],) + here[1:] for k in range(1, len(terrains))]
+    keys = [(sc["terrain"], tuple(sc["wheel"]), sc["added_load_n"]) for sc in SCENARIOS]
+    i = keys.index(here)
+    return [keys[(i + k) % len(keys)] for k in range(len(keys))]
+
+
 def run_seed(seed: int, duration_s: float, front_wheels: str, keep_dir: str | None = None,
-             soil_variability: float | None = None) -> dict:
+             soil_variability: float | None = None, terrains: list[str] | None = None) -> dict:
     """Simulate, fit and judge one seed; returns a row dict (never raises: errors are rows)."""
     from wheelsoil.pipeline import run_fit
     from wheelsoil.simulate import draw_case, judge, simulate_run, write_simulation
 
-    case = draw_case(seed)
+    case = draw_case(seed, terrains=terrains)
     terrain = case.pop("terrain")
     row = {"seed": seed, "effect": case["effect"], "terrain": terrain, "wheel": list(case["wheel"]),
            "added_load_n": case["added_load_n"], "size": case["size"], "notes": []}
     t0 = time.perf_counter()
     c0 = time.process_time()
     run = None
-    from wheelsoil.simulate import SCENARIOS
-
     size0 = case["size"]
-    for attempt in range(6):
-        if attempt == 3:  # still refused at 1/8 of the size: the next plausible run, full size
-            i = next(k for k, sc in enumerate(SCENARIOS) if sc["terrain"] == terrain and tuple(sc["wheel"]) ==
-                     tuple(case["wheel"]) and sc["added_load_n"] == case["added_load_n"])
-            sc = SCENARIOS[(i + 1) % len(SCENARIOS)]
-            terrain, case["wheel"], case["added_load_n"], case["size"] = (sc["terrain"], sc["wheel"],
-                                                                           sc["added_load_n"], size0)
-            row.update(terrain=terrain, wheel=list(sc["wheel"]), added_load_n=sc["added_load_n"])
-            row["notes"].append(f"moved to {terrain} {sc['wheel'][0]}x{sc['wheel'][1]} +{sc['added_load_n']:.0f} N")
-        try:
-            extra = {} if soil_variability is None else {"soil_variability": soil_variability}
-            run = simulate_run(terrain, duration_s=duration_s, front_wheels=front_wheels, **case, **extra)
+    extra = {} if soil_variability is None else {"soil_variability": soil_variability}
+    # a run the vehicle cannot drive: half the size (3 tries), then the next plausible run at full size
+    for k, (terrain, wheel, load) in enumerate(_runs_to_try(terrain, case, terrains)[:None if terrains else 3]):
+        if k:
+            case.update(wheel=wheel, added_load_n=load, size=size0)
+            row.update(terrain=terrain, wheel=list(wheel), added_load_n=load)
+            row["notes"].append(f"moved to {terrain} {wheel[0]}x{wheel[1]} +{load:.0f} N")
+        for _ in range(3):
+            try:
+                run = simulate_run(terrain, duration_s=duration_s, front_wheels=front_wheels, **case, **extra)
+                break
+            except ValueError as exc:
+                row["notes"].append(f"refused at size {case['size']:.3f}: {str(exc)[:60]}")
+                case["size"] *= 0.5
+        if run is not None:
             break
-        except ValueError as exc:
-            row["notes"].append(f"refused at size {case['size']:.3f}: {str(exc)[:60]}")
-            case["size"] *= 0.5
     row["size"] = case["size"]
     row["sim_s"] = time.perf_counter() - t0
     row["sim_cpu_s"] = time.process_time() - c0
@@ -209,14 +223,28 @@ def main(argv=None) -> int:
     ap.add_argument("--soil-variability", type=float, default=None, metavar="SD",
                     help="relative sd of c, kc, kphi along the track (random field, 3 m correlation; default: "
                     "the simulator's 0.02): a rougher field than the rule was developed on")
+    ap.add_argument("--terrains", default=None, metavar="SLUGS",
+                    help="draw each seed's soil from these built-in terrains (comma-separated slugs, or 'library': "
+                    "every built-in terrain but the paper's clay and sand, which the rule was developed on); the "
+                    "scenario's wheel and load stay; a soil the vehicle cannot drive moves to the next one")
     ap.add_argument("--json", default=None, metavar="FILE", help="also write the rows as JSON")
     ap.add_argument("--keep", default=None, metavar="DIR", help="keep recordings, truths and reports here")
     args = ap.parse_args(argv)
     args.jobs = max(1, min(args.jobs, 2))
+    terrains = None
+    if args.terrains:
+        from wheelsoil.model.terrain import TERRAINS
+
+        terrains = ([t for t in TERRAINS if t not in ("clay", "sand")] if args.terrains == "library"
+                    else [t.strip() for t in args.terrains.split(",") if t.strip()])
+        unknown = [t for t in terrains if t not in TERRAINS]
+        if unknown or not terrains:
+            ap.error(f"--terrains: unknown {unknown} (built-in: {', '.join(TERRAINS)})")
     seeds = args.seed if args.seed else list(range(args.first, args.first + (6 if args.quick else args.seeds)))
     print(f"bench_diagnosis: {len(seeds)} seeds, {args.duration:.0f} s runs, {args.jobs} process(es), "
           f"front wheels {args.front_wheels}"
-          + ("" if args.soil_variability is None else f", soil variability {args.soil_variability:g}"))
+          + ("" if args.soil_variability is None else f", soil variability {args.soil_variability:g}")
+          + ("" if terrains is None else f", terrains {', '.join(terrains)}"))
     print("diagnosis thresholds as the code holds them (wheelsoil.model.diagnosis):",
           json.dumps(thresholds(), sort_keys=True))
     sys.stdout.flush()
@@ -224,12 +252,12 @@ def main(argv=None) -> int:
     rows = []
     if args.jobs == 1:
         for s in seeds:
-            rows.append(run_seed(s, args.duration, args.front_wheels, args.keep, args.soil_variability))
+            rows.append(run_seed(s, args.duration, args.front_wheels, args.keep, args.soil_variability, terrains))
             print(f"  seed {s}: {rows[-1]['effect']} -> {rows[-1]['verdict']} ({rows[-1].get('confidence')})", flush=True)
     else:
         with ProcessPoolExecutor(max_workers=args.jobs) as pool:
-            futs = {s: pool.submit(run_seed, s, args.duration, args.front_wheels, args.keep, args.soil_variability)
-                    for s in seeds}
+            futs = {s: pool.submit(run_seed, s, args.duration, args.front_wheels, args.keep, args.soil_variability,
+                                   terrains) for s in seeds}
             for s in seeds:
                 rows.append(futs[s].result())
                 print(f"  seed {s}: {rows[-1]['effect']} -> {rows[-1]['verdict']} ({rows[-1].get('confidence')})",

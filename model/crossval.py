@@ -191,7 +191,7 @@ class _Problem:
 
     def forces(self, u, cells: Cells | None = None):
         c = self.cells if cells is None else cells
-        return self.hyp.predict(self.ctx, c.load_n, c.slip, c.x, self.values(u))
+        return self.hyp.predict(self.ctx, c.load_n, c.slip, c.x, self.values(u), inertia=c.inertia)
 
     def stack(self, f) -> np.ndarray:
         return np.concatenate([np.asarray(getattr(f, CHANNELS[c]), float) for c in self.chans])[self.ok]
@@ -221,7 +221,7 @@ class _Problem:
 
 def predict_cells(fit: HypFit, ctx: Context, cells: Cells):
     """WheelForces of a fitted hypothesis on (other) cells."""
-    return fit.hypothesis.predict(ctx, cells.load_n, cells.slip, cells.x, fit.params)
+    return fit.hypothesis.predict(ctx, cells.load_n, cells.slip, cells.x, fit.params, inertia=cells.inertia)
 
 
 def _equilibrate(A):
@@ -400,7 +400,8 @@ def _lab_terrain_variance(prob: _Problem, u, Jd, ctx: Context) -> np.ndarray:
 
         try:
             ctx2 = dataclasses.replace(ctx, terrain=apply_terrain(t0, vals), fit_terrain=False)
-            f = prob.hyp.predict(ctx2, prob.cells.load_n, prob.cells.slip, prob.cells.x, prob.values(u))
+            f = prob.hyp.predict(ctx2, prob.cells.load_n, prob.cells.slip, prob.cells.x, prob.values(u),
+                                 inertia=prob.cells.inertia)
             col = (prob.stack(f) - base) / prob.sd / h
         except ValueError:
             continue
@@ -455,7 +456,8 @@ def cross_validate(fit: HypFit, ctx: Context, cells: Cells, group_kind: str = ""
                 failed += 1
             vals = prob.values(u)
             f = fit.hypothesis.predict(ctx, cells.load_n[test], cells.slip[test],
-                                       None if cells.x is None else cells.x[test], vals)
+                                       None if cells.x is None else cells.x[test], vals,
+                                       inertia={c: v[test] for c, v in cells.inertia.items()})
         except (ValueError, FloatingPointError, np.linalg.LinAlgError):
             failed += 1
             vals = dict(fit.params)
@@ -499,7 +501,7 @@ def sample_predictions(fit: HypFit, ctx: Context, data: FitData) -> dict:
     paper's metrics and the report's figures); NaN arrays when it cannot be evaluated."""
     x = data.cells.x_of(data.x_raw) if data.cells is not None else None
     try:
-        f = fit.hypothesis.predict(ctx, data.load_n, data.slip, x, fit.params)
+        f = fit.hypothesis.predict(ctx, data.load_n, data.slip, x, fit.params, inertia=data.inertia)
         return {c: np.asarray(getattr(f, CHANNELS[c]), float) for c in CHANNELS}
     except (ValueError, FloatingPointError):
         return {c: np.full(data.n, np.nan) for c in CHANNELS}

@@ -150,6 +150,11 @@ class FitData:
         time series, all slips (over whole accelerate-brake cycles the load transferred by
         accelerating averages out); None for a table, or when the runs' means differ by > 2 %.
     cells : the :class:`Cells` the models are fitted to.
+    inertia : data column -> (N,) the wheel's inertial part of the transducer reading the
+        column was compensated from (``fx_n - drawbar_pull_n`` = -m_w dV/dt [N],
+        ``my_nm - torque_nm`` = I_w domega/dt [N m]; hardware.md), where the input has the
+        readings (``fx_n``, ``my_nm``: processed recordings); empty otherwise.  A transducer
+        gain error scales the reading, inertia included (``sensor_gain``).
     """
 
     slip: np.ndarray
@@ -168,6 +173,7 @@ class FitData:
     distance_m: np.ndarray | None = None
     cells: "Cells | None" = field(default=None, repr=False)
     load_static_n: float | None = None
+    inertia: dict = field(default_factory=dict)
 
     @property
     def n(self) -> int:
@@ -201,6 +207,7 @@ class FitData:
             t_s=None if self.t_s is None else self.t_s[mask],
             distance_m=None if self.distance_m is None else self.distance_m[mask],
             cells=None,
+            inertia={k: v[mask] for k, v in self.inertia.items()},
         )
 
 
@@ -318,6 +325,11 @@ def prepare_data(df, *, slip_min: float = 0.1, source: str = "data", n_blocks: i
                     notes.append(f"{col}: {n - n_ok} of {n} used rows have no value; fitted where present.")
             elif n_ok:
                 notes.append(f"{col}: only {n_ok} of {n} used rows have a value; channel not used.")
+    inertia = {}
+    for col, reading in (("drawbar_pull_n", "fx_n"), ("torque_nm", "my_nm")):
+        if col in channels and reading in df.columns:
+            part = pd.to_numeric(df[reading], errors="coerce").to_numpy(float)[keep] - channels[col]
+            inertia[col] = np.where(np.isfinite(part), part, 0.0)
     slip = s[keep]
     run_all = pd.to_numeric(df["run"], errors="coerce").fillna(0).to_numpy(int) if "run" in df.columns \
         else np.zeros(n_input, int)
@@ -355,6 +367,7 @@ def prepare_data(df, *, slip_min: float = 0.1, source: str = "data", n_blocks: i
         group_kind=group_kind,
         distance_m=dist,
         load_static_n=_static_load(w, valid_load, run_all) if kind == "timeseries" else None,
+        inertia=inertia,
     )
     return dataclasses_replace(data, cells=make_cells(data))
 
@@ -421,7 +434,8 @@ class Cells:
     max(1, median count / count)``), ``sigma`` (column -> noise std of a cell
     mean, :func:`cell_noise`), ``sigma_within`` (the within-cycle view),
     ``index`` (N,) the cell of each sample, ``x_kind`` ("distance", "time" or None),
-    ``bin`` (C,) slip-bin index (time series) or the row's slip rank.
+    ``bin`` (C,) slip-bin index (time series) or the row's slip rank, ``inertia`` (column ->
+    (C,) cell means of :attr:`FitData.inertia`).
     """
 
     slip: np.ndarray
@@ -439,6 +453,7 @@ class Cells:
     bin: np.ndarray
     noise_method: str = ""
     x_ref: tuple = (0.0, 1.0)
+    inertia: dict = field(default_factory=dict)
 
     def x_of(self, raw) -> np.ndarray | None:
         """The normalised drift coordinate of raw distance/time values (N,), as for the cells."""
@@ -458,7 +473,8 @@ class Cells:
             self, slip=self.slip[mask], load_n=self.load_n[mask], t_s=self.t_s[mask],
             x=None if self.x is None else self.x[mask], group=self.group[mask], count=self.count[mask],
             channels={k: v[mask] for k, v in self.channels.items()},
-            var={k: v[mask] for k, v in self.var.items()}, index=np.zeros(0, int), bin=self.bin[mask])
+            var={k: v[mask] for k, v in self.var.items()}, index=np.zeros(0, int), bin=self.bin[mask],
+            inertia={k: v[mask] for k, v in self.inertia.items()})
 
 
 def make_cells(data: "FitData") -> Cells:
@@ -536,7 +552,8 @@ def make_cells(data: "FitData") -> Cells:
         var[c] = sigma[c] ** 2 * np.maximum(1.0, ref / np.maximum(cntc[c], 1.0))
     return Cells(slip=slip_c, load_n=load_c, t_s=t_c, x=x, group=group, count=cnt[sel], channels=chans,
                  var=var, sigma=sigma, sigma_within=within, index=cells_idx, x_kind=x_kind, bin=sb,
-                 noise_method=method, x_ref=x_ref)
+                 noise_method=method, x_ref=x_ref,
+                 inertia={c: np.nan_to_num(mean(v)[sel]) for c, v in data.inertia.items()})
 
 
 #: Median of a chi-square variable with one degree of freedom: a robust variance from squares.

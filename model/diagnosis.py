@@ -72,11 +72,14 @@ decides with this rule (constants below; none was tuned on a benchmark):
 5. **Verdict.**  The supported hypothesis with the highest posterior is the
    candidate.  Its effect is named only if the effect's posterior probability
    is at least ``P_NAME`` and it holds, out of sample (paired test of step
-   2), against every supported hypothesis of another listed cause: it
+   2), against every supported hypothesis of another effect, a listed cause
+   or a generic alternative for causes on no list: it
    improves on it in every target channel, or (the rival has less evidence
    by more than ``BF_ALTERNATIVE``) its mean held-out gain over it is not
    negative in any target channel and it worsens no measured channel against
-   it.  An Occam factor alone names no cause: a Wong-Reece stress shift with
+   it (a cause that predicts new data worse than a stand-in for an unlisted
+   cause is not shown to be the cause, however much evidence a sub-relevant
+   error in another channel gives it).  An Occam factor alone names no cause: a Wong-Reece stress shift with
    2 parameters can out-score the 5-parameter terrain re-fit on a terrain
    mismatch, and then predicts new data worse than the re-fit; decisive
    evidence that new data do not contradict does.  Otherwise the causes that explain the data about
@@ -98,7 +101,9 @@ decides with this rule (constants below; none was tuned on a benchmark):
    ``LOAD_RATIO_TOL`` in a slip bin, Eq. 7, or static sinkage above D/6, the
    limit of Eq. 10's small-angle form), when there are fewer than
    ``MIN_UNITS_HIGH`` independent units, or when a fold could not be refitted.
-   ``unexplained`` is at most ``medium``.  ``none`` is ``high`` only when no
+   ``unexplained`` is at most ``medium``.  ``none`` is ``high`` only when the
+   posterior probability of no effect is at least ``P_HIGH`` (the probabilities
+   may favour an effect below the relevance threshold), no
    structure test comes near significance (p >= 0.05), the measured sinkage does
    not grow with slip, and the run is precise enough to exclude a relevant
    error: in every channel the 95 % confidence bound of Wong's mean error over
@@ -612,7 +617,8 @@ def _paired(data: FitData, wong: HypFit, f: HypFit) -> dict:
 
 def _holds_against(data: FitData, f: HypFit, rival: HypFit, target) -> bool:
     """True when ``f`` predicts new data at least as well as ``rival``, a supported hypothesis of another
-    listed cause with less evidence (module doc, step 5): out of sample (step 2's paired test of
+    effect (a listed cause, or a generic alternative for causes on no list) with less evidence
+    (module doc, step 5): out of sample (step 2's paired test of
     ``f`` against ``rival``) ``f`` improves every target channel, or its mean held-out gain is not
     negative in any target channel and it worsens no measured channel."""
     pr = _paired(data, rival, f)
@@ -1002,9 +1008,10 @@ def diagnose(
         # (the most probable first: it is the one the reason and the separating measurement name)
         rivals = sorted((k for k in probs if k not in supported and k != "wong" and eff_of[k] != fits[best].effect
                          and probs[k] > pb), key=lambda k: -probs[k])
-        # a supported listed cause of another effect that the candidate does not hold against out of
-        # sample explains the data as well where it matters, whatever the in-sample evidence says
-        alternatives += [k for k in supported if k != best and k not in alternatives and eff_of[k] in LISTED
+        # a supported hypothesis of another effect, a listed cause or a stand-in for causes on no list,
+        # that the candidate does not hold against out of sample explains the data as well where it
+        # matters, whatever the in-sample evidence says
+        alternatives += [k for k in supported if k != best and k not in alternatives
                          and eff_of[k] != fits[best].effect and not _holds_against(data, fits[best], fits[k], target)]
         other_eff = {fits[k].effect for k in alternatives} - {fits[best].effect}
         pe = eprobs.get(fits[best].effect, 0.0)
@@ -1257,6 +1264,16 @@ def _confidence(effect, model, fits, eprobs, consistency, data, tests_w, sink_ev
                        "may be as large as " + ", ".join(
                            f"{_fmt(t['level_upper_abs'], _UNITS[t['channel']])} ({t['level_upper_rel']:.1%} of the "
                            f"{CHANNEL_TITLES[t['channel']]})" for t in loose) + " (95 % confidence bound)")
+        # the confidence words follow the posterior (as for a named cause): the probabilities may
+        # favour an effect too small to matter
+        p_none = eprobs.get("none", 0.0)
+        if p_none < P_HIGH:
+            level = max(level, 1)
+            top = max((e for e in eprobs if e != "none"), key=lambda e: eprobs[e], default=None)
+            name = "a cause on no list" if top == "unexplained" else EFFECT_TITLES.get(top)
+            why.append(f"posterior probability of no effect: {p_none:.3g}" + (
+                f" (more probable: {name}, {eprobs[top]:.3g}, of a size below the relevance threshold)"
+                if top is not None and eprobs[top] > p_none else ""))
         level = max(level, cap)
         return ["high", "medium", "low"][level], why
     if effect == "unexplained":

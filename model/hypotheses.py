@@ -268,12 +268,22 @@ class Hypothesis:
             return "needs a time series (time or distance along the run); a table has neither"
         return None
 
-    def predict(self, ctx: Context, load_n, slip, x, p: Mapping[str, float]) -> WheelForces:
+    def predict(self, ctx: Context, load_n, slip, x, p: Mapping[str, float], inertia=None) -> WheelForces:
         """Forces at each cell/sample: ``load_n`` W [N], ``slip`` s, ``x`` normalised drift
-        coordinate (or None), all (N,); ``p`` parameter values by name (SI).
+        coordinate (or None), all (N,); ``p`` parameter values by name (SI); ``inertia``
+        (channel -> (N,) the wheel's inertial part of the transducer reading,
+        :attr:`~wheelsoil.model.data.FitData.inertia`; None: none known) for the hypotheses that
+        act on the reading (:meth:`reading`).
         Returns ``WheelForces`` of (N,) arrays.  Raises ValueError outside the model's domain."""
         terrain = apply_terrain(ctx.terrain, p) if (self.terrain_block or ctx.fit_terrain) else ctx.terrain
-        return self.forces(ctx, terrain, np.asarray(load_n, float), np.asarray(slip, float), x, p)
+        f = self.forces(ctx, terrain, np.asarray(load_n, float), np.asarray(slip, float), x, p)
+        return self.reading(f, p, inertia) if inertia else f
+
+    def reading(self, f: WheelForces, p: Mapping[str, float], inertia: Mapping) -> WheelForces:
+        """The inertia-compensated channels as processing derives them from a transducer reading
+        of the forces ``f`` plus the wheel's inertial part ``inertia``: ``f`` itself, unless the
+        hypothesis is an error of the transducer (:class:`SensorGain`)."""
+        return f
 
     def forces(self, ctx, terrain, load_n, slip, x, p) -> WheelForces:  # pragma: no cover - abstract
         raise NotImplementedError
@@ -438,7 +448,7 @@ class DriftLinear(Hypothesis):
             HParam("g_lnK", 0.0, -1.5, 1.5, "-", "change of ln K over the run (end - start)"),
         )
 
-    def predict(self, ctx, load_n, slip, x, p):
+    def predict(self, ctx, load_n, slip, x, p, inertia=None):
         base = dict(p)
         out = []
         if x is None:
@@ -519,7 +529,7 @@ class DriftOne(DriftLinear):
     def nulls(self, ctx):
         return {_SLOPE[self.param]: 0.0}
 
-    def predict(self, ctx, load_n, slip, x, p):
+    def predict(self, ctx, load_n, slip, x, p, inertia=None):
         t = ctx.terrain
         full = {"k_eq": t.k_eq(ctx.wheel.width), "n": t.n, "c": t.c, "phi": t.phi, "K": t.K}
         full.update({g: 0.0 for g in _SLOPE.values()})
@@ -719,6 +729,9 @@ class SensorGain(Hypothesis):
     """The transducer's drawbar pull and torque read (1 + g_dp) and (1 + g_t) times Wong's values.
 
     Not a cause on our list: a calibration error of the wheel force transducer (Fx or My gain).
+    The gain scales the transducer's reading, the wheel's inertia included, so on inertia-
+    compensated data each channel is (1 + g) x Wong's plus g x the inertial part of the reading
+    (:meth:`reading`, with :attr:`~wheelsoil.model.data.FitData.inertia`; hardware.md).
     Effect ``unexplained``: a listed cause it explains as well is not named.
     """
 
@@ -733,6 +746,15 @@ class SensorGain(Hypothesis):
         f = wong_forces(terrain, ctx.wheel, load_n, slip, sinkage=ctx.sinkage)
         return WheelForces(sinkage_m=f.sinkage_m, theta1_rad=f.theta1_rad, load_model_n=f.load_model_n,
                            drawbar_pull_n=f.drawbar_pull_n * (1.0 + p["g_dp"]), torque_nm=f.torque_nm * (1.0 + p["g_t"]))
+
+    def reading(self, f, p, inertia):
+        # the gain scales the reading, the wheel's inertia included (Fx = Dp - m_w dV/dt, My = T +
+        # I_w domega/dt; hardware.md); processing then adds the true inertia back:
+        # Dp_c = (1 + g)(Dp - m_w a) + m_w a = (1 + g) Dp + g (Fx - Dp), likewise for T
+        extra = {c: np.asarray(inertia.get(c, 0.0), float) * p[g]
+                 for c, g in (("drawbar_pull_n", "g_dp"), ("torque_nm", "g_t"))}
+        return dataclasses.replace(f, drawbar_pull_n=f.drawbar_pull_n + extra["drawbar_pull_n"],
+                                   torque_nm=f.torque_nm + extra["torque_nm"])
 
 
 class LoadStiffness(Hypothesis):

@@ -180,3 +180,18 @@ def test_judge_scores_by_the_acceptable_verdicts():
     assert judge({"effect": "load_gain", "family": "out", "acceptable": list(ACCEPTABLE["load_gain"])},
                  rep("terrain_mismatch"))["right"]
     assert judge({"effect": "none", "family": "in", "acceptable": ["none"]}, rep("unexplained"))["false_alarm"]
+
+
+def test_a_case_drawn_on_other_soils_keeps_the_seeds_other_draws():
+    from wheelsoil.model.terrain import TERRAINS
+    from wheelsoil.simulate import SCENARIOS, draw_case
+
+    soils = ["lete-sand", "grenville-loam", "heavy-clay-25"]
+    drawn = set()
+    for seed in range(40):
+        paper, other = draw_case(seed), draw_case(seed, terrains=soils)
+        assert other.pop("terrain") in soils and paper.pop("terrain") in {sc["terrain"] for sc in SCENARIOS}
+        assert other == paper  # effect, size, wheel, load, latency... those of the seed
+        drawn.add(draw_case(seed, terrains=soils)["terrain"])
+    assert drawn == set(soils) and set(soils) <= set(TERRAINS)
+    assert draw_case(7, terrains=soils) == draw_case(7, terrains=soils)

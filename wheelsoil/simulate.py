@@ -41,7 +41,7 @@ import math
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Any, Mapping, Sequence
 
 import numpy as np
 
@@ -795,17 +795,21 @@ SCENARIOS = (
 )
 
 
-def draw_case(seed: int, *, effect: str | None = None) -> dict[str, Any]:
+def draw_case(seed: int, *, effect: str | None = None, terrains: Sequence[str] | None = None) -> dict[str, Any]:
     """A benchmark case from ``seed`` alone (so any case can be re-run by its seed).
 
     Effect ``EFFECTS[seed % len(EFFECTS)]`` unless given (so consecutive seeds cover every
     effect in and out of family equally), a scenario of :data:`SCENARIOS`, effect size uniform
-    in [0, 1], GNSS latency 0.03-0.2 s, drop rate 0-1 %. Returns :func:`simulate_run` keyword
-    arguments plus ``terrain``.
+    in [0, 1], GNSS latency 0.03-0.2 s, drop rate 0-1 %. ``terrains`` (built-in terrain slugs,
+    ``wheelsoil terrains``): the scenario's soil replaced by one of them, drawn from the seed
+    on a separate stream (the other draws stay those of the seed). Returns
+    :func:`simulate_run` keyword arguments plus ``terrain``.
     """
     rng = np.random.default_rng([int(seed), 20261121])
     eff = effect or str(EFFECTS[int(seed) % len(EFFECTS)])
-    sc = SCENARIOS[int(rng.integers(len(SCENARIOS)))]
+    sc = dict(SCENARIOS[int(rng.integers(len(SCENARIOS)))])
+    if terrains:
+        sc["terrain"] = str(terrains[int(np.random.default_rng([int(seed), 20261123]).integers(len(terrains)))])
     return {
         "terrain": sc["terrain"], "wheel": sc["wheel"], "added_load_n": sc["added_load_n"], "effect": eff,
         "size": float(rng.uniform(0.0, 1.0)), "gnss_latency_s": float(rng.uniform(0.03, 0.2)),
