@@ -133,3 +133,38 @@ def test_one_value_terrain_mismatch_moves_only_its_value(param):
     np.testing.assert_allclose(f.torque_nm, ref.torque_nm, rtol=1e-9)
     assert np.max(np.abs(f.drawbar_pull_n - h.predict(CTX, W, S, None, _defaults(h)).drawbar_pull_n)) > 1.0
     assert h.available(dataclasses.replace(CTX, fit_terrain=True), True)
+
+
+def test_a_transducer_gain_scales_the_reading_with_the_wheels_inertia():
+    """A gain error scales what the transducer reads, Fx = Dp - m_w dV/dt and My = T + I_w domega/dt
+    (hardware.md); after processing adds the inertia back, Dp_c = (1 + g) Dp + g (Fx - Dp).  Only
+    the sensor-gain stand-in acts on the reading; every other hypothesis ignores it."""
+    import pandas as pd
+
+    from wheelsoil.model.data import prepare_data
+
+    inertia = {"drawbar_pull_n": np.linspace(-300.0, 100.0, 5), "torque_nm": np.linspace(-40.0, 200.0, 5)}
+    base = wong_forces(SAND, DEFAULT_WHEEL, W, S)
+    gain = get_hypothesis("sensor_gain")
+    f = gain.predict(CTX, W, S, X, {"g_dp": 0.1, "g_t": -0.2}, inertia=inertia)
+    np.testing.assert_allclose(f.drawbar_pull_n, 1.1 * base.drawbar_pull_n + 0.1 * inertia["drawbar_pull_n"])
+    np.testing.assert_allclose(f.torque_nm, 0.8 * base.torque_nm - 0.2 * inertia["torque_nm"])
+    g0 = gain.predict(CTX, W, S, X, {"g_dp": 0.1, "g_t": -0.2})  # no reading known: Wong's scaled
+    np.testing.assert_allclose(g0.torque_nm, 0.8 * base.torque_nm)
+    w = get_hypothesis("wong").predict(CTX, W, S, X, {}, inertia=inertia)
+    np.testing.assert_allclose(w.drawbar_pull_n, base.drawbar_pull_n)
+    # prepare_data takes the inertial part from the readings, per sample and per cell
+    n = 400
+    rng = np.random.default_rng(3)
+    s = rng.uniform(0.15, 0.85, n)
+    df = pd.DataFrame({"slip": s, "load_n": 13000.0, "drawbar_pull_n": 1000.0 * s, "torque_nm": 2000.0 * s,
+                       "t_s": np.arange(n) * 0.01, "cycle": np.repeat(np.arange(4), n // 4)})
+    df["fx_n"] = df["drawbar_pull_n"] - 80.0 * 0.5
+    df["my_nm"] = df["torque_nm"] + 11.5 * s
+    data = prepare_data(df)
+    np.testing.assert_allclose(data.inertia["drawbar_pull_n"], -40.0)
+    np.testing.assert_allclose(data.inertia["torque_nm"], 11.5 * data.slip)
+    np.testing.assert_allclose(data.cells.inertia["torque_nm"], 11.5 * data.cells.slip, rtol=1e-9)
+    keep = data.cells.group == 0
+    np.testing.assert_allclose(data.cells.subset(keep).inertia["drawbar_pull_n"], -40.0)
+    assert prepare_data(df.drop(columns=["fx_n", "my_nm"])).inertia == {}
