@@ -669,8 +669,9 @@ class WheelRadius(Hypothesis):
 
 
 class TyreRadius(Hypothesis):
-    """A deflecting tyre: the soil sees Wong's equivalent rigid wheel of radius r (1 + rho) at
-    the measured slip (Eq. 6 with the tyre's rolling radius r, unchanged).
+    """A deflecting tyre: the soil sees Wong's equivalent rigid wheel of radius
+    r (1 + rho W / W_0) at the measured slip (Eq. 6 with the tyre's rolling radius r, unchanged);
+    the deflection follows the load (W_0: the run's static load, else the data's reference load).
 
     Not a cause on our list: the sibling of :class:`WheelRadius` for a tyre in the elastic
     mode, whose contact arc is that of a larger rigid wheel while the tread still moves at
@@ -684,13 +685,26 @@ class TyreRadius(Hypothesis):
     source = "generic alternative: Wong (2008) ch. 2, the flexible tyre's equivalent rigid wheel"
 
     def own_params(self, ctx):
-        return (HParam("rho", 0.0, -0.3, 1.0, "-", "relative change of the radius the soil sees at the same slip"),)
+        return (HParam("rho", 0.0, -0.3, 1.0, "-", "relative change of the radius the soil sees at the same slip, "
+                       "at the run's static load (proportional to the load: the deflection is)"),)
 
     def forces(self, ctx, terrain, load_n, slip, x, p):
         from .terrain import Wheel
 
-        wheel = Wheel(ctx.wheel.radius * (1.0 + p["rho"]), ctx.wheel.width)
-        return wong_forces(terrain, wheel, load_n, slip, sinkage=ctx.sinkage)
+        # the deflection, and with it r_e - r, grows with the load (a linear vertical tyre
+        # stiffness): r_e = r (1 + rho W / W_0), W_0 the run's static load (else the reference
+        # load); quadratic Lagrange interpolation between three kernel calls, at the smallest,
+        # middle and largest load of the call (as LoadStiffness)
+        w0 = ctx.w_static or ctx.w_ref or float(np.median(load_n))
+        ratio = np.asarray(load_n, float) / w0
+        nodes = np.array([ratio.min(), 0.5 * (ratio.min() + ratio.max()), ratio.max()])
+        out = [wong_forces(terrain, Wheel(ctx.wheel.radius * (1.0 + p["rho"] * v), ctx.wheel.width), load_n, slip,
+                           sinkage=ctx.sinkage) for v in nodes]
+        h = 0.5 * (nodes[2] - nodes[0])
+        if h <= 0:
+            return out[0]
+        q = (ratio - nodes[1]) / h  # Lagrange weights on -1, 0, 1
+        return _weighted_sum((0.5 * q * (q - 1.0), 1.0 - q * q, 0.5 * q * (q + 1.0)), out)
 
 
 class WheelWidth(Hypothesis):

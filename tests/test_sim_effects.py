@@ -195,3 +195,16 @@ def test_a_case_drawn_on_other_soils_keeps_the_seeds_other_draws():
         drawn.add(draw_case(seed, terrains=soils)["terrain"])
     assert drawn == set(soils) and set(soils) <= set(TERRAINS)
     assert draw_case(7, terrains=soils) == draw_case(7, terrains=soils)
+
+
+def test_a_width_error_is_exactly_a_terrain_mismatch_so_both_verdicts_are_acceptable():
+    """The forces see b only as b k_eq = kc + b kphi and b c (Eqs. 2, 7-10): the contact width
+    f b is the configured wheel on a soil of kphi f and c f.  No measurement of the wheel's
+    forces can tell them apart, so the judge accepts terrain_mismatch as for a load gain."""
+    f = 0.85
+    wide = _tm("width_error", factor=f).drive_forces(LOAD, SLIP)
+    soil = dict(SOIL, kphi=SOIL["kphi"] * f, c=SOIL["c"] * f)
+    same = TruthModel(soil, R, B, "none", {}, W0).drive_forces(LOAD, SLIP)
+    for k in ("drawbar_pull_n", "torque_nm", "sinkage_m"):
+        np.testing.assert_allclose(wide[k], same[k], rtol=1e-12)
+    assert set(ACCEPTABLE["width_error"]) == {"unexplained", "terrain_mismatch"}

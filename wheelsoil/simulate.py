@@ -893,7 +893,8 @@ effects (--effect; parameters with --param NAME=VALUE, the others drawn at --siz
     bulldozing           Bekker bulldozing resistance x factor (factor)
     load_dependent       k_eq (W/W_static)^beta (beta)
     vertical_balance     true sinkage from the vertical balance Eq. 7, not Eq. 10
-    width_error          the tyre's effective contact width is factor x b (factor)
+    width_error          the tyre's effective contact width is factor x b (factor); exactly
+                         kphi and c x factor, so terrain_mismatch is acceptable too
     zero_drift           the transducer's My zero drifts over the run (drift_nm, end - start)
 
 The recording holds only what a logger would record plus a provenance record
