@@ -79,7 +79,10 @@ decides with this rule (constants below; none was tuned on a benchmark):
    negative in any target channel and it worsens no measured channel against
    it (a cause that predicts new data worse than a stand-in for an unlisted
    cause is not shown to be the cause, however much evidence a sub-relevant
-   error in another channel gives it).  An Occam factor alone names no cause: a Wong-Reece stress shift with
+   error in another channel gives it), or the rival leaves a relevant error of
+   Wong's in some channel that the candidate explains (it improves on the
+   rival there: a drawbar-pull-only stand-in does not explain a 13 % torque
+   error that a stress shift removes).  An Occam factor alone names no cause: a Wong-Reece stress shift with
    2 parameters can out-score the 5-parameter terrain re-fit on a terrain
    mismatch, and then predicts new data worse than the re-fit; decisive
    evidence that new data do not contradict does.  Otherwise the causes that explain the data about
@@ -615,14 +618,16 @@ def _paired(data: FitData, wong: HypFit, f: HypFit) -> dict:
     return out
 
 
-def _holds_against(data: FitData, f: HypFit, rival: HypFit, target) -> bool:
+def _holds_against(data: FitData, f: HypFit, rival: HypFit, target, relevant=()) -> bool:
     """True when ``f`` predicts new data at least as well as ``rival``, a supported hypothesis of another
     effect (a listed cause, or a generic alternative for causes on no list) with less evidence
     (module doc, step 5): out of sample (step 2's paired test of
-    ``f`` against ``rival``) ``f`` improves every target channel, or its mean held-out gain is not
+    ``f`` against ``rival``) ``f`` improves every target channel, or it improves a channel of
+    ``relevant`` (those where Wong's error is relevant): the rival leaves an error there that ``f``
+    explains, so it does not explain the data as well; or its mean held-out gain is not
     negative in any target channel and it worsens no measured channel."""
     pr = _paired(data, rival, f)
-    if all(pr[c]["improves"] for c in target):
+    if all(pr[c]["improves"] for c in target) or any(pr[c]["improves"] for c in relevant if c in pr):
         return True
     return all(pr[c]["gain_noise_var"] >= 0 for c in target) and not any(r["worsens"] for r in pr.values())
 
@@ -950,6 +955,7 @@ def diagnose(
     structured = bool(sig_w)
     structure = {"wong": tests_w}
     target = _target_channels(tests_w, sig_w)
+    relevant = list(dict.fromkeys(tests_w[k]["channel"] for k in sig_w))  # Wong errs relevantly there
     target_txt = " and ".join(CHANNEL_TITLES[c] for c in target) or "drawbar pull"
     # paired tests; what each fit stands for (null effect parameters, or an added part that does
     # not pay off out of sample: the smaller model's effect)
@@ -1012,7 +1018,8 @@ def diagnose(
         # that the candidate does not hold against out of sample explains the data as well where it
         # matters, whatever the in-sample evidence says
         alternatives += [k for k in supported if k != best and k not in alternatives
-                         and eff_of[k] != fits[best].effect and not _holds_against(data, fits[best], fits[k], target)]
+                         and eff_of[k] != fits[best].effect
+                         and not _holds_against(data, fits[best], fits[k], target, relevant)]
         other_eff = {fits[k].effect for k in alternatives} - {fits[best].effect}
         pe = eprobs.get(fits[best].effect, 0.0)
         tests_b = _structure_cells(data, fits[best].cell_pred)
