@@ -43,6 +43,11 @@ simulate, write the MCAP, ``run_fit`` as a user would).
     the Dp-resistance stand-in, and won on a 0.4 % torque error from the soil's roughness;
   - 2209, a torque zero drift of 122 N m (under 1 % of the torque), was ``none`` at "high"
     while the posterior gave the zero drift probability 1.
+- Benchmark seed 2504, a Wong-Reece stress shift on clay (Wong's torque 13 % off): once a named
+  cause had to hold out of sample against the stand-ins for causes on no list, the Dp-only
+  drift stand-in, 1 N better on the held-out drawbar pull, blocked it, although it leaves the
+  whole torque error that the stress shift removes.  A rival that leaves a relevant error the
+  candidate explains does not explain the data as well.
 """
 
 from __future__ import annotations
@@ -174,3 +179,14 @@ def test_transducer_errors_on_library_soils_are_no_named_cause_nor_a_sure_none(t
     if d["effect"] == "none":
         assert d["effect_probabilities"]["none"] < 0.99
         assert any("posterior probability of no effect" in r for r in d["confidence_reasons"])
+
+
+def test_benchmark_seed_2504_a_dp_only_stand_in_does_not_block_a_stress_shift_that_explains_the_torque(tmp_path):
+    case = draw_case(2504)
+    terrain = case.pop("terrain")
+    assert case["effect"] == "stress_distribution"
+    run = simulate_run(terrain, duration_s=180.0, front_wheels="reference", **case)
+    report = run_fit([write_simulation(run, tmp_path / "run.mcap")], terrain, tmp_path / "report")
+    d = report["diagnosis"]
+    assert d["effect"] == "stress_distribution", d["summary"]
+    assert d["channels"]["torque_nm"]["improves"], d["channels"]["torque_nm"]
