@@ -183,8 +183,6 @@ EFFECT_TITLES = {
     "stress_distribution": "a different normal-stress distribution", "terrain_drift": "terrain drifting along the run",
     "unexplained": "unexplained",
 }
-#: The listed causes (verdicts that name a cause).
-LISTED = ("slip_sinkage", "terrain_mismatch", "stress_distribution", "terrain_drift")
 #: The legacy default candidate list of the command line (pipeline); it means "all hypotheses".
 _LEGACY_DEFAULT = {"vasilev", "lyasko", "ding", "terrain_mismatch"}
 
