@@ -952,8 +952,8 @@ def diagnose(
     sig_w = _significant_tests(tests_w, n_tests)
     structured = bool(sig_w)
     structure = {"wong": tests_w}
-    target = _target_channels(tests_w, sig_w)
     relevant = list(dict.fromkeys(tests_w[k]["channel"] for k in sig_w))  # Wong errs relevantly there
+    target = _target_channels(relevant)
     target_txt = " and ".join(CHANNEL_TITLES[c] for c in target) or "drawbar pull"
     # paired tests; what each fit stands for (null effect parameters, or an added part that does
     # not pay off out of sample: the smaller model's effect)
@@ -1200,13 +1200,12 @@ def _design_effect(data: FitData, f: HypFit) -> float:
     return float(1.0 + (m - 1.0) * rho)
 
 
-def _target_channels(tests: dict, sig: list) -> list:
+def _target_channels(relevant: list) -> list:
     """The channels a cause must improve out of sample (rule step 3): the drawbar pull when
     Wong's drawbar pull shows relevant structure (the quantity the paper judges), else every
     channel whose Wong residuals do (the drawbar pull then has no error to lower, and a cause
     must keep it so: it may worsen no channel)."""
-    chans = list(dict.fromkeys(tests[k]["channel"] for k in sig))
-    return ["drawbar_pull_n"] if "drawbar_pull_n" in chans else chans
+    return ["drawbar_pull_n"] if "drawbar_pull_n" in relevant else list(relevant)
 
 
 def _not_better_than_nested(data, fits, f: HypFit, target) -> list:

@@ -472,6 +472,20 @@ class DriftLinear(Hypothesis):
         return 0.5 + x
 
 
+def _interpolated(u: np.ndarray, forces_at) -> WheelForces:
+    """Forces of a model whose parameter varies per sample with ``u`` (N,): ``forces_at(v)`` is the
+    kernel's forces of all N samples with the parameter at ``v``; it is called at the smallest,
+    middle and largest ``u`` and the results are interpolated per sample (quadratic Lagrange: three
+    kernel calls instead of one per sample, error of third order in the spread of ``u``)."""
+    nodes = np.array([u.min(), 0.5 * (u.min() + u.max()), u.max()])
+    out = [forces_at(v) for v in nodes]
+    h = 0.5 * (nodes[2] - nodes[0])
+    if h <= 0:
+        return out[0]
+    q = (u - nodes[1]) / h  # Lagrange weights on -1, 0, 1
+    return _weighted_sum((0.5 * q * (q - 1.0), 1.0 - q * q, 0.5 * q * (q + 1.0)), out)
+
+
 def _weighted_sum(weights, forces) -> WheelForces:
     """Every field of the kernel outputs ``forces`` summed with per-sample ``weights`` (each (N,) or
     scalar): the interpolation between kernel calls at different terrains."""
@@ -692,19 +706,11 @@ class TyreRadius(Hypothesis):
         from .terrain import Wheel
 
         # the deflection, and with it r_e - r, grows with the load (a linear vertical tyre
-        # stiffness): r_e = r (1 + rho W / W_0), W_0 the run's static load (else the reference
-        # load); quadratic Lagrange interpolation between three kernel calls, at the smallest,
-        # middle and largest load of the call (as LoadStiffness)
+        # stiffness): r_e = r (1 + rho W / W_0), W_0 the run's static load (else the reference load)
         w0 = ctx.w_static or ctx.w_ref or float(np.median(load_n))
-        ratio = np.asarray(load_n, float) / w0
-        nodes = np.array([ratio.min(), 0.5 * (ratio.min() + ratio.max()), ratio.max()])
-        out = [wong_forces(terrain, Wheel(ctx.wheel.radius * (1.0 + p["rho"] * v), ctx.wheel.width), load_n, slip,
-                           sinkage=ctx.sinkage) for v in nodes]
-        h = 0.5 * (nodes[2] - nodes[0])
-        if h <= 0:
-            return out[0]
-        q = (ratio - nodes[1]) / h  # Lagrange weights on -1, 0, 1
-        return _weighted_sum((0.5 * q * (q - 1.0), 1.0 - q * q, 0.5 * q * (q + 1.0)), out)
+        return _interpolated(np.asarray(load_n, float) / w0, lambda v: wong_forces(
+            terrain, Wheel(ctx.wheel.radius * (1.0 + p["rho"] * v), ctx.wheel.width), load_n, slip,
+            sinkage=ctx.sinkage))
 
 
 class WheelWidth(Hypothesis):
@@ -765,10 +771,9 @@ class SensorGain(Hypothesis):
         # the gain scales the reading, the wheel's inertia included (Fx = Dp - m_w dV/dt, My = T +
         # I_w domega/dt; hardware.md); processing then adds the true inertia back:
         # Dp_c = (1 + g)(Dp - m_w a) + m_w a = (1 + g) Dp + g (Fx - Dp), likewise for T
-        extra = {c: np.asarray(inertia.get(c, 0.0), float) * p[g]
-                 for c, g in (("drawbar_pull_n", "g_dp"), ("torque_nm", "g_t"))}
-        return dataclasses.replace(f, drawbar_pull_n=f.drawbar_pull_n + extra["drawbar_pull_n"],
-                                   torque_nm=f.torque_nm + extra["torque_nm"])
+        gains = {"drawbar_pull_n": p["g_dp"], "torque_nm": p["g_t"]}  # channel = WheelForces field
+        return dataclasses.replace(f, **{c: getattr(f, c) + g * np.asarray(inertia.get(c, 0.0), float)
+                                         for c, g in gains.items()})
 
 
 class LoadStiffness(Hypothesis):
@@ -801,18 +806,10 @@ class LoadStiffness(Hypothesis):
         return None
 
     def forces(self, ctx, terrain, load_n, slip, x, p):
-        u = np.log(load_n / float(ctx.w_static))
-        nodes = np.array([u.min(), 0.5 * (u.min() + u.max()), u.max()])
         k0 = terrain.k_eq(ctx.wheel.width)
-        out = []
-        for un in nodes:
-            t = apply_terrain(terrain, {"k_eq": k0 * math.exp(p["beta"] * un)})
-            out.append(wong_forces(t, ctx.wheel, load_n, slip, sinkage=ctx.sinkage))
-        h = 0.5 * (nodes[2] - nodes[0])
-        if h <= 0:
-            return out[0]
-        q = (u - nodes[1]) / h  # Lagrange weights on -1, 0, 1
-        return _weighted_sum((0.5 * q * (q - 1.0), 1.0 - q * q, 0.5 * q * (q + 1.0)), out)
+        return _interpolated(np.log(load_n / float(ctx.w_static)), lambda v: wong_forces(
+            apply_terrain(terrain, {"k_eq": k0 * math.exp(p["beta"] * v)}), ctx.wheel, load_n, slip,
+            sinkage=ctx.sinkage))
 
 
 class VerticalBalance(Hypothesis):
