@@ -58,8 +58,11 @@ def _runs_to_try(terrain: str, case: dict, terrains: list[str] | None) -> list[t
 
 
 def run_seed(seed: int, duration_s: float, front_wheels: str, keep_dir: str | None = None,
-             soil_variability: float | None = None, terrains: list[str] | None = None) -> dict:
-    """Simulate, fit and judge one seed; returns a row dict (never raises: errors are rows)."""
+             terrains: list[str] | None = None, sim_options: dict | None = None) -> dict:
+    """Simulate, fit and judge one seed; returns a row dict (never raises: errors are rows).
+
+    ``sim_options``: further keywords of ``simulate_run`` (``soil_variability``, ``slip_max``).
+    """
     from wheelsoil.pipeline import run_fit
     from wheelsoil.simulate import draw_case, judge, simulate_run, write_simulation
 
@@ -71,7 +74,7 @@ def run_seed(seed: int, duration_s: float, front_wheels: str, keep_dir: str | No
     c0 = time.process_time()
     run = None
     size0 = case["size"]
-    extra = {} if soil_variability is None else {"soil_variability": soil_variability}
+    extra = dict(sim_options or {})
     # a run the vehicle cannot drive: half the size (3 tries), then the next plausible run at full size
     for k, (terrain, wheel, load) in enumerate(_runs_to_try(terrain, case, terrains)[:None if terrains else 3]):
         if k:
@@ -223,6 +226,9 @@ def main(argv=None) -> int:
     ap.add_argument("--soil-variability", type=float, default=None, metavar="SD",
                     help="relative sd of c, kc, kphi along the track (random field, 3 m correlation; default: "
                     "the simulator's 0.02): a rougher field than the rule was developed on")
+    ap.add_argument("--slip-max", type=float, default=None, metavar="S",
+                    help="the highest slip of the driver's sweeps, 0.2 .. 0.95 (default: the simulator's, about "
+                    "0.9, as in the paper): a narrower slip range than the rule was developed on")
     ap.add_argument("--terrains", default=None, metavar="SLUGS",
                     help="draw each seed's soil from these built-in terrains (comma-separated slugs, or 'library': "
                     "every built-in terrain but the paper's clay and sand, which the rule was developed on); the "
@@ -240,10 +246,12 @@ def main(argv=None) -> int:
         unknown = [t for t in terrains if t not in TERRAINS]
         if unknown or not terrains:
             ap.error(f"--terrains: unknown {unknown} (built-in: {', '.join(TERRAINS)})")
+    sim_options = {k: v for k, v in (("soil_variability", args.soil_variability), ("slip_max", args.slip_max))
+                   if v is not None}
     seeds = args.seed if args.seed else list(range(args.first, args.first + (6 if args.quick else args.seeds)))
     print(f"bench_diagnosis: {len(seeds)} seeds, {args.duration:.0f} s runs, {args.jobs} process(es), "
           f"front wheels {args.front_wheels}"
-          + ("" if args.soil_variability is None else f", soil variability {args.soil_variability:g}")
+          + "".join(f", {k.replace('_', ' ')} {v:g}" for k, v in sim_options.items())
           + ("" if terrains is None else f", terrains {', '.join(terrains)}"))
     print("diagnosis thresholds as the code holds them (wheelsoil.model.diagnosis):",
           json.dumps(thresholds(), sort_keys=True))
@@ -252,12 +260,12 @@ def main(argv=None) -> int:
     rows = []
     if args.jobs == 1:
         for s in seeds:
-            rows.append(run_seed(s, args.duration, args.front_wheels, args.keep, args.soil_variability, terrains))
+            rows.append(run_seed(s, args.duration, args.front_wheels, args.keep, terrains, sim_options))
             print(f"  seed {s}: {rows[-1]['effect']} -> {rows[-1]['verdict']} ({rows[-1].get('confidence')})", flush=True)
     else:
         with ProcessPoolExecutor(max_workers=args.jobs) as pool:
-            futs = {s: pool.submit(run_seed, s, args.duration, args.front_wheels, args.keep, args.soil_variability,
-                                   terrains) for s in seeds}
+            futs = {s: pool.submit(run_seed, s, args.duration, args.front_wheels, args.keep, terrains, sim_options)
+                    for s in seeds}
             for s in seeds:
                 rows.append(futs[s].result())
                 print(f"  seed {s}: {rows[-1]['effect']} -> {rows[-1]['verdict']} ({rows[-1].get('confidence')})",

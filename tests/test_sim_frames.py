@@ -238,3 +238,12 @@ def test_usb_batching_stamps_frames_in_bursts():
     big = gaps[gaps > 200e-6] / 0.001
     assert np.mean(np.abs(big - np.round(big)) < 0.05) > 0.95
     assert r.info["usb_batching_s"] == 0.001
+
+
+def test_slip_max_caps_the_drivers_sweeps_and_is_checked():
+    r = simulate_run(load_terrain("sand"), seed=5, duration_s=60.0, slip_max=0.5, front_wheels="reference")
+    acc = r.truth[r.truth.phase == "accel"]
+    assert 0.4 < acc.slip.max() < 0.6 and acc.slip.min() < 0.1
+    assert r.info["slip_max"] == 0.5
+    with pytest.raises(ValueError, match="slip_max"):
+        simulate_run(load_terrain("sand"), slip_max=0.1)

@@ -52,7 +52,7 @@ def spatial_field(rng, distance_m, corr_m, sigma):
 
 def simulate_physics(truth: TruthModel, rng: np.random.Generator, *, added_load_n: float,
                      duration_s: float | None, n_cycles: int = 6, soil_variability: float = 0.02,
-                     vehicle: VehicleParams | None = None) -> dict[str, Any]:
+                     vehicle: VehicleParams | None = None, slip_max: float | None = None) -> dict[str, Any]:
     """Simulate the run's physics; returns a dict.
 
     ``wft``: dict of arrays on the 500 Hz grid (shape (N,)): ``t_s``, ``speed_mps`` V,
@@ -63,7 +63,8 @@ def simulate_physics(truth: TruthModel, rng: np.random.Generator, *, added_load_
     ``cycle``, ``distance_m``. ``dyn``: the 10 ms dynamics (see
     :func:`~.vehicle.simulate_dynamics`). ``table_max_error_n``: the force table's
     largest interpolation error on random points; ``can_move``: :func:`check_can_move`'s dict;
-    ``grade``, ``vehicle`` (VehicleParams).
+    ``grade``, ``vehicle`` (VehicleParams). ``slip_max``: the highest slip of the driver's sweeps
+    (None: about 0.9, see :func:`~.vehicle.simulate_dynamics`).
 
     Raises ValueError when the vehicle cannot move (message says why and what to change)
     or the wheel would bury itself.
@@ -95,7 +96,8 @@ def simulate_physics(truth: TruthModel, rng: np.random.Generator, *, added_load_
         dyn = simulate_dynamics(table, veh, sub, added_load_n=added_load_n, radius_m=r, duration_s=duration_s,
                                 n_cycles=n_cycles, grade=grade, bumps_front=bump(bf), bumps_rear=bump(br),
                                 dist_total_guess_m=dist_guess, slip_noise=slip_noise,
-                                can_start=can_move["can_start"], slip_best=can_move["slip_at_max"])
+                                can_start=can_move["can_start"], slip_best=can_move["slip_at_max"],
+                                slip_max=slip_max)
         total = max(float(dyn["distance_m"][-1]), 1.0)
         if abs(total - dist_guess) < 0.5:
             break

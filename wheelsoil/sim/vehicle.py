@@ -196,7 +196,8 @@ def _smooth(x):
 def simulate_dynamics(table: ForceTable, veh: VehicleParams, rng: np.random.Generator, *,
                       added_load_n: float, radius_m: float, duration_s: float | None, n_cycles: int,
                       grade: float = 0.0, bumps_front=None, bumps_rear=None, dist_total_guess_m: float = 300.0,
-                      slip_noise=None, can_start: bool = True, slip_best: float = 0.5):
+                      slip_noise=None, can_start: bool = True, slip_best: float = 0.5,
+                      slip_max: float | None = None):
     """Integrate the vehicle through accelerate-brake cycles.
 
     ``bumps_front/rear``: callables t -> load disturbance [N] (or None); ``slip_noise``:
@@ -204,7 +205,8 @@ def simulate_dynamics(table: ForceTable, veh: VehicleParams, rng: np.random.Gene
     when the vehicle could not pull away from standstill (it then enters the test strip rolling
     at 1 m/s and brakes only to a crawl); ``slip_best``: the slip of the largest net pull. Below
     1 m/s the driver keeps the slip near ``slip_best`` (else a soil that digs in at high slip
-    would bog the vehicle down). Returns a dict of
+    would bog the vehicle down). ``slip_max``: the highest slip the driver sweeps to (each sweep
+    peaks at 0.925 .. 1 times it); None: 0.86 .. 0.93 (the paper's sweeps to s = 0.9). Returns a dict of
     arrays on the ``DT_S`` grid: ``t_s, speed_mps, accel_mps2, omega_radps, slip (s of the
     wheels; nan at standstill), slip_cmd, load_front_n, load_rear_n, dp_front_n, dp_rear_n
     (per wheel, as used), resistance_n, distance_m, phase (object), cycle (int)``, and
@@ -316,7 +318,7 @@ def simulate_dynamics(table: ForceTable, veh: VehicleParams, rng: np.random.Gene
             step("other", -1, s_cmd=s_now + (s_roll - s_now) * _smooth(2 * u) + wobble() * 0.3)
         # acceleration: the slip sweep
         T = rng.uniform(6.0, 9.0)
-        s_max = rng.uniform(0.86, 0.93)
+        s_max = rng.uniform(0.86, 0.93) if slip_max is None else rng.uniform(0.925, 1.0) * slip_max
         skew = rng.uniform(0.45, 0.8)  # the slip peaks early, while the vehicle is still slow
         t0 = t
         while t - t0 < T and t < t_end:
