@@ -99,7 +99,7 @@ decides with this rule (constants below; none was tuned on a benchmark):
    ``P_HIGH``, ``medium`` >= ``P_NAME``), capped at ``medium`` when the
    named model is physically inconsistent, when one of the generic
    alternatives for causes on no list (effect ``unexplained``: ``dp_resistance``, ``dp_drift``, ``radius``,
-   ``tyre``, ``width``, ``sensor_gain``, ``zero_drift``, ``load_k``, ``balance``) is also supported out of sample (with less
+   ``tyre``, ``width``, ``sensor_gain``, ``angle_offset``, ``zero_drift``, ``load_k``, ``balance``) is also supported out of sample (with less
    evidence: the data do not exclude an off-list cause), (model W / measured W outside
    ``LOAD_RATIO_TOL`` in a slip bin, Eq. 7, or static sinkage above D/6, the
    limit of Eq. 10's small-angle form), when there are fewer than
@@ -795,6 +795,9 @@ def _separating(effects: set, channels: set, names=()) -> str | None:
     if {"zero_drift", "dp_drift"} & set(names) and e & {"terrain_drift", "terrain_mismatch"}:
         parts.append("the transducer's zeros with the wheel lifted before and after the run (a drifting zero "
                      "moves them; the soil does not)")
+    if {"angle_offset", "sensor_gain"} & set(names) and e:
+        parts.append("the transducer's calibration: known loads on the standing wheel at several wheel angles "
+                     "(a gain error scales the reading; an angle offset makes Fx follow the load)")
     if "load_k" in names and e & {"terrain_mismatch", "terrain_drift", "slip_sinkage"}:
         parts.append("the same slip sweep at a second static load (only a load-dependent soil changes its "
                      "pressure-sinkage modulus with it)")

@@ -42,7 +42,12 @@ simulate, write the MCAP, ``run_fit`` as a user would).
     terrain mismatch: the terrain re-fit predicted the drawbar pull worse out of sample than
     the Dp-resistance stand-in, and won on a 0.4 % torque error from the soil's roughness;
   - 2209, a torque zero drift of 122 N m (under 1 % of the torque), was ``none`` at "high"
-    while the posterior gave the zero drift probability 1.
+    while the posterior gave the zero drift probability 1;
+  - 3172, a 1.03 deg wheel-angle offset on a sandy loam (Dp +250 N, 15 %), was named a
+    terrain mismatch: the terrain re-fit explained the drawbar pull no better out of sample
+    than the Dp-only stand-in, and won the posterior on a 0.16 % torque error, which the
+    offset makes by tilting the measured load (W' = W cos d - Fx sin d).  The angle-offset
+    stand-in (``angle_offset``) turns the hub forces as the offset does and explains both.
 - Benchmark seed 2504, a Wong-Reece stress shift on clay (Wong's torque 13 % off): once a named
   cause had to hold out of sample against the stand-ins for causes on no list, the Dp-only
   drift stand-in, 1 N better on the held-out drawbar pull, blocked it, although it leaves the
@@ -162,6 +167,7 @@ def test_benchmark_seed_1398_a_cohesion_mismatch_is_not_named_a_stress_distribut
     (2133, "north-gower-clayey-loam", (0.47, 0.32), 0.0),
     (2203, "north-gower-clayey-loam", (0.55, 0.40), 3000.0),
     (2209, "heavy-clay-25", (0.47, 0.32), 5000.0),
+    (3172, "sandy-loam-michigan-11", (0.47, 0.32), 5000.0),
 ])
 def test_transducer_errors_on_library_soils_are_no_named_cause_nor_a_sure_none(tmp_path, seed, terrain, wheel,
                                                                                 added_load_n):

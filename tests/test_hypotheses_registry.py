@@ -168,3 +168,27 @@ def test_a_transducer_gain_scales_the_reading_with_the_wheels_inertia():
     keep = data.cells.group == 0
     np.testing.assert_allclose(data.cells.subset(keep).inertia["drawbar_pull_n"], -40.0)
     assert prepare_data(df.drop(columns=["fx_n", "my_nm"])).inertia == {}
+
+
+def test_a_wheel_angle_offset_turns_the_hub_forces_so_the_load_leaks_into_the_drawbar_pull():
+    """hardware.md: Fx = Fx_w cos a + Fz_w sin a, Fz = -Fx_w sin a + Fz_w cos a.  With the angle read
+    delta too far, the reported hub forces are the true ones turned by delta; the fit sees the
+    measured load W' and the inertia-compensated Dp' = Fx' + m_w dV/dt.  The stand-in recovers the
+    true load from W' and predicts Dp' and the torque at it (error of order sin(delta)^2)."""
+    h = get_hypothesis("angle_offset")
+    assert h.effect == "unexplained"
+    rng = np.random.default_rng(7)
+    load = rng.uniform(11000.0, 15000.0, 5)
+    iota = np.linspace(-300.0, 100.0, 5)  # Fx - Dp = -m_w dV/dt
+    delta = 0.03
+    true = wong_forces(SAND, DEFAULT_WHEEL, load, S)
+    fx = true.drawbar_pull_n + iota
+    fx_read = fx * np.cos(delta) + load * np.sin(delta)
+    w_read = -fx * np.sin(delta) + load * np.cos(delta)
+    f = h.predict(CTX, w_read, S, X, {"delta": delta}, inertia={"drawbar_pull_n": iota})
+    np.testing.assert_allclose(f.drawbar_pull_n, fx_read - iota, atol=2.0)
+    np.testing.assert_allclose(f.torque_nm, true.torque_nm, rtol=1e-3)
+    assert np.all(np.abs(fx_read - iota - true.drawbar_pull_n) > 250.0)  # W sin(delta): far above the tolerance
+    # no offset: Wong's forces at the measured load, whatever the reading
+    f0 = h.predict(CTX, w_read, S, X, {"delta": 0.0}, inertia={"drawbar_pull_n": iota})
+    np.testing.assert_allclose(f0.drawbar_pull_n, wong_forces(SAND, DEFAULT_WHEEL, w_read, S).drawbar_pull_n)
