@@ -805,6 +805,9 @@ class AngleOffset(Hypothesis):
         return (HParam("delta", 0.0, -0.2, 0.2, "rad", "offset of the wheel-angle reading"),)
 
     def predict(self, ctx, load_n, slip, x, p, inertia=None):
+        """Wong's forces as processing reports them with the wheel angle read ``delta`` off (class
+        doc): ``load_n`` is the measured load W' (N,) [N]; shapes, units and errors as
+        :meth:`Hypothesis.predict`; without ``inertia`` the reading is taken as Dp alone."""
         terrain = self.terrain(ctx, p)
         w_meas, slip = np.asarray(load_n, float), np.asarray(slip, float)
         iota = np.asarray((inertia or {}).get("drawbar_pull_n", 0.0), float)
