@@ -783,7 +783,7 @@ class SensorGain(Hypothesis):
                                          for c, g in gains.items()})
 
 
-class AngleOffset(Hypothesis):
+class AngleOffset(Wong):
     """The wheel-angle reading is off by delta: processing turns the transducer's rotating-frame
     forces into the hub frame with the wrong angle (hardware.md: Fx = Fx_w cos a + Fz_w sin a,
     Fz = -Fx_w sin a + Fz_w cos a), so the hub forces it reports are the true ones turned by delta.
@@ -816,9 +816,6 @@ class AngleOffset(Hypothesis):
         w = (w_meas + (f0.drawbar_pull_n + iota) * sd) / cd
         f = self.forces(ctx, terrain, w, slip, x, p)
         return dataclasses.replace(f, drawbar_pull_n=(f.drawbar_pull_n + iota) * cd + w * sd - iota)
-
-    def forces(self, ctx, terrain, load_n, slip, x, p):
-        return wong_forces(terrain, ctx.wheel, load_n, slip, sinkage=ctx.sinkage)
 
 
 class LoadStiffness(Hypothesis):
