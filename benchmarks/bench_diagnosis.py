@@ -20,6 +20,7 @@ with ``--terrains``, the next soil of the list).
     python benchmarks/bench_diagnosis.py --first 128 --seeds 128   # seeds 128..255
     python benchmarks/bench_diagnosis.py --front-wheels driven      # the 4x4's front wheels on FL/FR
     python benchmarks/bench_diagnosis.py --terrains library         # soils the rule was not developed on
+    python benchmarks/bench_diagnosis.py --effects held-out         # causes the rule never met
 
 The FL/FR wheel-speed channels carry an idealised undriven reference wheel by default:
 processing estimates the GNSS latency against them as free-rolling wheels, which the 4x4's
@@ -58,15 +59,18 @@ def _runs_to_try(terrain: str, case: dict, terrains: list[str] | None) -> list[t
 
 
 def run_seed(seed: int, duration_s: float, front_wheels: str, keep_dir: str | None = None,
-             terrains: list[str] | None = None, sim_options: dict | None = None) -> dict:
+             terrains: list[str] | None = None, sim_options: dict | None = None, effects: str = "listed") -> dict:
     """Simulate, fit and judge one seed; returns a row dict (never raises: errors are rows).
 
-    ``sim_options``: further keywords of ``simulate_run`` (``soil_variability``, ``slip_max``).
+    ``sim_options``: further keywords of ``simulate_run`` (``soil_variability``, ``slip_max``);
+    ``effects``: ``listed`` (``EFFECTS[seed % 17]``), ``held-out`` or ``held-out-2`` (``HELD_OUT``,
+    ``HELD_OUT_2``: causes added after the rule, :mod:`wheelsoil.sim.effects`).
     """
     from wheelsoil.pipeline import run_fit
-    from wheelsoil.simulate import draw_case, judge, simulate_run, write_simulation
+    from wheelsoil.simulate import EFFECTS, HELD_OUT, HELD_OUT_2, draw_case, judge, simulate_run, write_simulation
 
-    case = draw_case(seed, terrains=terrains)
+    pool = {"listed": EFFECTS, "held-out": HELD_OUT, "held-out-2": HELD_OUT_2}[effects]
+    case = draw_case(seed, terrains=terrains, effects=pool)
     terrain = case.pop("terrain")
     row = {"seed": seed, "effect": case["effect"], "terrain": terrain, "wheel": list(case["wheel"]),
            "added_load_n": case["added_load_n"], "size": case["size"], "notes": []}
@@ -139,14 +143,14 @@ def _pct(a, b):
 
 
 def report(rows: list[dict], wall_s: float, args) -> str:
-    from wheelsoil.simulate import IN_FAMILY, OUT_OF_FAMILY, VERDICTS
+    from wheelsoil.simulate import HELD_OUT, HELD_OUT_2, IN_FAMILY, OUT_OF_FAMILY, VERDICTS
 
     lines = []
     cols = list(VERDICTS) + ["other"]
     head = "| true effect | family | " + " | ".join(cols) + " | right |"
     lines += ["Confusion table (rows: true effect; columns: report.json diagnosis.effect)", "", head,
               "|" + "---|" * (len(cols) + 3)]
-    for eff in list(IN_FAMILY) + list(OUT_OF_FAMILY):
+    for eff in list(IN_FAMILY) + list(OUT_OF_FAMILY) + list(HELD_OUT) + list(HELD_OUT_2):
         rs = [r for r in rows if r["effect"] == eff]
         if not rs:
             continue
@@ -233,6 +237,11 @@ def main(argv=None) -> int:
                     help="draw each seed's soil from these built-in terrains (comma-separated slugs, or 'library': "
                     "every built-in terrain but the paper's clay and sand, which the rule was developed on); the "
                     "scenario's wheel and load stay; a soil the vehicle cannot drive moves to the next one")
+    ap.add_argument("--effects", choices=("listed", "held-out", "held-out-2"), default="listed",
+                    help="'listed' (default): EFFECTS[seed %% 17], in and out of family; 'held-out': "
+                    "HELD_OUT[seed %% 3], out-of-family causes added after the rule (a rebounding soil, a "
+                    "hump-shaped shear curve, a GNSS speed gain); 'held-out-2': HELD_OUT_2[seed %% 3], a second "
+                    "batch scored once after the stand-ins the first one led to")
     ap.add_argument("--json", default=None, metavar="FILE", help="also write the rows as JSON")
     ap.add_argument("--keep", default=None, metavar="DIR", help="keep recordings, truths and reports here")
     args = ap.parse_args(argv)
@@ -252,7 +261,8 @@ def main(argv=None) -> int:
     print(f"bench_diagnosis: {len(seeds)} seeds, {args.duration:.0f} s runs, {args.jobs} process(es), "
           f"front wheels {args.front_wheels}"
           + "".join(f", {k.replace('_', ' ')} {v:g}" for k, v in sim_options.items())
-          + ("" if terrains is None else f", terrains {', '.join(terrains)}"))
+          + ("" if terrains is None else f", terrains {', '.join(terrains)}")
+          + ("" if args.effects == "listed" else f", effects {args.effects}"))
     print("diagnosis thresholds as the code holds them (wheelsoil.model.diagnosis):",
           json.dumps(thresholds(), sort_keys=True))
     sys.stdout.flush()
@@ -260,11 +270,12 @@ def main(argv=None) -> int:
     rows = []
     if args.jobs == 1:
         for s in seeds:
-            rows.append(run_seed(s, args.duration, args.front_wheels, args.keep, terrains, sim_options))
+            rows.append(run_seed(s, args.duration, args.front_wheels, args.keep, terrains, sim_options, args.effects))
             print(f"  seed {s}: {rows[-1]['effect']} -> {rows[-1]['verdict']} ({rows[-1].get('confidence')})", flush=True)
     else:
         with ProcessPoolExecutor(max_workers=args.jobs) as pool:
-            futs = {s: pool.submit(run_seed, s, args.duration, args.front_wheels, args.keep, terrains, sim_options)
+            futs = {s: pool.submit(run_seed, s, args.duration, args.front_wheels, args.keep, terrains, sim_options,
+                                   args.effects)
                     for s in seeds}
             for s in seeds:
                 rows.append(futs[s].result())

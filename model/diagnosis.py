@@ -99,7 +99,7 @@ decides with this rule (constants below; none was tuned on a benchmark):
    ``P_HIGH``, ``medium`` >= ``P_NAME``), capped at ``medium`` when the
    named model is physically inconsistent, when one of the generic
    alternatives for causes on no list (effect ``unexplained``: ``dp_resistance``, ``dp_drift``, ``radius``,
-   ``tyre``, ``width``, ``sensor_gain``, ``angle_offset``, ``zero_drift``, ``load_k``, ``balance``) is also supported out of sample (with less
+   ``speed_gain``, ``tyre``, ``width``, ``sensor_gain``, ``angle_offset``, ``zero_drift``, ``load_k``, ``rebound``, ``shear_slip``, ``balance``) is also supported out of sample (with less
    evidence: the data do not exclude an off-list cause), (model W / measured W outside
    ``LOAD_RATIO_TOL`` in a slip bin, Eq. 7, or static sinkage above D/6, the
    limit of Eq. 10's small-angle form), when there are fewer than
@@ -789,6 +789,9 @@ def _separating(effects: set, channels: set, names=()) -> str | None:
     e = set(effects) - {"none", "unexplained"}
     geometry = {"radius", "tyre", "width"} & set(names)
     parts = []
+    if "speed_gain" in names and e:
+        parts.append("the vehicle speed against a second reference (a fifth wheel, a radar, or the undriven wheels "
+                     "rolling free at known radius): a speed read with a gain error moves every slip")
     if geometry and e & {"terrain_mismatch", "terrain_drift", "slip_sinkage"}:
         parts.append("the tyre's loaded radius and contact width (footprint) under this load, or plate-sinkage and "
                      "shear tests of this soil (a wheel-geometry error acts on the forces like a change of the soil)")
@@ -798,6 +801,13 @@ def _separating(effects: set, channels: set, names=()) -> str | None:
     if {"angle_offset", "sensor_gain"} & set(names) and e:
         parts.append("the transducer's calibration: known loads on the standing wheel at several wheel angles "
                      "(a gain error scales the reading; an angle offset makes Fx follow the load)")
+    if "rebound" in names and e:
+        parts.append("the rut depth behind the wheel against the sinkage under its axle, or the normal stress "
+                     "behind the bottom (pressure sensors in the rim): a rebounding soil leaves a shallower rut "
+                     "and still pushes on the wheel behind the bottom")
+    if "shear_slip" in names and e:
+        parts.append("shear-box or bevameter tests of this soil at several shear rates (a strength that changes "
+                     "with the rate of shear) and the normal stress under the wheel (pressure sensors in the rim)")
     if "load_k" in names and e & {"terrain_mismatch", "terrain_drift", "slip_sinkage"}:
         parts.append("the same slip sweep at a second static load (only a load-dependent soil changes its "
                      "pressure-sinkage modulus with it)")

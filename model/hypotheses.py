@@ -39,6 +39,8 @@ The hypotheses (paper numbering for Eqs.; Wong = *Theory of Ground Vehicles*, 4t
 * ``radius``: not a listed cause either: the soil sees another wheel radius than
   the one slip was computed with (a deflecting tyre, a radius error): effect
   ``unexplained``.
+* ``speed_gain``: not a listed cause: slip (Eq. 6) from a vehicle or wheel speed read with
+  a gain error; the soil sees the true slip on the configured wheel: effect ``unexplained``.
 * ``width``: not a listed cause, the sibling of ``radius``: the soil sees another
   contact width b (1 + beta) than the configured b (a bulging or deflecting tyre,
   a wrong width in the configuration): effect ``unexplained``.  ``radius`` and
@@ -51,6 +53,14 @@ The hypotheses (paper numbering for Eqs.; Wong = *Theory of Ground Vehicles*, 4t
 * ``angle_offset``: not a listed cause: the wheel-angle reading is off, so the
   hub-frame forces are turned by that angle (the load leaks into the drawbar
   pull, the drawbar pull into the measured load): effect ``unexplained``.
+* ``rebound``: not a listed cause: a soil that rebounds behind the wheel, so the
+  contact runs on past the bottom to an exit angle theta2 = lambda theta1 (Wong's rear
+  region with an exit angle; kernel ``wong_forces(..., exit_ratio=lambda)``).  The
+  rebounding soil pushes the wheel forward and keeps shearing behind the bottom, which
+  raises Dp and T in a way a terrain re-fit mimics: effect ``unexplained``.
+* ``shear_slip``: not a listed cause: a shear strength that changes with slip,
+  (c + sigma tan phi)(1 + b s) (rate effects, remoulding, a weak tyre-soil interface;
+  kernel ``tau_scale``): effect ``unexplained``.
 * ``balance``: not a listed cause: the static sinkage from the vertical balance
   Eq. (7) instead of Eq. (10) (no parameters): effect ``unexplained``.
 * ``drift_linear``: terrain drift.  The terrain changes along the run:
@@ -689,6 +699,28 @@ class WheelRadius(Hypothesis):
         return wong_forces(terrain, wheel, load_n, s_e, sinkage=ctx.sinkage)
 
 
+class SpeedGain(Hypothesis):
+    """Slip from a speed read with a gain error: the data's slip s comes from V' = V (1 + gamma)
+    (a GNSS antenna's lever arm, a receiver or wheel-speed calibration), so the soil sees
+    s_e = 1 - (1 - s) / (1 + gamma) (Eq. 6 with the true V), clipped at 0; wheel and soil as
+    configured.  A wheel-speed gain is the same error with gamma = 1/g - 1.
+
+    Not a cause on our list: a slip measurement error.  The sibling of :class:`WheelRadius`,
+    whose soil also sees another radius.  Effect ``unexplained``: a listed cause it explains as
+    well is not named.
+    """
+
+    name, effect, title = "speed_gain", "unexplained", "slip from a speed read with a gain error (no listed cause)"
+    source = "generic alternative: a speed calibration error in Eq. (6)"
+
+    def own_params(self, ctx):
+        return (HParam("gamma", 0.0, -0.2, 0.2, "-", "relative error of the speed slip was computed with"),)
+
+    def forces(self, ctx, terrain, load_n, slip, x, p):
+        s_e = np.clip(1.0 - (1.0 - np.asarray(slip, float)) / (1.0 + p["gamma"]), 0.0, 0.999)
+        return wong_forces(terrain, ctx.wheel, load_n, s_e, sinkage=ctx.sinkage)
+
+
 class TyreRadius(Hypothesis):
     """A deflecting tyre: the soil sees Wong's equivalent rigid wheel of radius
     r (1 + rho W / W_0) at the measured slip (Eq. 6 with the tyre's rolling radius r, unchanged);
@@ -854,6 +886,55 @@ class LoadStiffness(Hypothesis):
             sinkage=ctx.sinkage))
 
 
+class Rebound(Hypothesis):
+    """A soil that rebounds behind the wheel: the contact runs on past the bottom to the exit
+    angle theta2 = lambda theta1, lambda in [0, 0.6] (kernel ``wong_forces(exit_ratio=)``: the
+    rear region from 0 to -theta2, its normal stress the mirrored front profile, shear by
+    Eqs. (4)-(5) continued over it).
+
+    Not a cause on our list: ``stress_distribution`` is the Wong-Reece shift of the maximum
+    (a1, a2) with the exit at the bottom.  Elastic soil (a firm or wet clay, a compacted sand)
+    springs back behind the wheel; the rebounding soil pushes the wheel forward (-sigma sin
+    theta > 0 for theta < 0) and is sheared longer, so Dp and T grow together, a change the
+    five-value terrain re-fit mimics with other soil values.  Effect ``unexplained``: a listed
+    cause it explains as well is not named.  Source: Wong, Theory of Ground Vehicles, 4th
+    ed., ch. 2 (the rear region and exit angle of a rigid wheel); Wong & Reece (1967).
+    """
+
+    name, effect, title = "rebound", "unexplained", "a soil rebounding behind the wheel to an exit angle (no listed cause)"
+    source = "generic alternative: Wong (2008) ch. 2, exit angle theta2 of a rebounding soil; kernel exit_ratio"
+
+    def own_params(self, ctx):
+        return (HParam("exit_ratio", 0.0, 0.0, 0.6, "-", "exit angle theta2 / theta1 behind the bottom"),)
+
+    def forces(self, ctx, terrain, load_n, slip, x, p):
+        return wong_forces(terrain, ctx.wheel, load_n, slip, sinkage=ctx.sinkage, exit_ratio=p["exit_ratio"])
+
+
+class ShearSlip(Hypothesis):
+    """A shear strength that changes with slip: Eq. (4) with (c + sigma tan phi)(1 + b s), b in
+    [-0.6, 0.6] (kernel ``wong_forces(tau_scale=)``).
+
+    Not a cause on our list: it stands for a soil whose strength depends on the shear rate or
+    remoulds at high slip (rate effects in clays, shear-band softening in dense sands), or a
+    tyre-soil interface weaker than the soil.  It lowers (b < 0) or raises the drawbar pull and
+    torque the more the more the wheel slips, which a Wong-Reece shift with slip (a2) or a
+    slip-sinkage form mimics.  Effect ``unexplained``: a listed cause it explains as well is
+    not named.  Source: Wong, Theory of Ground Vehicles, 4th ed., ch. 2 (shear strength of
+    soils; rate of shear).
+    """
+
+    name, effect, title = "shear_slip", "unexplained", "a shear strength changing with slip (no listed cause)"
+    source = "generic alternative: Eq. (4) with a slip-dependent shear strength; kernel tau_scale"
+
+    def own_params(self, ctx):
+        return (HParam("b", 0.0, -0.6, 0.6, "-", "relative change of the shear strength per unit slip"),)
+
+    def forces(self, ctx, terrain, load_n, slip, x, p):
+        return wong_forces(terrain, ctx.wheel, load_n, slip, sinkage=ctx.sinkage,
+                           tau_scale=1.0 + p["b"] * np.asarray(slip, float))
+
+
 class VerticalBalance(Hypothesis):
     """Wong's model with the static sinkage from the vertical balance Eq. (7) = W instead of
     Eq. (10)'s small-angle formula (kernel ``sinkage="balance"``); no parameters.
@@ -881,8 +962,8 @@ HYPOTHESES: dict[str, Hypothesis] = {
               VasilevTerrain(), DingTerrain(),
               WongReece(), DriftLinear(), DriftStep(), *(_drift_one(n) for n in TERRAIN_NAMES),
               *(_drift_one(n, step=True) for n in TERRAIN_NAMES), DrawbarResistance(), DrawbarDrift(), ZeroDrift(),
-              WheelRadius(), TyreRadius(), WheelWidth(), SensorGain(), AngleOffset(), LoadStiffness(),
-              VerticalBalance())
+              WheelRadius(), SpeedGain(), TyreRadius(), WheelWidth(), SensorGain(), AngleOffset(), LoadStiffness(),
+              Rebound(), ShearSlip(), VerticalBalance())
 }
 
 

@@ -11,7 +11,8 @@ Equations (paper numbering; the two printed typos fixed as in hardware.md):
 - (8)  Dp = r b (int tau cos - int sigma sin)
 - (9)  T  = r^2 b int tau
 - (10) z0 = [3 W / (sqrt(2r) (kc + b kphi) (3 - n))]^(2/(2n+1))
-  integrals over theta in [0, theta1] (exit angle theta2 = 0).
+  integrals over theta in [0, theta1] (exit angle theta2 = 0; ``exit_ratio``:
+  a rebounding soil's exit angle theta2 > 0, see ``wong_forces``).
 
 Normal-stress distribution (``stress=``). ``None``: the paper's Eqs. (2)-(3),
 maximum at theta = 0. ``(a1, a2)``: Wong-Reece (Wong, Theory of Ground
@@ -174,14 +175,17 @@ def sinkage_eq10(terrain: Terrain, wheel: Wheel, load_n, n=None) -> np.ndarray:
     return (3.0 * np.asarray(load_n, float) / (math.sqrt(2.0 * r) * k * (3.0 - n))) ** (2.0 / (2.0 * n + 1.0))
 
 
-def _integrals(terrain: Terrain, wheel: Wheel, z, s, n, load_only: bool = False, ratio=None):
+def _integrals(terrain: Terrain, wheel: Wheel, z, s, n, load_only: bool = False, ratio=None, exit_ratio=None,
+               tau_scale=None):
     """Eqs. (1)-(9) by substituted Gauss-Legendre quadrature; z, s, n of shape (N,).
 
     ``ratio`` None: the paper's distribution (Eqs. 2-3 over [0, theta1]).
     ``ratio`` (N,) array theta_m/theta1 in [0, 1): the Wong-Reece distribution
     (front region [theta_m, theta1] and rear region [0, theta_m], see
-    ``wong_forces``). Returns theta1 and W (Eq. 7), and unless ``load_only``
-    also Dp, T; all (N,).
+    ``wong_forces``). ``exit_ratio`` (N,) theta2/theta1 >= 0: the rear region
+    runs on to -theta2 (a rebounding soil; ``ratio`` None then means theta_m = 0).
+    ``tau_scale`` (N,) multiplies the shear strength c + sigma tan phi of Eq. (4) per sample.
+    Returns theta1 and W (Eq. 7), and unless ``load_only`` also Dp, T; all (N,).
     """
     r, b = wheel.radius, wheel.width
     k = terrain.kc / b + terrain.kphi
@@ -197,12 +201,14 @@ def _integrals(terrain: Terrain, wheel: Wheel, z, s, n, load_only: bool = False,
         t1 = theta1[sl, None]
         nn = n[sl, None]
         ss = s[sl, None]
-        if ratio is None:
+        if ratio is None and exit_ratio is None:
             tm = None
             span = t1
         else:
-            tm = ratio[sl, None] * t1  # theta_m, Wong-Reece
+            tm = (0.0 if ratio is None else ratio[sl, None]) * t1  # theta_m, Wong-Reece
             span = t1 - tm  # front region length theta1 - theta_m
+            t2 = 0.0 if exit_ratio is None else exit_ratio[sl, None] * t1  # exit angle theta2
+            rear = tm + t2  # rear region length theta_m + theta2
         s1 = np.sin(t1)
         c1 = np.cos(t1)
         half = (0.5 * span) * _UQ  # (theta1 - theta)/2 on the front region's nodes
@@ -216,7 +222,10 @@ def _integrals(terrain: Terrain, wheel: Wheel, z, s, n, load_only: bool = False,
             sigma = k * np.exp(nn * np.log(ztheta))  # Eq. (2)
         # Eq. (5): j = r [(theta1 - theta) - (1 - s)(sin theta1 - sin theta)]
         j = r * (2.0 * half - (1.0 - ss) * (2.0 * cos_m * sh))
-        tau = (c + sigma * tanphi) * -np.expm1(-j * inv_k)  # Eq. (4)
+        strength = c + sigma * tanphi
+        if tau_scale is not None:
+            strength = strength * tau_scale[sl, None]
+        tau = strength * -np.expm1(-j * inv_k)  # Eq. (4)
         # theta = theta1 - d with sin d = 2 sh ch, cos d = 1 - 2 sh^2
         sin_d = 2.0 * sh * ch
         cos_d = 1.0 - 2.0 * sh * sh
@@ -228,17 +237,17 @@ def _integrals(terrain: Terrain, wheel: Wheel, z, s, n, load_only: bool = False,
             dp_blk = (r * b) * scale * ((tau * cos_t - sigma * sin_t) @ _G)  # Eq. (8)
             t_blk = (r * r * b) * scale * (tau @ _G)  # Eq. (9)
         if tm is not None:
-            # Rear region, nodes theta = theta_m u^3 (the stress vanishes like theta^n at
-            # theta = 0). Its stress is the front's at theta' = theta1 - (theta/theta_m)
-            # (theta1 - theta_m) = theta1 - span u^3: the front region's node for the same
-            # u, so ``sigma`` is reused as it is.
-            th = tm * _UQ
+            # Rear region, nodes theta = -theta2 + (theta_m + theta2) u^3 (the stress vanishes
+            # like (theta + theta2)^n at the exit). Its stress is the front's at theta' = theta1 -
+            # (theta + theta2)/(theta_m + theta2) (theta1 - theta_m) = theta1 - span u^3: the
+            # front region's node for the same u, so ``sigma`` is reused as it is.
+            th = rear * _UQ - t2
             sin_r = np.sin(th)
             cos_r = np.cos(th)
-            # Eq. (5) over the same contact; theta1 - theta = span + theta_m (1 - u^3)
-            j_r = r * ((span + tm * _1MUQ) - (1.0 - ss) * (s1 - sin_r))
-            tau_r = (c + sigma * tanphi) * -np.expm1(-j_r * inv_k)  # Eq. (4)
-            scale_r = tm[:, 0]
+            # Eq. (5) over the same contact; theta1 - theta = span + (theta_m + theta2) (1 - u^3)
+            j_r = r * ((span + rear * _1MUQ) - (1.0 - ss) * (s1 - sin_r))
+            tau_r = strength * -np.expm1(-j_r * inv_k)  # Eq. (4)
+            scale_r = np.broadcast_to(rear, t1.shape)[:, 0]
             w_blk = w_blk + (r * b) * scale_r * ((sigma * cos_r + tau_r * sin_r) @ _G)
             if not load_only:
                 dp_blk = dp_blk + (r * b) * scale_r * ((tau_r * cos_r - sigma * sin_r) @ _G)
@@ -250,7 +259,7 @@ def _integrals(terrain: Terrain, wheel: Wheel, z, s, n, load_only: bool = False,
     return theta1, w_out, dp_out, t_out
 
 
-def _balance_sinkage(terrain, wheel, w, s, n, z_start, ratio=None) -> np.ndarray:
+def _balance_sinkage(terrain, wheel, w, s, n, z_start, ratio=None, exit_ratio=None, tau_scale=None) -> np.ndarray:
     """z0 with Eq. (7)(z0, s) = W, per sample; safeguarded secant in log z vs log W.
 
     Raises ValueError naming the first sample whose load exceeds what the
@@ -273,7 +282,9 @@ def _balance_sinkage(terrain, wheel, w, s, n, z_start, ratio=None) -> np.ndarray
     out = np.empty(size)
     for _ in range(100):
         _, wm, _, _ = _integrals(terrain, wheel, np.exp(x), s[active], n[active], load_only=True,
-                                 ratio=None if ratio is None else ratio[active])
+                                 ratio=None if ratio is None else ratio[active],
+                                 exit_ratio=None if exit_ratio is None else exit_ratio[active],
+                                 tau_scale=None if tau_scale is None else tau_scale[active])
         g = np.log(wm) - log_w[active]
         done = np.abs(g) < 1e-13
         if x_prev is not None:
@@ -352,6 +363,8 @@ def wong_forces(
     z_fn: ZFn | None = None,
     n_fn: NFn | None = None,
     stress=None,
+    exit_ratio=None,
+    tau_scale=None,
 ) -> WheelForces:
     """Wong's rigid-wheel forces for each sample (paper Eqs. 1-10).
 
@@ -389,6 +402,17 @@ def wong_forces(
       not checked against the 1967 paper here). A fitter should bound
       a1 + a2 s_max below 1 (e.g. a1 <= 0.6, a2 <= 0.35).
 
+    ``exit_ratio`` (float or (N,) array, >= 0 and < 1; None or 0: the paper's exit
+    theta2 = 0): a soil that rebounds behind the wheel, exit angle theta2 = exit_ratio
+    theta1. The rear region then runs from theta_m down to -theta2 with
+    sigma = k_eq (r (cos(theta1 - (theta + theta2)/(theta_m + theta2) (theta1 - theta_m))
+    - cos theta1))^n (zero at the exit), Eq. (5) continued over it. Source: Wong, Theory
+    of Ground Vehicles, 4th ed., ch. 2 (rear region with an exit angle); Wong & Reece 1967.
+
+    ``tau_scale`` (float or (N,) array, > 0; None: 1) multiplies the shear strength
+    c + sigma tan phi of Eq. (4) per sample (a shear strength that changes with slip, e.g.
+    rate effects or remoulding: 1 + b s).
+
     Quadrature: each region by the substituted 24-point Gauss-Legendre rule
     (u^3 substitution at the end where the stress vanishes like a power n);
     the kink at theta_m is a region boundary, so both integrands are smooth.
@@ -400,12 +424,34 @@ def wong_forces(
     or slip, W <= 0, s < 0 (skid is not modelled), s >= 1, a sinkage exponent
     outside (0, 3), kc/b + kphi <= 0, a sinkage < 0 or >= r (theta1 >= 90 deg),
     an unknown ``sinkage`` mode, a malformed ``stress`` or a non-finite
-    coefficient, theta_m/theta1 = a1 + a2 s outside [0, 1) (``stress_ratio[i]``).
+    coefficient, theta_m/theta1 = a1 + a2 s outside [0, 1) (``stress_ratio[i]``),
+    an exit ratio that is not finite or outside [0, 1) (``exit_ratio[i]``), a shear-strength
+    factor that is not finite and positive (``tau_scale[i]``).
     """
     if sinkage not in SINKAGE_MODES:
         raise ValueError(f"sinkage mode must be one of {', '.join(SINKAGE_MODES)}, got {sinkage!r}")
     w, s = _as_samples(load_n, slip)
     ratio = _stress_ratio(stress, s)
+    if exit_ratio is not None:
+        try:
+            exit_ratio = np.broadcast_to(np.asarray(exit_ratio, dtype=float), s.shape).copy()
+        except (TypeError, ValueError):
+            raise ValueError(f"exit_ratio must be a number or an array of shape ({len(s)},), "
+                             f"got {exit_ratio!r}") from None
+        _check(~np.isfinite(exit_ratio) | (exit_ratio < 0) | (exit_ratio >= 1), "exit_ratio", exit_ratio,
+               "exit angle theta2/theta1 must be in [0, 1)")
+        if not exit_ratio.any():
+            exit_ratio = None  # theta2 = 0: the paper's exit, same numbers bit for bit
+    if tau_scale is not None:
+        try:
+            tau_scale = np.broadcast_to(np.asarray(tau_scale, dtype=float), s.shape).copy()
+        except (TypeError, ValueError):
+            raise ValueError(f"tau_scale must be a number or an array of shape ({len(s)},), "
+                             f"got {tau_scale!r}") from None
+        _check(~np.isfinite(tau_scale) | (tau_scale <= 0), "tau_scale", tau_scale,
+               "the shear-strength factor must be finite and > 0")
+        if np.all(tau_scale == 1.0):
+            tau_scale = None  # Eq. (4) as printed, same numbers bit for bit
     r, b = wheel.radius, wheel.width
     if terrain.kc / b + terrain.kphi <= 0:
         raise ValueError(
@@ -421,13 +467,14 @@ def wong_forces(
     z0 = sinkage_eq10(terrain, wheel, w, n)
     if sinkage == "balance":
         z_start = z0 if ratio is None else z0 * _small_angle_load_factor(ratio, n) ** (-1.0 / (n + 0.5))
-        z0 = _balance_sinkage(terrain, wheel, w, s, n, z_start, ratio)
+        z0 = _balance_sinkage(terrain, wheel, w, s, n, z_start, ratio, exit_ratio, tau_scale)
     z = z0 if z_fn is None else np.broadcast_to(np.asarray(z_fn(z0, s), dtype=float), w.shape).copy()
     _check(~np.isfinite(z), "sinkage_m", z, "sinkage is not finite")
     _check(z < 0, "sinkage_m", z, "sinkage must be >= 0 m")
     _check(z >= r, "sinkage_m", z, f"sinkage must be < wheel radius r = {r} m "
            "(theta1 >= 90 deg is outside the model)")
-    theta1, w_model, dp, t = _integrals(terrain, wheel, z, s, n, ratio=ratio)
+    theta1, w_model, dp, t = _integrals(terrain, wheel, z, s, n, ratio=ratio, exit_ratio=exit_ratio,
+                                        tau_scale=tau_scale)
     return WheelForces(
         sinkage_m=z, theta1_rad=theta1, load_model_n=w_model, drawbar_pull_n=dp, torque_nm=t
     )

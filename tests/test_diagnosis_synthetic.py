@@ -287,3 +287,13 @@ def test_none_on_rough_ground_is_not_high():
     if d.effect == "none":
         assert d.confidence != "high"
         assert any("scatter too much" in r for r in d.confidence_reasons), d.confidence_reasons
+
+
+def test_the_separating_measurement_names_what_tells_each_stand_in_from_a_listed_cause():
+    from wheelsoil.model.diagnosis import _separating
+
+    for name, words in (("speed_gain", "vehicle speed"), ("rebound", "rut depth"), ("shear_slip", "shear rates"),
+                        ("angle_offset", "calibration"), ("load_k", "second static load")):
+        text = _separating({"terrain_mismatch", "unexplained"}, {"drawbar_pull_n", "torque_nm"}, [name])
+        assert text and words in text, (name, text)
+    assert _separating({"none"}, {"drawbar_pull_n"}, []) is None

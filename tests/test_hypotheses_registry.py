@@ -1,6 +1,7 @@
 """The hypothesis registry: every cause one small class, null parameters reduce to its nested model."""
 
 import dataclasses
+import math
 
 import numpy as np
 import pytest
@@ -192,3 +193,28 @@ def test_a_wheel_angle_offset_turns_the_hub_forces_so_the_load_leaks_into_the_dr
     # no offset: Wong's forces at the measured load, whatever the reading
     f0 = h.predict(CTX, w_read, S, X, {"delta": 0.0}, inertia={"drawbar_pull_n": iota})
     np.testing.assert_allclose(f0.drawbar_pull_n, wong_forces(SAND, DEFAULT_WHEEL, w_read, S).drawbar_pull_n)
+
+
+def test_a_rebounding_soil_a_speed_gain_and_a_slip_dependent_shear_strength_are_stand_ins():
+    """``rebound``: Wong's forces with the contact on to theta2 = lambda theta1 behind the bottom
+    (kernel ``exit_ratio``), which raise Dp and T together; ``speed_gain``: Wong's forces at the
+    slip the soil sees when the speed read (1 + gamma) x the true one, s_e = 1 - (1 - s)/(1 + gamma);
+    ``shear_slip``: Eq. (4)'s strength x (1 + b s) (kernel ``tau_scale``)."""
+    reb, spd, shs = get_hypothesis("rebound"), get_hypothesis("speed_gain"), get_hypothesis("shear_slip")
+    assert reb.effect == spd.effect == shs.effect == "unexplained"
+    soft = shs.predict(CTX, W, S, X, {"b": -0.3})
+    for i in (0, len(S) - 1):  # per cell: Wong on a soil whose c and tan(phi) are scaled by 1 - 0.3 s
+        k = 1.0 - 0.3 * S[i]
+        soil = dataclasses.replace(SAND, c=SAND.c * k, phi=math.atan(math.tan(SAND.phi) * k))
+        assert soft.torque_nm[i] == pytest.approx(wong_forces(soil, DEFAULT_WHEEL, W[i:i + 1], S[i:i + 1]).torque_nm[0],
+                                                  rel=1e-9)
+    base = wong_forces(SAND, DEFAULT_WHEEL, W, S)
+    f = reb.predict(CTX, W, S, X, {"exit_ratio": 0.2})
+    np.testing.assert_allclose(f.drawbar_pull_n, wong_forces(SAND, DEFAULT_WHEEL, W, S, exit_ratio=0.2).drawbar_pull_n)
+    assert np.all(f.drawbar_pull_n > base.drawbar_pull_n) and np.all(f.torque_nm > base.torque_nm)
+    np.testing.assert_array_equal(reb.predict(CTX, W, S, X, reb.nulls(CTX)).drawbar_pull_n, base.drawbar_pull_n)
+    # a speed read 3 % high: the data's slip is lower than the soil's
+    g = spd.predict(CTX, W, S, X, {"gamma": 0.03})
+    s_true = 1.0 - (1.0 - np.asarray(S)) / 1.03
+    np.testing.assert_allclose(g.drawbar_pull_n, wong_forces(SAND, DEFAULT_WHEEL, W, s_true).drawbar_pull_n)
+    np.testing.assert_array_equal(spd.predict(CTX, W, S, X, spd.nulls(CTX)).torque_nm, base.torque_nm)

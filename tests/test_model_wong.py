@@ -420,3 +420,49 @@ def test_stress_with_a_slip_dependent_exponent_matches_quadrature():
     ref = wong_forces_quad(sand, DEFAULT_WHEEL, w, s, n=n_eff, stress=(0.35, 0.2))
     _assert_close(ours, ref)
     np.testing.assert_allclose(ours.sinkage_m, ref.sinkage_m, rtol=1e-12)
+
+
+def test_exit_angle_and_shear_scale_match_the_simulators_independent_quadrature():
+    # a rebounding soil (exit angle theta2 = lambda theta1), alone and with a shifted maximum, and a
+    # shear strength scaled per sample, against wheelsoil.sim.terra (scipy quad_vec, written without
+    # the kernel) over every built-in terrain
+    from wheelsoil.sim.terra import soil_dict, wheel_forces
+
+    rng = np.random.default_rng(23)
+    for terrain, wheel, load, slip in _random_cases(60, seed=29):
+        lam = rng.uniform(0.01, 0.6)
+        a1 = rng.choice([0.0, rng.uniform(0.0, 0.5)])
+        scale = rng.uniform(0.5, 1.5)
+        shear = wong_forces(terrain, wheel, [load], [slip], tau_scale=scale)
+        ref = wheel_forces(soil_dict(terrain), wheel.radius, wheel.width, [load], [slip], tau_scale=scale)
+        for field in FIELDS:
+            a, b = getattr(shear, field)[0], ref[field][0]
+            assert abs(a - b) <= max(1e-6 * abs(b), 1e-3), (terrain.name, field, scale, a, b)
+        ours = wong_forces(terrain, wheel, [load], [slip], exit_ratio=lam, stress=(a1, 0.0))
+        ref = wheel_forces(soil_dict(terrain), wheel.radius, wheel.width, [load], [slip], exit_frac=lam,
+                           stress=(a1, 0.0))
+        for field in FIELDS:
+            a, b = getattr(ours, field)[0], ref[field][0]
+            assert abs(a - b) <= max(1e-6 * abs(b), 1e-3), (terrain.name, field, lam, a1, a, b)
+        plain = wong_forces(terrain, wheel, [load], [slip], stress=(a1, 0.0))
+        # the rebounding soil behind the bottom pushes the wheel forward and is sheared longer
+        assert ours.drawbar_pull_n[0] > plain.drawbar_pull_n[0] and ours.torque_nm[0] > plain.torque_nm[0]
+
+
+def test_exit_ratio_zero_and_tau_scale_one_are_the_paper_model_and_bad_values_are_named():
+    terrain = load_terrain("sand")
+    w, s = np.linspace(4000.0, 9000.0, 50), np.linspace(0.0, 0.9, 50)
+    paper = wong_forces(terrain, DEFAULT_WHEEL, w, s)
+    zero = wong_forces(terrain, DEFAULT_WHEEL, w, s, exit_ratio=0.0)
+    for field in ("sinkage_m", *FIELDS):
+        np.testing.assert_array_equal(getattr(zero, field), getattr(paper, field))
+    bal = wong_forces(terrain, DEFAULT_WHEEL, w, s, sinkage="balance", exit_ratio=0.3)
+    np.testing.assert_allclose(bal.load_model_n, w, rtol=1e-10)  # the balance holds with the rear region
+    for bad in (-0.1, 1.0, float("nan")):
+        with pytest.raises(ValueError, match="exit_ratio"):
+            wong_forces(terrain, DEFAULT_WHEEL, w, s, exit_ratio=bad)
+    one = wong_forces(terrain, DEFAULT_WHEEL, w, s, tau_scale=1.0)
+    np.testing.assert_array_equal(one.torque_nm, paper.torque_nm)
+    for bad in (0.0, -1.0, float("inf")):
+        with pytest.raises(ValueError, match="tau_scale"):
+            wong_forces(terrain, DEFAULT_WHEEL, w, s, tau_scale=bad)

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from wheelsoil.model import load_terrain
-from wheelsoil.sim.effects import ACCEPTABLE, EFFECTS, OUT_OF_FAMILY, TruthModel, draw_effect
+from wheelsoil.sim.effects import ACCEPTABLE, EFFECTS, OUT_OF_FAMILY, TruthModel, draw_effect, family_of
 from wheelsoil.sim.effects import _bulldozing_resistance
 from wheelsoil.sim.terra import soil_dict, wheel_forces
 from wheelsoil.simulate import judge, simulate_run
@@ -107,6 +107,30 @@ def test_out_of_family_soil_and_tyre_effects(wong):
     assert not np.allclose(vb["sinkage_m"], wong["sinkage_m"], rtol=1e-3)
 
 
+def test_held_out_effects_exit_angle_and_hump_shaped_shear(wong):
+    from wheelsoil.sim.terra import _shear_factor
+
+    ex = _tm("exit_angle", exit_frac=0.2).drive_forces(LOAD, SLIP)
+    np.testing.assert_allclose(ex["drawbar_pull_n"], wheel_forces(SOIL, R, B, LOAD, SLIP, exit_frac=0.2)["drawbar_pull_n"])
+    # the rebounding soil behind the bottom pushes the wheel forward and is sheared longer
+    assert np.all(ex["drawbar_pull_n"] > wong["drawbar_pull_n"]) and np.all(ex["torque_nm"] > wong["torque_nm"])
+    np.testing.assert_allclose(ex["sinkage_m"], wong["sinkage_m"])  # Eq. (10)'s sinkage: the soil only rebounds
+    K = 0.02
+    # Wong's hump: the peak (1 x the strength) at j = Kw = 2.5 K, the residual Kr far beyond
+    np.testing.assert_allclose(_shear_factor(np.array([2.5 * K, 1e3 * K]), K, (0.7, 2.5)), [1.0, 0.7], rtol=1e-9)
+    hu = _tm("shear_hump", Kr=0.7).drive_forces(LOAD, SLIP)
+    assert hu["drawbar_pull_n"][-1] < wong["drawbar_pull_n"][-1]  # at high slip the soil is at its residual
+    assert family_of("gnss_gain") == "out" and "gnss_gain" not in EFFECTS  # held out: the rotation is unchanged
+    # second batch: a shear strength falling with slip, and the tyre's own losses in the hub torque only
+    so = _tm("strength_softening", beta=0.2).drive_forces(LOAD, SLIP)
+    ref = wheel_forces({**SOIL, "c": SOIL["c"] * (1 - 0.2 * SLIP[-1]),
+                        "phi": math.atan(math.tan(SOIL["phi"]) * (1 - 0.2 * SLIP[-1]))}, R, B, LOAD[-1:], SLIP[-1:])
+    assert so["drawbar_pull_n"][-1] == pytest.approx(ref["drawbar_pull_n"][0], rel=1e-6)
+    ty = _tm("tyre_hysteresis", f=0.02).drive_forces(LOAD, SLIP)
+    np.testing.assert_allclose(ty["torque_nm"] - wong["torque_nm"], 0.02 * LOAD * R, rtol=1e-6)
+    np.testing.assert_allclose(ty["drawbar_pull_n"], wong["drawbar_pull_n"])
+
+
 @pytest.fixture(scope="module")
 def base_run():
     return simulate_run("sand", seed=31, duration_s=30.0, added_load_n=5000.0, soil_variability=0.0)
@@ -114,7 +138,8 @@ def base_run():
 
 @pytest.mark.parametrize("effect,params", [("fx_gain", {"gain": 1.1}), ("my_gain", {"gain": 0.9}),
                                            ("load_gain", {"gain": 1.05}), ("angle_offset", {"offset_deg": 1.0}),
-                                           ("zero_drift", {"drift_nm": 80.0})])
+                                           ("zero_drift", {"drift_nm": 80.0}), ("gnss_gain", {"gain": 1.03}),
+                                           ("inertia_error", {"e": 0.3})])
 def test_sensor_effects_change_only_what_the_transducer_reports(base_run, effect, params):
     from wheelsoil.processing.decode import decode_batches
     from wheelsoil.daq import load_vehicle_config
@@ -130,6 +155,21 @@ def test_sensor_effects_change_only_what_the_transducer_reports(base_run, effect
         np.testing.assert_allclose(a.my_nm, 0.9 * b.my_nm)
     elif effect == "load_gain":
         np.testing.assert_allclose(a.load_measured_n, 1.05 * b.load_n)
+    elif effect == "gnss_gain":  # the transducer reads the truth; the GNSS speed reads 1.03 x it
+        from wheelsoil.processing.decode import decode_batches
+        from wheelsoil.daq import load_vehicle_config
+
+        np.testing.assert_allclose(a.fx_n, b.fx_n)
+        dec = decode_batches(list(r.frame_batches().values()), load_vehicle_config().buses,
+                             select={"RT_SB_GPS_Speed": None})
+        dec0 = decode_batches(list(base_run.frame_batches().values()), load_vehicle_config().buses,
+                              select={"RT_SB_GPS_Speed": None})
+        v, v0 = dec["RT_SB_GPS_Speed"].signals["GPS_Speed_2D"], dec0["RT_SB_GPS_Speed"].signals["GPS_Speed_2D"]
+        fast = v0 > 2.0
+        assert np.median(v[fast] / v0[fast]) == pytest.approx(1.03, abs=0.003)
+    elif effect == "inertia_error":  # a wheel 1.3 x the configured one: 0.3 x its inertial part more
+        np.testing.assert_allclose(a.my_nm - b.my_nm, 0.3 * 11.5 * b.omega_dot_radps2, atol=1e-6)
+        np.testing.assert_allclose(b.fx_n - a.fx_n, 0.3 * 80.0 * b.accel_mps2, atol=1e-6)
     elif effect == "zero_drift":  # My - its true value runs linearly from -40 to +40 N m
         d = a.my_nm.to_numpy() - b.my_nm.to_numpy()
         assert d[0] == pytest.approx(-40.0) and d[-1] == pytest.approx(40.0)

@@ -45,12 +45,12 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
-from wheelsoil.sim.effects import (ACCEPTABLE, EFFECTS, IN_FAMILY, OUT_OF_FAMILY, SENSOR_EFFECTS, VERDICTS,
+from wheelsoil.sim.effects import (ACCEPTABLE, EFFECTS, HELD_OUT, HELD_OUT_2, IN_FAMILY, OUT_OF_FAMILY, SENSOR_EFFECTS, VERDICTS,
                                    TruthModel, draw_effect, family_of)
 from wheelsoil.sim.physics import bandlimited as _bandlimited
 from wheelsoil.sim.terra import soil_dict
 
-__all__ = ["EFFECTS", "IN_FAMILY", "OUT_OF_FAMILY", "ACCEPTABLE", "VERDICTS", "SimulatedRun", "simulate_run",
+__all__ = ["EFFECTS", "IN_FAMILY", "OUT_OF_FAMILY", "HELD_OUT", "HELD_OUT_2", "ACCEPTABLE", "VERDICTS", "SimulatedRun", "simulate_run",
            "write_simulation", "write_truth", "write_vehicle_config", "judge", "draw_case", "pack_signals", "vehicle_config_for",
            "SIMULATOR"]
 
@@ -341,6 +341,10 @@ def simulate_run(
         angle_err_deg = float(params["offset_deg"])
     elif effect == "zero_drift":
         my += params["drift_nm"] * ((t_rel - t_rel[0]) / (t_rel[-1] - t_rel[0]) - 0.5)
+    elif effect == "inertia_error":  # the true wheel is (1 + e) x the configured one: the reading's inertia too
+        fx -= params["e"] * WHEEL_MASS_KG * w["accel_mps2"]
+        my += params["e"] * WHEEL_INERTIA_KGM2 * w["omega_dot_radps2"]
+    gnss_gain = float(params["gain"]) if effect == "gnss_gain" else 1.0
 
     start_s = 1765416600 + int(seed % 5000) * 3607 + rng.uniform(0, 1)  # a December morning, seeded
     gps_offset_s = float(rng.uniform(-2.0, 2.0))       # GPS - (host UTC + leap) at the start
@@ -349,7 +353,8 @@ def simulate_run(
     frames_wft = _wft_frames(dbs["wft"], rng, t_rel, w_meas, fx, my, angle_rad, angle_deg, drop_rate,
                              angle_err_deg=angle_err_deg)
     frames_veh = _vehicle_bus_frames(dbs, rng, t_rel, speed, omega, slip, r, gnss_latency_s,
-                                     start_s, gps_offset_s, gps_drift, front_wheels=front_wheels)
+                                     start_s, gps_offset_s, gps_drift, front_wheels=front_wheels,
+                                     gnss_gain=gnss_gain)
     start_ns = int(round(start_s * 1e9))
     frames = {}
     for bus, parts in ((BUS_WFT, frames_wft), (BUS_VEH, frames_veh)):
@@ -561,7 +566,7 @@ def _wft_frames(db, rng, t_rel, load, fx, my_true, angle_rad, angle_deg, drop_ra
 
 
 def _vehicle_bus_frames(dbs, rng, t_rel, speed, omega, slip, r, latency_s, start_s, gps_offset_s, gps_drift,
-                        front_wheels="driven"):
+                        front_wheels="driven", gnss_gain=1.0):
     """can1: wheel speeds (100 Hz), WSS status (10 Hz), GNSS speed/velocity/time (20 Hz), GPS status (1 Hz).
 
     All four wheels are driven through locked differentials: they turn at the
@@ -569,7 +574,7 @@ def _vehicle_bus_frames(dbs, rng, t_rel, speed, omega, slip, r, latency_s, start
     the wheel speeds differ by that). ``front_wheels="reference"`` puts an
     idealised undriven reference wheel (r omega = V, rolling slip -0.8 %) on the
     FL/FR channels instead (the dynamics stay 4x4); GNSS velocities are of the fix epoch
-    and arrive ``latency_s`` later; ``RT_SB_GPS_Time`` carries the fix's GPS
+    and arrive ``latency_s`` later (their speeds read ``gnss_gain`` x the true ones); ``RT_SB_GPS_Time`` carries the fix's GPS
     week and time of week on the GPS clock (host clock + offset + drift).
     """
     duration = t_rel[-1]
@@ -610,7 +615,7 @@ def _vehicle_bus_frames(dbs, rng, t_rel, speed, omega, slip, r, latency_s, start
     gps_fix = np.arange(k0, k1 + 1) * step
     t_fix = (gps_fix - gps0) / (1 + gps_drift)  # host time of the fix epoch
     ng = len(t_fix)
-    v_fix = np.interp(t_fix, t_rel, speed)
+    v_fix = gnss_gain * np.interp(t_fix, t_rel, speed)
     t_rx = t_fix + latency_s + np.abs(rng.normal(0, 1.5e-3, ng))
     m_spd = gps.get_message_by_name("RT_SB_GPS_Speed")
     m_vel = gps.get_message_by_name("RT_SB_INS_Vel_Body_Axes")
@@ -801,18 +806,19 @@ SCENARIOS = (
 )
 
 
-def draw_case(seed: int, *, effect: str | None = None, terrains: Sequence[str] | None = None) -> dict[str, Any]:
+def draw_case(seed: int, *, effect: str | None = None, terrains: Sequence[str] | None = None,
+              effects: Sequence[str] = EFFECTS) -> dict[str, Any]:
     """A benchmark case from ``seed`` alone (so any case can be re-run by its seed).
 
-    Effect ``EFFECTS[seed % len(EFFECTS)]`` unless given (so consecutive seeds cover every
-    effect in and out of family equally), a scenario of :data:`SCENARIOS`, effect size uniform
+    Effect ``effects[seed % len(effects)]`` unless given (so consecutive seeds cover every
+    effect in and out of family equally; ``effects=HELD_OUT``: the held-out causes), a scenario of :data:`SCENARIOS`, effect size uniform
     in [0, 1], GNSS latency 0.03-0.2 s, drop rate 0-1 %. ``terrains`` (built-in terrain slugs,
     ``wheelsoil terrains``): the scenario's soil replaced by one of them, drawn from the seed
     on a separate stream (the other draws stay those of the seed). Returns
     :func:`simulate_run` keyword arguments plus ``terrain``.
     """
     rng = np.random.default_rng([int(seed), 20261121])
-    eff = effect or str(EFFECTS[int(seed) % len(EFFECTS)])
+    eff = effect or str(effects[int(seed) % len(effects)])
     sc = dict(SCENARIOS[int(rng.integers(len(SCENARIOS)))])
     if terrains:
         sc["terrain"] = str(terrains[int(np.random.default_rng([int(seed), 20261123]).integers(len(terrains)))])
@@ -902,6 +908,14 @@ effects (--effect; parameters with --param NAME=VALUE, the others drawn at --siz
     width_error          the tyre's effective contact width is factor x b (factor); exactly
                          kphi and c x factor, so terrain_mismatch is acceptable too
     zero_drift           the transducer's My zero drifts over the run (drift_nm, end - start)
+  held out (out of family, never used to develop the diagnosis' rule):
+    exit_angle           a rebounding soil: contact on to theta2 = exit_frac theta1 behind the
+                         bottom (a stress distribution: stress_distribution acceptable too)
+    shear_hump           Wong's hump-shaped shear curve, residual Kr x the strength
+    gnss_gain            the GNSS speed reads gain x the true speed (slip from a wrong speed)
+    strength_softening   shear strength x (1 - beta s): a soil remoulded at high slip
+    tyre_hysteresis      the tyre's internal losses: hub torque + f W r, Dp unchanged
+    inertia_error        the wheel's mass and inertia are (1 + e) x the configured ones
 
 The recording holds only what a logger would record plus a provenance record
 (kind "simulated", the seed): the effect and its parameters go to --truth FILE
@@ -922,7 +936,7 @@ def register(subparsers) -> None:
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     p.add_argument("--terrain", required=True, help="built-in terrain name (clay, sand, ...) or a terrain TOML file")
-    p.add_argument("--effect", default="none", choices=EFFECTS, metavar="EFFECT",
+    p.add_argument("--effect", default="none", choices=EFFECTS + HELD_OUT + HELD_OUT_2, metavar="EFFECT",
                    help="hidden effect (default none; list below)")
     p.add_argument("--param", action="append", default=[], metavar="K=V",
                    help="a parameter of the effect, repeatable (e.g. m1=0.6); others drawn at --size")
@@ -980,6 +994,8 @@ CLI_PARAMS = {
     "angle_offset": ("offset_deg",), "tyre_deflection": ("kappa",), "bulldozing": ("factor",),
     "load_dependent": ("beta",), "vertical_balance": (), "width_error": ("factor",), "zero_drift": ("drift_nm",),
     "terrain_mismatch": ("k_eq", "n", "c", "phi", "K"), "terrain_drift": ("k_eq", "n", "c", "phi", "K"),
+    "exit_angle": ("exit_frac",), "shear_hump": ("Kr",), "gnss_gain": ("gain",),
+    "strength_softening": ("beta",), "tyre_hysteresis": ("f",), "inertia_error": ("e",),
 }
 
 OUTPUT_SUFFIXES = (".mcap", ".log", ".asc", ".blf", ".trc")

@@ -54,6 +54,30 @@ Out of family (``unexplained`` always acceptable)
                        (with the shear term, at the sample's slip) instead of Eq. (10)'s
                        small-angle formula the models use.
 
+Held out (out of family, added after the diagnosis' rule was last changed and never used to
+develop it: ``bench_diagnosis.py --effects held-out`` scores the rule on causes it has never met)
+  ``exit_angle``       a rebounding soil: the contact runs on behind the wheel's bottom to the
+                       exit angle theta2 = lambda theta1 (Wong-Reece rear region from theta_m to
+                       -theta2; Wong, Theory of Ground Vehicles, ch. 2). A normal-stress
+                       distribution other than the model's, so ``stress_distribution`` is
+                       acceptable too.
+  ``shear_hump``       a compact soil whose shear stress peaks and falls to a residual Kr x the
+                       strength (Wong's hump-shaped curve, peak at j = 2.5 K) instead of
+                       Janosi-Hanamoto's Eq. (4).
+  ``gnss_gain``        the GNSS speed reads g x the true speed (antenna lever arm, a receiver
+                       setting): slip is computed from a wrong vehicle speed.
+
+Held out, second batch (``--effects held-out-2``; added together with the stand-ins for the
+first batch and scored once, after them)
+  ``strength_softening`` the soil's shear strength falls with slip (remoulding at high shear
+                       rates): tau = (c + sigma tan phi)(1 - beta s)(1 - exp(-j/K)).
+  ``tyre_hysteresis``  the tyre's internal losses: the hub torque carries an extra f W r
+                       (rolling-resistance coefficient f of the carcass) that the soil never
+                       sees; Dp unchanged.
+  ``inertia_error``    the wheel's true mass and inertia are (1 + e) x the configured ones
+                       (another rim, mud in the tyre): processing's compensation leaves
+                       e m_w dV/dt in Dp and e I_w domega/dt in T.
+
 Sensor effects (``fx_gain``, ``my_gain``, ``load_gain``, ``angle_offset``, ``zero_drift``) change only
 what the transducer reports; the soil forces (and the vehicle) are Wong's.
 """
@@ -68,7 +92,7 @@ import numpy as np
 
 from .terra import sinkage_eq10, wheel_forces
 
-__all__ = ["EFFECTS", "IN_FAMILY", "OUT_OF_FAMILY", "ACCEPTABLE", "VERDICTS", "SENSOR_EFFECTS",
+__all__ = ["EFFECTS", "IN_FAMILY", "OUT_OF_FAMILY", "HELD_OUT", "HELD_OUT_2", "ACCEPTABLE", "VERDICTS", "SENSOR_EFFECTS",
            "draw_effect", "TruthModel", "family_of"]
 
 #: The verdicts a report can give (report.json ``diagnosis.effect``).
@@ -78,7 +102,11 @@ IN_FAMILY = ("none", "vasilev", "lyasko", "ding", "terrain_mismatch", "stress_di
 OUT_OF_FAMILY = ("fx_gain", "my_gain", "load_gain", "angle_offset", "tyre_deflection", "bulldozing",
                  "load_dependent", "vertical_balance", "width_error", "zero_drift")
 EFFECTS = IN_FAMILY + OUT_OF_FAMILY
-SENSOR_EFFECTS = ("fx_gain", "my_gain", "load_gain", "angle_offset", "zero_drift")
+#: out of family, never used to develop the rule (not in EFFECTS: the benchmark's rotation is unchanged)
+HELD_OUT = ("exit_angle", "shear_hump", "gnss_gain")
+#: the second held-out batch, scored once after the stand-ins the first one led to
+HELD_OUT_2 = ("strength_softening", "tyre_hysteresis", "inertia_error")
+SENSOR_EFFECTS = ("fx_gain", "my_gain", "load_gain", "angle_offset", "zero_drift", "gnss_gain", "inertia_error")
 
 #: Acceptable verdicts per effect (contract F). See the module docstring for the two
 #: out-of-family effects with an exact in-family equivalent (load_gain, width_error).
@@ -100,6 +128,12 @@ ACCEPTABLE: dict[str, tuple[str, ...]] = {
     "vertical_balance": ("unexplained",),
     "width_error": ("unexplained", "terrain_mismatch"),
     "zero_drift": ("unexplained",),
+    "exit_angle": ("unexplained", "stress_distribution"),
+    "shear_hump": ("unexplained",),
+    "gnss_gain": ("unexplained",),
+    "strength_softening": ("unexplained",),
+    "tyre_hysteresis": ("unexplained",),
+    "inertia_error": ("unexplained",),
 }
 
 #: Terrain parameters a mismatch / drift may change, with the relative (or absolute) range
@@ -120,6 +154,8 @@ PARAM_NAMES: dict[str, tuple[str, ...]] = {
     "stress_distribution": ("a1", "a2"), "fx_gain": ("gain",), "my_gain": ("gain",), "load_gain": ("gain",),
     "angle_offset": ("offset_deg",), "tyre_deflection": ("kappa",), "bulldozing": ("factor",),
     "load_dependent": ("beta",), "vertical_balance": (), "width_error": ("factor",), "zero_drift": ("drift_nm",),
+    "exit_angle": ("exit_frac",), "shear_hump": ("Kr",), "gnss_gain": ("gain",),
+    "strength_softening": ("beta",), "tyre_hysteresis": ("f",), "inertia_error": ("e",),
 }
 
 
@@ -127,9 +163,9 @@ def family_of(effect: str) -> str:
     """``"in"`` or ``"out"``; ValueError for an unknown effect."""
     if effect in IN_FAMILY:
         return "in"
-    if effect in OUT_OF_FAMILY:
+    if effect in OUT_OF_FAMILY or effect in HELD_OUT or effect in HELD_OUT_2:
         return "out"
-    raise ValueError(f"unknown effect {effect!r}; choose one of {', '.join(EFFECTS)}")
+    raise ValueError(f"unknown effect {effect!r}; choose one of {', '.join(EFFECTS + HELD_OUT + HELD_OUT_2)}")
 
 
 def _mag(size, lo, hi, log=False):
@@ -209,6 +245,18 @@ def draw_effect(effect: str, rng: np.random.Generator, *, size: float | None = N
         p = {"factor": 1.0 + sign * _mag(u, 0.05, 0.30)}
     elif effect == "zero_drift":  # 0.2-2 % of a 10 kN m channel over a run
         p = {"drift_nm": sign * _mag(u, 20.0, 200.0, log=True)}
+    elif effect == "exit_angle":
+        p = {"exit_frac": _mag(u, 0.03, 0.25)}
+    elif effect == "shear_hump":
+        p = {"Kr": 1.0 - _mag(u, 0.05, 0.40)}
+    elif effect == "gnss_gain":
+        p = {"gain": 1.0 + sign * _mag(u, 0.005, 0.05, log=True)}
+    elif effect == "strength_softening":
+        p = {"beta": _mag(u, 0.03, 0.30, log=True)}
+    elif effect == "tyre_hysteresis":
+        p = {"f": _mag(u, 0.005, 0.05, log=True)}
+    elif effect == "inertia_error":
+        p = {"e": sign * _mag(u, 0.1, 0.6)}
     p.update(given)
     p["size"] = u
     return p
@@ -312,6 +360,12 @@ class TruthModel:
             kw["stress"] = (p["a1"], p["a2"])
         elif e == "vertical_balance":
             kw["sinkage"] = "balance"
+        elif e == "exit_angle":
+            kw["exit_frac"] = p["exit_frac"]
+        elif e == "shear_hump":
+            kw["hump"] = (p["Kr"], 2.5)
+        elif e == "strength_softening":
+            kw["tau_scale"] = 1.0 - p["beta"] * s
         elif e == "width_error":
             b = self.width_m * p["factor"]
         elif e == "tyre_deflection":
@@ -322,6 +376,8 @@ class TruthModel:
             soil["kc"] = soil["kc"] * f
             soil["kphi"] = soil["kphi"] * f
         out = wheel_forces(soil, r, b, w, s, epsrel=self.epsrel, **kw)
+        if e == "tyre_hysteresis":
+            out["torque_nm"] = out["torque_nm"] + p["f"] * w * r
         if e == "bulldozing":
             out["drawbar_pull_n"] = out["drawbar_pull_n"] - p["factor"] * _bulldozing_resistance(
                 soil, b, out["sinkage_m"])

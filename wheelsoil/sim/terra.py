@@ -26,7 +26,10 @@ Wong & Reece, J. Terramechanics 4(1), 1967): maximum at
 theta_m = (a1 + a2 s) theta1; front region theta_m..theta1 as Eq. (2);
 rear region 0..theta_m
 sigma2(theta) = (kc/b + kphi) r^n [cos(theta1 - theta/theta_m (theta1 - theta_m)) - cos theta1]^n
-(exit angle theta2 = 0). a1 = a2 = 0 is the paper's distribution exactly.
+(exit angle theta2 = 0; a rebounding soil, ``exit_frac``: the rear region runs on to
+-theta2 and theta_e = theta1 - (theta + theta2)/(theta_m + theta2) (theta1 - theta_m)).
+a1 = a2 = 0 with theta2 = 0 is the paper's distribution exactly. ``hump``: Wong's
+hump-shaped shear curve of compact soils instead of Eq. (4).
 
 Quadrature. ``scipy.integrate.quad_vec`` (adaptive Gauss-Kronrod 21, all
 samples and the five integrals of one call in one vector) over a normalised
@@ -44,6 +47,7 @@ secant/bisection in log z (:func:`balance_sinkage`).
 
 from __future__ import annotations
 
+import math
 from typing import Any, Mapping
 
 import numpy as np
@@ -84,19 +88,36 @@ def _bc(x, size):
     return np.broadcast_to(np.asarray(x, float), (size,))
 
 
-def _integrals(soil, r, b, z, s, n, theta_m_frac, epsrel):
-    """The five integrals of Eqs. (7)-(9) for each sample: returns W, Dp, T, theta1 (all (N,))."""
+def _shear_factor(j, K, hump):
+    """Shear stress over shear strength at shear displacement j (N,): Janosi-Hanamoto (Eq. 4),
+    or with ``hump = (Kr, Kw_over_K)`` Wong's hump-shaped curve of compact soils
+    Kr {1 + [1/(Kr (1 - 1/e)) - 1] exp(1 - j/Kw)} (1 - exp(-j/Kw)), Kw = Kw_over_K K: the peak
+    (1 at j = Kw) falls to the residual Kr (Wong, Theory of Ground Vehicles, 4th ed., ch. 2)."""
+    if hump is None:
+        return -np.expm1(-j / K)
+    kr, kw_over_k = hump
+    kw = kw_over_k * K
+    return kr * (1.0 + (1.0 / (kr * (1.0 - math.exp(-1.0))) - 1.0) * np.exp(1.0 - j / kw)) * (-np.expm1(-j / kw))
+
+
+def _integrals(soil, r, b, z, s, n, theta_m_frac, epsrel, exit_frac=0.0, hump=None, tau_scale=1.0):
+    """The five integrals of Eqs. (7)-(9) for each sample: returns W, Dp, T, theta1 (all (N,)).
+
+    ``exit_frac``: the soil's rebound behind the wheel, exit angle theta2 = exit_frac theta1 (the
+    rear region runs from theta_m to -theta2); ``hump``: see :func:`_shear_factor`; ``tau_scale``
+    (N,) or scalar multiplies the shear strength."""
     from scipy.integrate import quad_vec
 
     size = len(z)
-    c = _bc(soil["c"], size)
-    tanphi = np.tan(_bc(soil["phi"], size))
+    c = _bc(soil["c"], size) * _bc(tau_scale, size)
+    tanphi = np.tan(_bc(soil["phi"], size)) * _bc(tau_scale, size)
     K = _bc(soil["K"], size)
     k = _bc(soil["kc"], size) / b + _bc(soil["kphi"], size)
     n = _bc(n, size)
     s = _bc(s, size)
     th1 = np.arccos(1.0 - z / r)  # Eq. (1)
     thm = np.clip(_bc(theta_m_frac, size), 0.0, 0.999) * th1
+    th2 = np.clip(_bc(exit_frac, size), 0.0, 1.0) * th1  # exit angle (rebound), 0 in the paper
     # scales: the largest normal stress and shear stress (for relative error control)
     sig_max = k * np.maximum(z, 1e-300) ** n
     tau_max = c + sig_max * tanphi
@@ -110,13 +131,14 @@ def _integrals(soil, r, b, z, s, n, theta_m_frac, epsrel):
             theta = th1 - d
             # cos theta - cos theta1 = 2 sin((theta1 + theta)/2) sin(d/2)   (Eq. 3)
             zt = 2.0 * r * np.sin(th1 - 0.5 * d) * np.sin(0.5 * d)
-        else:  # rear region: theta = theta_m v^2, stress of the mirrored front profile
+        else:  # rear region: theta = -theta2 + (theta_m + theta2) v^2, stress of the mirrored front profile
             v = u - 1.0
-            theta = thm * v * v
-            jac = 2.0 * thm * v
-            # equivalent angle theta_e = theta1 - theta/theta_m (theta1 - theta_m)
+            span = thm + th2
+            theta = -th2 + span * v * v
+            jac = 2.0 * span * v
+            # equivalent angle theta_e = theta1 - (theta + theta2)/(theta_m + theta2) (theta1 - theta_m)
             with np.errstate(invalid="ignore", divide="ignore"):
-                de = np.where(thm > 0, (theta / np.where(thm > 0, thm, 1.0)) * (th1 - thm), 0.0)
+                de = np.where(span > 0, ((theta + th2) / np.where(span > 0, span, 1.0)) * (th1 - thm), 0.0)
             d = th1 - theta  # for the shear displacement
             zt = 2.0 * r * np.sin(th1 - 0.5 * de) * np.sin(0.5 * de)
         zt = np.maximum(zt, 0.0)
@@ -124,7 +146,7 @@ def _integrals(soil, r, b, z, s, n, theta_m_frac, epsrel):
             sigma = k * np.where(zt > 0, zt, 1.0) ** n * (zt > 0)  # Eq. (2)
         # Eq. (5): sin theta1 - sin theta = 2 cos((theta1 + theta)/2) sin(d/2)
         j = r * (d - (1.0 - s) * 2.0 * np.cos(th1 - 0.5 * d) * np.sin(0.5 * d))
-        tau = (c + sigma * tanphi) * (-np.expm1(-j / K))  # Eq. (4)
+        tau = (c + sigma * tanphi) * _shear_factor(j, K, hump)  # Eq. (4)
         ct, st = np.cos(theta), np.sin(theta)
         return np.concatenate([
             jac * sigma * ct / s_sig, jac * tau * st / s_tau, jac * tau * ct / s_tau,
@@ -204,7 +226,7 @@ def balance_sinkage(soil, radius_m, width_m, load_n, slip, *, n=None, theta_m_fr
 
 def wheel_forces(soil: Mapping[str, Any], radius_m: float, width_m: float, load_n, slip, *,
                  sinkage: str = "eq10", H=None, m1=None, m2=None, n1=None, stress=None,
-                 epsrel: float = EPSREL) -> dict[str, np.ndarray]:
+                 exit_frac: float = 0.0, hump=None, tau_scale=1.0, epsrel: float = EPSREL) -> dict[str, np.ndarray]:
     """Reference forces of a rigid wheel on soil per sample (paper Eqs. 1-13, Wong-Reece stress).
 
     Parameters
@@ -218,6 +240,10 @@ def wheel_forces(soil: Mapping[str, Any], radius_m: float, width_m: float, load_
         Scalars or (N,); None = not applied. The transform is applied to z0 (of Eq. 10 or
         of the balance), as in the paper.
     stress : ``(a1, a2)`` Wong-Reece maximum at theta_m = (a1 + a2 s) theta1, or None (paper).
+    exit_frac : exit angle theta2 = exit_frac theta1 of a rebounding soil (Wong-Reece rear region
+        from theta_m to -theta2); 0 in the paper.
+    hump : ``(Kr, Kw_over_K)``: Wong's hump-shaped shear curve instead of Eq. (4), or None.
+    tau_scale : factor on the shear strength c + sigma tan phi (scalar or (N,)), 1 in the paper.
     epsrel : quadrature tolerance.
 
     Returns
@@ -271,6 +297,6 @@ def wheel_forces(soil: Mapping[str, Any], radius_m: float, width_m: float, load_
     if np.any(~np.isfinite(z) | (z <= 0) | (z >= r)):
         i = int(np.flatnonzero(~np.isfinite(z) | (z <= 0) | (z >= r))[0])
         raise ValueError(f"sinkage[{i}] = {z[i]:.4g} m outside (0, r = {r[i]:.4g} m): the wheel buries itself")
-    w_m, dp, t, th1 = _integrals(soil_n, r, b, z, s, n, tm, epsrel)
+    w_m, dp, t, th1 = _integrals(soil_n, r, b, z, s, n, tm, epsrel, exit_frac, hump, tau_scale)
     return {"sinkage_m": z, "static_sinkage_m": z0, "theta1_rad": th1, "load_model_n": w_m,
             "drawbar_pull_n": dp, "torque_nm": t}
