@@ -20,7 +20,12 @@ with ``--terrains``, the next soil of the list).
     python benchmarks/bench_diagnosis.py --first 128 --seeds 128   # seeds 128..255
     python benchmarks/bench_diagnosis.py --front-wheels driven      # the 4x4's front wheels on FL/FR
     python benchmarks/bench_diagnosis.py --terrains library         # soils the rule was not developed on
-    python benchmarks/bench_diagnosis.py --effects held-out         # causes the rule never met
+    python benchmarks/bench_diagnosis.py --effects held-out         # causes added after the rule (batch 1)
+    python benchmarks/bench_diagnosis.py --effects held-out-2       # ... and a second batch
+
+A held-out batch is scored once with the rule as it stands when the batch is added: that first
+score measures how the rule meets causes it was not developed on; anything changed because of it
+makes the batch seen, and later rounds of it measure the fix only.
 
 The FL/FR wheel-speed channels carry an idealised undriven reference wheel by default:
 processing estimates the GNSS latency against them as free-rolling wheels, which the 4x4's

@@ -918,7 +918,7 @@ class ShearSlip(Hypothesis):
     Not a cause on our list: it stands for a soil whose strength depends on the shear rate or
     remoulds at high slip (rate effects in clays, shear-band softening in dense sands), or a
     tyre-soil interface weaker than the soil.  It lowers (b < 0) or raises the drawbar pull and
-    torque the more the more the wheel slips, which a Wong-Reece shift with slip (a2) or a
+    torque, the more so the more the wheel slips, which a Wong-Reece shift with slip (a2) or a
     slip-sinkage form mimics.  Effect ``unexplained``: a listed cause it explains as well is
     not named.  Source: Wong, Theory of Ground Vehicles, 4th ed., ch. 2 (shear strength of
     soils; rate of shear).

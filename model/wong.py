@@ -353,6 +353,20 @@ def _stress_ratio(stress, s: np.ndarray) -> np.ndarray | None:
     return ratio
 
 
+def _per_sample(value, name: str, s: np.ndarray, bad, rule: str, neutral: float) -> np.ndarray | None:
+    """``value`` (a number or (N,)) as a float array of ``s``'s shape (N,), checked finite and not
+    ``bad``; None when ``value`` is None or ``neutral`` at every sample.  Raises ValueError naming
+    the first offending element (``name[i]``) and ``rule``, or a value of the wrong shape."""
+    if value is None:
+        return None
+    try:
+        arr = np.broadcast_to(np.asarray(value, dtype=float), s.shape).copy()
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be a number or an array of shape ({len(s)},), got {value!r}") from None
+    _check(~np.isfinite(arr) | bad(arr), name, arr, rule)
+    return None if np.all(arr == neutral) else arr
+
+
 def wong_forces(
     terrain: Terrain,
     wheel: Wheel,
@@ -432,26 +446,11 @@ def wong_forces(
         raise ValueError(f"sinkage mode must be one of {', '.join(SINKAGE_MODES)}, got {sinkage!r}")
     w, s = _as_samples(load_n, slip)
     ratio = _stress_ratio(stress, s)
-    if exit_ratio is not None:
-        try:
-            exit_ratio = np.broadcast_to(np.asarray(exit_ratio, dtype=float), s.shape).copy()
-        except (TypeError, ValueError):
-            raise ValueError(f"exit_ratio must be a number or an array of shape ({len(s)},), "
-                             f"got {exit_ratio!r}") from None
-        _check(~np.isfinite(exit_ratio) | (exit_ratio < 0) | (exit_ratio >= 1), "exit_ratio", exit_ratio,
-               "exit angle theta2/theta1 must be in [0, 1)")
-        if not exit_ratio.any():
-            exit_ratio = None  # theta2 = 0: the paper's exit, same numbers bit for bit
-    if tau_scale is not None:
-        try:
-            tau_scale = np.broadcast_to(np.asarray(tau_scale, dtype=float), s.shape).copy()
-        except (TypeError, ValueError):
-            raise ValueError(f"tau_scale must be a number or an array of shape ({len(s)},), "
-                             f"got {tau_scale!r}") from None
-        _check(~np.isfinite(tau_scale) | (tau_scale <= 0), "tau_scale", tau_scale,
-               "the shear-strength factor must be finite and > 0")
-        if np.all(tau_scale == 1.0):
-            tau_scale = None  # Eq. (4) as printed, same numbers bit for bit
+    # theta2 = 0 and a factor 1 are the paper's exit and Eq. (4): the same numbers bit for bit
+    exit_ratio = _per_sample(exit_ratio, "exit_ratio", s, lambda v: (v < 0) | (v >= 1),
+                             "exit angle theta2/theta1 must be in [0, 1)", neutral=0.0)
+    tau_scale = _per_sample(tau_scale, "tau_scale", s, lambda v: v <= 0,
+                            "the shear-strength factor must be finite and > 0", neutral=1.0)
     r, b = wheel.radius, wheel.width
     if terrain.kc / b + terrain.kphi <= 0:
         raise ValueError(

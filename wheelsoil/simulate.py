@@ -45,14 +45,14 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
-from wheelsoil.sim.effects import (ACCEPTABLE, EFFECTS, HELD_OUT, HELD_OUT_2, IN_FAMILY, OUT_OF_FAMILY, SENSOR_EFFECTS, VERDICTS,
-                                   TruthModel, draw_effect, family_of)
+from wheelsoil.sim.effects import (ACCEPTABLE, EFFECTS, HELD_OUT, HELD_OUT_2, IN_FAMILY, OUT_OF_FAMILY,
+                                   SENSOR_EFFECTS, VERDICTS, TruthModel, draw_effect, family_of)
 from wheelsoil.sim.physics import bandlimited as _bandlimited
 from wheelsoil.sim.terra import soil_dict
 
-__all__ = ["EFFECTS", "IN_FAMILY", "OUT_OF_FAMILY", "HELD_OUT", "HELD_OUT_2", "ACCEPTABLE", "VERDICTS", "SimulatedRun", "simulate_run",
-           "write_simulation", "write_truth", "write_vehicle_config", "judge", "draw_case", "pack_signals", "vehicle_config_for",
-           "SIMULATOR"]
+__all__ = ["EFFECTS", "IN_FAMILY", "OUT_OF_FAMILY", "HELD_OUT", "HELD_OUT_2", "ACCEPTABLE", "VERDICTS",
+           "SimulatedRun", "simulate_run", "write_simulation", "write_truth", "write_vehicle_config", "judge",
+           "draw_case", "pack_signals", "vehicle_config_for", "SIMULATOR"]
 
 #: Name and version of the simulator (in the provenance record and the truth).
 SIMULATOR = "wheelsoil.sim/2 (reference quadrature, 4x4 dynamics)"
@@ -574,8 +574,9 @@ def _vehicle_bus_frames(dbs, rng, t_rel, speed, omega, slip, r, latency_s, start
     the wheel speeds differ by that). ``front_wheels="reference"`` puts an
     idealised undriven reference wheel (r omega = V, rolling slip -0.8 %) on the
     FL/FR channels instead (the dynamics stay 4x4); GNSS velocities are of the fix epoch
-    and arrive ``latency_s`` later (their speeds read ``gnss_gain`` x the true ones); ``RT_SB_GPS_Time`` carries the fix's GPS
-    week and time of week on the GPS clock (host clock + offset + drift).
+    and arrive ``latency_s`` later (their speeds read ``gnss_gain`` x the true ones);
+    ``RT_SB_GPS_Time`` carries the fix's GPS week and time of week on the GPS clock (host
+    clock + offset + drift).
     """
     duration = t_rel[-1]
     wss, gps = dbs["wheel_speed"], dbs["gps_rt_speedbox"]
@@ -811,9 +812,9 @@ def draw_case(seed: int, *, effect: str | None = None, terrains: Sequence[str] |
     """A benchmark case from ``seed`` alone (so any case can be re-run by its seed).
 
     Effect ``effects[seed % len(effects)]`` unless given (so consecutive seeds cover every
-    effect in and out of family equally; ``effects=HELD_OUT``: the held-out causes), a scenario of :data:`SCENARIOS`, effect size uniform
-    in [0, 1], GNSS latency 0.03-0.2 s, drop rate 0-1 %. ``terrains`` (built-in terrain slugs,
-    ``wheelsoil terrains``): the scenario's soil replaced by one of them, drawn from the seed
+    effect in and out of family equally; ``effects=HELD_OUT`` or ``HELD_OUT_2``: the held-out
+    causes), a scenario of :data:`SCENARIOS`, effect size uniform in [0, 1], GNSS latency
+    0.03-0.2 s, drop rate 0-1 %. ``terrains`` (built-in terrain slugs, ``wheelsoil terrains``): the scenario's soil replaced by one of them, drawn from the seed
     on a separate stream (the other draws stay those of the seed). Returns
     :func:`simulate_run` keyword arguments plus ``terrain``.
     """
@@ -908,7 +909,8 @@ effects (--effect; parameters with --param NAME=VALUE, the others drawn at --siz
     width_error          the tyre's effective contact width is factor x b (factor); exactly
                          kphi and c x factor, so terrain_mismatch is acceptable too
     zero_drift           the transducer's My zero drifts over the run (drift_nm, end - start)
-  held out (out of family, never used to develop the diagnosis' rule):
+  held out (out of family, added after the diagnosis' rule to score it on causes it was
+  not developed on; bench_diagnosis.py --effects held-out / held-out-2):
     exit_angle           a rebounding soil: contact on to theta2 = exit_frac theta1 behind the
                          bottom (a stress distribution: stress_distribution acceptable too)
     shear_hump           Wong's hump-shaped shear curve, residual Kr x the strength
