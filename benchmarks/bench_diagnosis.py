@@ -22,6 +22,7 @@ with ``--terrains``, the next soil of the list).
     python benchmarks/bench_diagnosis.py --terrains library         # soils the rule was not developed on
     python benchmarks/bench_diagnosis.py --effects held-out         # causes added after the rule (batch 1)
     python benchmarks/bench_diagnosis.py --effects held-out-2       # ... and a second batch
+    python benchmarks/bench_diagnosis.py --effects held-out-3       # ... and a third
 
 A held-out batch is scored once with the rule as it stands when the batch is added: that first
 score measures how the rule meets causes it was not developed on; anything changed because of it
@@ -68,13 +69,13 @@ def run_seed(seed: int, duration_s: float, front_wheels: str, keep_dir: str | No
     """Simulate, fit and judge one seed; returns a row dict (never raises: errors are rows).
 
     ``sim_options``: further keywords of ``simulate_run`` (``soil_variability``, ``slip_max``);
-    ``effects``: ``listed`` (``EFFECTS[seed % 17]``), ``held-out`` or ``held-out-2`` (``HELD_OUT``,
-    ``HELD_OUT_2``: causes added after the rule, :mod:`wheelsoil.sim.effects`).
+    ``effects``: ``listed`` (``EFFECTS[seed % 17]``) or a key of ``HELD_OUT_BATCHES`` (causes
+    added after the rule, :mod:`wheelsoil.sim.effects`).
     """
     from wheelsoil.pipeline import run_fit
-    from wheelsoil.simulate import EFFECTS, HELD_OUT, HELD_OUT_2, draw_case, judge, simulate_run, write_simulation
+    from wheelsoil.simulate import EFFECTS, HELD_OUT_BATCHES, draw_case, judge, simulate_run, write_simulation
 
-    pool = {"listed": EFFECTS, "held-out": HELD_OUT, "held-out-2": HELD_OUT_2}[effects]
+    pool = EFFECTS if effects == "listed" else HELD_OUT_BATCHES[effects]
     case = draw_case(seed, terrains=terrains, effects=pool)
     terrain = case.pop("terrain")
     row = {"seed": seed, "effect": case["effect"], "terrain": terrain, "wheel": list(case["wheel"]),
@@ -148,14 +149,14 @@ def _pct(a, b):
 
 
 def report(rows: list[dict], wall_s: float, args) -> str:
-    from wheelsoil.simulate import HELD_OUT, HELD_OUT_2, IN_FAMILY, OUT_OF_FAMILY, VERDICTS
+    from wheelsoil.simulate import ALL_HELD_OUT, IN_FAMILY, OUT_OF_FAMILY, VERDICTS
 
     lines = []
     cols = list(VERDICTS) + ["other"]
     head = "| true effect | family | " + " | ".join(cols) + " | right |"
     lines += ["Confusion table (rows: true effect; columns: report.json diagnosis.effect)", "", head,
               "|" + "---|" * (len(cols) + 3)]
-    for eff in list(IN_FAMILY) + list(OUT_OF_FAMILY) + list(HELD_OUT) + list(HELD_OUT_2):
+    for eff in IN_FAMILY + OUT_OF_FAMILY + ALL_HELD_OUT:
         rs = [r for r in rows if r["effect"] == eff]
         if not rs:
             continue
@@ -242,11 +243,12 @@ def main(argv=None) -> int:
                     help="draw each seed's soil from these built-in terrains (comma-separated slugs, or 'library': "
                     "every built-in terrain but the paper's clay and sand, which the rule was developed on); the "
                     "scenario's wheel and load stay; a soil the vehicle cannot drive moves to the next one")
-    ap.add_argument("--effects", choices=("listed", "held-out", "held-out-2"), default="listed",
+    ap.add_argument("--effects", choices=("listed", "held-out", "held-out-2", "held-out-3"), default="listed",
                     help="'listed' (default): EFFECTS[seed %% 17], in and out of family; 'held-out': "
                     "HELD_OUT[seed %% 3], out-of-family causes added after the rule (a rebounding soil, a "
                     "hump-shaped shear curve, a GNSS speed gain); 'held-out-2': HELD_OUT_2[seed %% 3], a second "
-                    "batch scored once after the stand-ins the first one led to")
+                    "batch scored once after the stand-ins the first one led to; 'held-out-3' a third (a firm "
+                    "layer under the soil, load-channel crosstalk, a rolling radius shrinking with the load)")
     ap.add_argument("--json", default=None, metavar="FILE", help="also write the rows as JSON")
     ap.add_argument("--keep", default=None, metavar="DIR", help="keep recordings, truths and reports here")
     args = ap.parse_args(argv)

@@ -198,8 +198,8 @@ def test_benchmark_seed_2504_a_dp_only_stand_in_does_not_block_a_stress_shift_th
     assert d["channels"]["torque_nm"]["improves"], d["channels"]["torque_nm"]
 
 
-@pytest.mark.parametrize("seed,pool", [(5004, "HELD_OUT"), (5075, "HELD_OUT"), (6012, "HELD_OUT_2")])
-def test_held_out_causes_are_not_named_listed_causes(tmp_path, seed, pool):
+@pytest.mark.parametrize("seed,batch", [(5004, "held-out"), (5075, "held-out"), (6012, "held-out-2")])
+def test_held_out_causes_are_not_named_listed_causes(tmp_path, seed, batch):
     """Held-out benchmark seeds (``bench_diagnosis.py --effects held-out`` and ``held-out-2``: causes
     added after the rule and first scored with it unchanged):
 
@@ -212,9 +212,9 @@ def test_held_out_causes_are_not_named_listed_causes(tmp_path, seed, pool):
       lowers Dp and T at high slip as well.
 
     The stand-ins ``rebound``, ``speed_gain`` and ``shear_slip`` (one parameter each) explain them."""
-    import wheelsoil.simulate as sim
+    from wheelsoil.simulate import HELD_OUT_BATCHES
 
-    case = draw_case(seed, effects=getattr(sim, pool))
+    case = draw_case(seed, effects=HELD_OUT_BATCHES[batch])
     terrain = case.pop("terrain")
     assert case["effect"] in ("exit_angle", "gnss_gain", "strength_softening")
     run = simulate_run(terrain, duration_s=180.0, front_wheels="reference", **case)

@@ -11,7 +11,7 @@ import pytest
 from wheelsoil.model import load_terrain
 from wheelsoil.sim.effects import ACCEPTABLE, EFFECTS, OUT_OF_FAMILY, TruthModel, draw_effect, family_of
 from wheelsoil.sim.effects import _bulldozing_resistance
-from wheelsoil.sim.terra import soil_dict, wheel_forces
+from wheelsoil.sim.terra import sinkage_eq10, soil_dict, wheel_forces
 from wheelsoil.simulate import judge, simulate_run
 
 SOIL = soil_dict(load_terrain("sand"))
@@ -129,6 +129,10 @@ def test_held_out_effects_exit_angle_and_hump_shaped_shear(wong):
     ty = _tm("tyre_hysteresis", f=0.02).drive_forces(LOAD, SLIP)
     np.testing.assert_allclose(ty["torque_nm"] - wong["torque_nm"], 0.02 * LOAD * R, rtol=1e-6)
     np.testing.assert_allclose(ty["drawbar_pull_n"], wong["drawbar_pull_n"])
+    # third batch: a firm layer at 0.9 x the static sinkage caps the sinkage smoothly below it
+    hl = _tm("hard_layer", depth_ratio=0.9).drive_forces(LOAD, SLIP)
+    cap = 0.9 * float(sinkage_eq10(SOIL, R, B, W0))
+    assert np.all(hl["sinkage_m"] < cap) and np.all(hl["sinkage_m"] > 0.85 * cap)
 
 
 @pytest.fixture(scope="module")
@@ -139,7 +143,8 @@ def base_run():
 @pytest.mark.parametrize("effect,params", [("fx_gain", {"gain": 1.1}), ("my_gain", {"gain": 0.9}),
                                            ("load_gain", {"gain": 1.05}), ("angle_offset", {"offset_deg": 1.0}),
                                            ("zero_drift", {"drift_nm": 80.0}), ("gnss_gain", {"gain": 1.03}),
-                                           ("inertia_error", {"e": 0.3})])
+                                           ("inertia_error", {"e": 0.3}), ("fz_crosstalk", {"k": 0.03}),
+                                           ("load_radius", {"e": 0.5})])
 def test_sensor_effects_change_only_what_the_transducer_reports(base_run, effect, params):
     from wheelsoil.processing.decode import decode_batches
     from wheelsoil.daq import load_vehicle_config
@@ -170,6 +175,17 @@ def test_sensor_effects_change_only_what_the_transducer_reports(base_run, effect
     elif effect == "inertia_error":  # a wheel 1.3 x the configured one: 0.3 x its inertial part more
         np.testing.assert_allclose(a.my_nm - b.my_nm, 0.3 * 11.5 * b.omega_dot_radps2, atol=1e-6)
         np.testing.assert_allclose(b.fx_n - a.fx_n, 0.3 * 80.0 * b.accel_mps2, atol=1e-6)
+    elif effect == "fz_crosstalk":  # the load channel reads W + 0.03 Fx
+        np.testing.assert_allclose(a.load_measured_n - a.load_n, 0.03 * b.fx_n, atol=1e-6)
+    elif effect == "load_radius":  # only the left-rear wheel-speed reading changes: omega (1 - 0.5 (W/W0 - 1))
+        from wheelsoil.processing.decode import decode_batches
+        from wheelsoil.daq import load_vehicle_config
+
+        np.testing.assert_allclose(a.load_measured_n, b.load_n)
+        dec = [decode_batches(list(x.frame_batches().values()), load_vehicle_config().buses,
+                              select={"WSS_WheelSpeeds": None})["WSS_WheelSpeeds"].signals for x in (r, base_run)]
+        np.testing.assert_allclose(dec[0]["WheelSpeed_RR"], dec[1]["WheelSpeed_RR"], rtol=1e-3, atol=0.2)
+        assert np.abs(dec[0]["WheelSpeed_RL"] - dec[1]["WheelSpeed_RL"]).max() > 1.0
     elif effect == "zero_drift":  # My - its true value runs linearly from -40 to +40 N m
         d = a.my_nm.to_numpy() - b.my_nm.to_numpy()
         assert d[0] == pytest.approx(-40.0) and d[-1] == pytest.approx(40.0)

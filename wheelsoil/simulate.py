@@ -45,12 +45,14 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
-from wheelsoil.sim.effects import (ACCEPTABLE, EFFECTS, HELD_OUT, HELD_OUT_2, IN_FAMILY, OUT_OF_FAMILY,
-                                   SENSOR_EFFECTS, VERDICTS, TruthModel, draw_effect, family_of)
+from wheelsoil.sim.effects import (ACCEPTABLE, ALL_HELD_OUT, EFFECTS, HELD_OUT, HELD_OUT_2, HELD_OUT_3,
+                                   HELD_OUT_BATCHES, IN_FAMILY, OUT_OF_FAMILY, SENSOR_EFFECTS, VERDICTS, TruthModel,
+                                   draw_effect, family_of)
 from wheelsoil.sim.physics import bandlimited as _bandlimited
 from wheelsoil.sim.terra import soil_dict
 
-__all__ = ["EFFECTS", "IN_FAMILY", "OUT_OF_FAMILY", "HELD_OUT", "HELD_OUT_2", "ACCEPTABLE", "VERDICTS",
+__all__ = ["EFFECTS", "IN_FAMILY", "OUT_OF_FAMILY", "HELD_OUT", "HELD_OUT_2", "HELD_OUT_3", "HELD_OUT_BATCHES",
+           "ALL_HELD_OUT", "ACCEPTABLE", "VERDICTS",
            "SimulatedRun", "simulate_run", "write_simulation", "write_truth", "write_vehicle_config", "judge",
            "draw_case", "pack_signals", "vehicle_config_for", "SIMULATOR"]
 
@@ -344,7 +346,11 @@ def simulate_run(
     elif effect == "inertia_error":  # the true wheel is (1 + e) x the configured one: the reading's inertia too
         fx -= params["e"] * WHEEL_MASS_KG * w["accel_mps2"]
         my += params["e"] * WHEEL_INERTIA_KGM2 * w["omega_dot_radps2"]
+    elif effect == "fz_crosstalk":  # the load channel picks up k x the hub Fx
+        w_meas += params["k"] * fx
     gnss_gain = float(params["gain"]) if effect == "gnss_gain" else 1.0
+    # the left-rear wheel-speed channel reads omega r_roll / r (a rolling radius shrinking with the load)
+    rl_gain = 1.0 - params["e"] * (load / static - 1.0) if effect == "load_radius" else None
 
     start_s = 1765416600 + int(seed % 5000) * 3607 + rng.uniform(0, 1)  # a December morning, seeded
     gps_offset_s = float(rng.uniform(-2.0, 2.0))       # GPS - (host UTC + leap) at the start
@@ -354,7 +360,7 @@ def simulate_run(
                              angle_err_deg=angle_err_deg)
     frames_veh = _vehicle_bus_frames(dbs, rng, t_rel, speed, omega, slip, r, gnss_latency_s,
                                      start_s, gps_offset_s, gps_drift, front_wheels=front_wheels,
-                                     gnss_gain=gnss_gain)
+                                     gnss_gain=gnss_gain, rl_gain=rl_gain)
     start_ns = int(round(start_s * 1e9))
     frames = {}
     for bus, parts in ((BUS_WFT, frames_wft), (BUS_VEH, frames_veh)):
@@ -566,7 +572,7 @@ def _wft_frames(db, rng, t_rel, load, fx, my_true, angle_rad, angle_deg, drop_ra
 
 
 def _vehicle_bus_frames(dbs, rng, t_rel, speed, omega, slip, r, latency_s, start_s, gps_offset_s, gps_drift,
-                        front_wheels="driven", gnss_gain=1.0):
+                        front_wheels="driven", gnss_gain=1.0, rl_gain=None):
     """can1: wheel speeds (100 Hz), WSS status (10 Hz), GNSS speed/velocity/time (20 Hz), GPS status (1 Hz).
 
     All four wheels are driven through locked differentials: they turn at the
@@ -574,7 +580,8 @@ def _vehicle_bus_frames(dbs, rng, t_rel, speed, omega, slip, r, latency_s, start
     the wheel speeds differ by that). ``front_wheels="reference"`` puts an
     idealised undriven reference wheel (r omega = V, rolling slip -0.8 %) on the
     FL/FR channels instead (the dynamics stay 4x4); GNSS velocities are of the fix epoch
-    and arrive ``latency_s`` later (their speeds read ``gnss_gain`` x the true ones);
+    and arrive ``latency_s`` later (their speeds read ``gnss_gain`` x the true ones); ``rl_gain``
+    (on the ``t_rel`` grid, or None) multiplies the left-rear wheel-speed reading only;
     ``RT_SB_GPS_Time`` carries the fix's GPS week and time of week on the GPS clock (host
     clock + offset + drift).
     """
@@ -595,6 +602,8 @@ def _vehicle_bus_frames(dbs, rng, t_rel, speed, omega, slip, r, latency_s, start
         om_f = v_w / (r * 1.008) / tol[0]
         om_fr = v_w / (r * 1.008) / tol[1]
     om_rr = om_rl / tol[2]
+    if rl_gain is not None:
+        om_rl = om_rl * np.interp(t_w, t_rel, rl_gain)
 
     def rpm(om):
         noisy = om * (1 + rng.normal(0, WSS_NOISE_REL, nw)) + rng.normal(0, 0.005, nw)
@@ -812,10 +821,11 @@ def draw_case(seed: int, *, effect: str | None = None, terrains: Sequence[str] |
     """A benchmark case from ``seed`` alone (so any case can be re-run by its seed).
 
     Effect ``effects[seed % len(effects)]`` unless given (so consecutive seeds cover every
-    effect in and out of family equally; ``effects=HELD_OUT`` or ``HELD_OUT_2``: the held-out
-    causes), a scenario of :data:`SCENARIOS`, effect size uniform in [0, 1], GNSS latency
-    0.03-0.2 s, drop rate 0-1 %. ``terrains`` (built-in terrain slugs, ``wheelsoil terrains``): the scenario's soil replaced by one of them, drawn from the seed
-    on a separate stream (the other draws stay those of the seed). Returns
+    effect in and out of family equally; a batch of ``HELD_OUT_BATCHES``: the held-out causes),
+    a scenario of :data:`SCENARIOS`, effect size uniform in [0, 1], GNSS latency 0.03-0.2 s,
+    drop rate 0-1 %. ``terrains`` (built-in terrain slugs, ``wheelsoil terrains``): the
+    scenario's soil replaced by one of them, drawn from the seed on a separate stream (the
+    other draws stay those of the seed). Returns
     :func:`simulate_run` keyword arguments plus ``terrain``.
     """
     rng = np.random.default_rng([int(seed), 20261121])
@@ -918,6 +928,9 @@ effects (--effect; parameters with --param NAME=VALUE, the others drawn at --siz
     strength_softening   shear strength x (1 - beta s): a soil remoulded at high slip
     tyre_hysteresis      the tyre's internal losses: hub torque + f W r, Dp unchanged
     inertia_error        the wheel's mass and inertia are (1 + e) x the configured ones
+    hard_layer           a firm layer at depth_ratio x the static sinkage caps the sinkage
+    fz_crosstalk         the transducer's load channel reads W + k Fx
+    load_radius          rolling radius r (1 - e (W - W0)/W0): slip off with the load
 
 The recording holds only what a logger would record plus a provenance record
 (kind "simulated", the seed): the effect and its parameters go to --truth FILE
@@ -938,7 +951,7 @@ def register(subparsers) -> None:
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     p.add_argument("--terrain", required=True, help="built-in terrain name (clay, sand, ...) or a terrain TOML file")
-    p.add_argument("--effect", default="none", choices=EFFECTS + HELD_OUT + HELD_OUT_2, metavar="EFFECT",
+    p.add_argument("--effect", default="none", choices=EFFECTS + ALL_HELD_OUT, metavar="EFFECT",
                    help="hidden effect (default none; list below)")
     p.add_argument("--param", action="append", default=[], metavar="K=V",
                    help="a parameter of the effect, repeatable (e.g. m1=0.6); others drawn at --size")
@@ -998,6 +1011,7 @@ CLI_PARAMS = {
     "terrain_mismatch": ("k_eq", "n", "c", "phi", "K"), "terrain_drift": ("k_eq", "n", "c", "phi", "K"),
     "exit_angle": ("exit_frac",), "shear_hump": ("Kr",), "gnss_gain": ("gain",),
     "strength_softening": ("beta",), "tyre_hysteresis": ("f",), "inertia_error": ("e",),
+    "hard_layer": ("depth_ratio",), "fz_crosstalk": ("k",), "load_radius": ("e",),
 }
 
 OUTPUT_SUFFIXES = (".mcap", ".log", ".asc", ".blf", ".trc")

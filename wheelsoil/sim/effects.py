@@ -78,6 +78,16 @@ first batch and scored once, after them)
                        (another rim, mud in the tyre): processing's compensation leaves
                        e m_w dV/dt in Dp and e I_w domega/dt in T.
 
+Held out, third batch (``--effects held-out-3``; added after the stand-ins for the first two,
+scored once with the rule as it then stood)
+  ``hard_layer``       a firm layer under the soil: the sinkage cannot pass a depth d =
+                       0.8-1.3 x the static sinkage at the static load (smooth cap,
+                       z = (z^-8 + d^-8)^(-1/8)).
+  ``fz_crosstalk``     the transducer's load channel picks up k x its Fx (k 1-6 %, either sign).
+  ``load_radius``      the tyre's rolling radius shrinks with the load: r_roll = r (1 - e (W - W0) /
+                       W0), e 0.1-1, so slip from r omega is off by a load-dependent amount
+                       (the left-rear wheel-speed channel reads omega r_roll / r).
+
 Sensor effects (``fx_gain``, ``my_gain``, ``load_gain``, ``angle_offset``, ``zero_drift``) change only
 what the transducer reports; the soil forces (and the vehicle) are Wong's.
 """
@@ -92,8 +102,8 @@ import numpy as np
 
 from .terra import sinkage_eq10, wheel_forces
 
-__all__ = ["EFFECTS", "IN_FAMILY", "OUT_OF_FAMILY", "HELD_OUT", "HELD_OUT_2", "ACCEPTABLE", "VERDICTS", "SENSOR_EFFECTS",
-           "draw_effect", "TruthModel", "family_of"]
+__all__ = ["EFFECTS", "IN_FAMILY", "OUT_OF_FAMILY", "HELD_OUT", "HELD_OUT_2", "HELD_OUT_3", "HELD_OUT_BATCHES",
+           "ALL_HELD_OUT", "ACCEPTABLE", "VERDICTS", "SENSOR_EFFECTS", "draw_effect", "TruthModel", "family_of"]
 
 #: The verdicts a report can give (report.json ``diagnosis.effect``).
 VERDICTS = ("none", "slip_sinkage", "terrain_mismatch", "stress_distribution", "terrain_drift", "unexplained")
@@ -106,7 +116,13 @@ EFFECTS = IN_FAMILY + OUT_OF_FAMILY
 HELD_OUT = ("exit_angle", "shear_hump", "gnss_gain")
 #: the second held-out batch, scored once after the stand-ins the first one led to
 HELD_OUT_2 = ("strength_softening", "tyre_hysteresis", "inertia_error")
-SENSOR_EFFECTS = ("fx_gain", "my_gain", "load_gain", "angle_offset", "zero_drift", "gnss_gain", "inertia_error")
+#: the third, scored once after the stand-ins the first two led to
+HELD_OUT_3 = ("hard_layer", "fz_crosstalk", "load_radius")
+#: the batches by their ``bench_diagnosis.py --effects`` name, and all held-out effects
+HELD_OUT_BATCHES = {"held-out": HELD_OUT, "held-out-2": HELD_OUT_2, "held-out-3": HELD_OUT_3}
+ALL_HELD_OUT = HELD_OUT + HELD_OUT_2 + HELD_OUT_3
+SENSOR_EFFECTS = ("fx_gain", "my_gain", "load_gain", "angle_offset", "zero_drift", "gnss_gain", "inertia_error",
+                  "fz_crosstalk", "load_radius")
 
 #: Acceptable verdicts per effect (contract F). See the module docstring for the two
 #: out-of-family effects with an exact in-family equivalent (load_gain, width_error).
@@ -134,6 +150,9 @@ ACCEPTABLE: dict[str, tuple[str, ...]] = {
     "strength_softening": ("unexplained",),
     "tyre_hysteresis": ("unexplained",),
     "inertia_error": ("unexplained",),
+    "hard_layer": ("unexplained",),
+    "fz_crosstalk": ("unexplained",),
+    "load_radius": ("unexplained",),
 }
 
 #: Terrain parameters a mismatch / drift may change, with the relative (or absolute) range
@@ -156,6 +175,7 @@ PARAM_NAMES: dict[str, tuple[str, ...]] = {
     "load_dependent": ("beta",), "vertical_balance": (), "width_error": ("factor",), "zero_drift": ("drift_nm",),
     "exit_angle": ("exit_frac",), "shear_hump": ("Kr",), "gnss_gain": ("gain",),
     "strength_softening": ("beta",), "tyre_hysteresis": ("f",), "inertia_error": ("e",),
+    "hard_layer": ("depth_ratio",), "fz_crosstalk": ("k",), "load_radius": ("e",),
 }
 
 
@@ -163,9 +183,9 @@ def family_of(effect: str) -> str:
     """``"in"`` or ``"out"``; ValueError for an unknown effect."""
     if effect in IN_FAMILY:
         return "in"
-    if effect in OUT_OF_FAMILY or effect in HELD_OUT or effect in HELD_OUT_2:
+    if effect in OUT_OF_FAMILY + ALL_HELD_OUT:
         return "out"
-    raise ValueError(f"unknown effect {effect!r}; choose one of {', '.join(EFFECTS + HELD_OUT + HELD_OUT_2)}")
+    raise ValueError(f"unknown effect {effect!r}; choose one of {', '.join(EFFECTS + ALL_HELD_OUT)}")
 
 
 def _mag(size, lo, hi, log=False):
@@ -257,6 +277,12 @@ def draw_effect(effect: str, rng: np.random.Generator, *, size: float | None = N
         p = {"f": _mag(u, 0.005, 0.05, log=True)}
     elif effect == "inertia_error":
         p = {"e": sign * _mag(u, 0.1, 0.6)}
+    elif effect == "hard_layer":
+        p = {"depth_ratio": _mag(u, 1.3, 0.8)}
+    elif effect == "fz_crosstalk":
+        p = {"k": sign * _mag(u, 0.01, 0.06)}
+    elif effect == "load_radius":
+        p = {"e": _mag(u, 0.1, 1.0)}
     p.update(given)
     p["size"] = u
     return p
@@ -366,6 +392,8 @@ class TruthModel:
             kw["hump"] = (p["Kr"], 2.5)
         elif e == "strength_softening":
             kw["tau_scale"] = 1.0 - p["beta"] * s
+        elif e == "hard_layer":
+            kw["z_cap"] = p["depth_ratio"] * float(sinkage_eq10(self.soil, r, b, self.static_load_n))
         elif e == "width_error":
             b = self.width_m * p["factor"]
         elif e == "tyre_deflection":

@@ -226,7 +226,8 @@ def balance_sinkage(soil, radius_m, width_m, load_n, slip, *, n=None, theta_m_fr
 
 def wheel_forces(soil: Mapping[str, Any], radius_m: float, width_m: float, load_n, slip, *,
                  sinkage: str = "eq10", H=None, m1=None, m2=None, n1=None, stress=None,
-                 exit_frac: float = 0.0, hump=None, tau_scale=1.0, epsrel: float = EPSREL) -> dict[str, np.ndarray]:
+                 exit_frac: float = 0.0, hump=None, tau_scale=1.0, z_cap=None,
+                 epsrel: float = EPSREL) -> dict[str, np.ndarray]:
     """Reference forces of a rigid wheel on soil per sample (paper Eqs. 1-13, Wong-Reece stress).
 
     Parameters
@@ -244,6 +245,8 @@ def wheel_forces(soil: Mapping[str, Any], radius_m: float, width_m: float, load_
         from theta_m to -theta2); 0 in the paper.
     hump : ``(Kr, Kw_over_K)``: Wong's hump-shaped shear curve instead of Eq. (4), or None.
     tau_scale : factor on the shear strength c + sigma tan phi (scalar or (N,)), 1 in the paper.
+    z_cap : depth [m] of a firm layer the sinkage cannot pass (smooth cap (z^-8 + d^-8)^(-1/8),
+        after any slip-sinkage transform), or None.
     epsrel : quadrature tolerance.
 
     Returns
@@ -294,6 +297,8 @@ def wheel_forces(soil: Mapping[str, Any], radius_m: float, width_m: float, load_
         if np.any(mm2 * s >= 1):
             raise ValueError("Lyasko: m2 s >= 1")
         z = z0 * (1.0 + mm1 * s) / (1.0 - mm2 * s)  # Eq. (12)
+    if z_cap is not None:
+        z = (z ** -8.0 + float(z_cap) ** -8.0) ** (-1.0 / 8.0)
     if np.any(~np.isfinite(z) | (z <= 0) | (z >= r)):
         i = int(np.flatnonzero(~np.isfinite(z) | (z <= 0) | (z >= r))[0])
         raise ValueError(f"sinkage[{i}] = {z[i]:.4g} m outside (0, r = {r[i]:.4g} m): the wheel buries itself")
