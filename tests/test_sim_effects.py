@@ -133,6 +133,20 @@ def test_held_out_effects_exit_angle_and_hump_shaped_shear(wong):
     hl = _tm("hard_layer", depth_ratio=0.9).drive_forces(LOAD, SLIP)
     cap = 0.9 * float(sinkage_eq10(SOIL, R, B, W0))
     assert np.all(hl["sinkage_m"] < cap) and np.all(hl["sinkage_m"] > 0.85 * cap)
+    # fourth batch: a slip angle shears the soil sideways (least thrust left at low slip, where the
+    # lateral displacement is largest against the longitudinal one); lugs shear it at r + h
+    sa = _tm("slip_angle", angle_deg=6.0).drive_forces(LOAD, SLIP)
+    loss = wong["drawbar_pull_n"] - sa["drawbar_pull_n"]
+    assert np.all(loss > 0) and np.all(sa["torque_nm"] < wong["torque_nm"])
+    assert loss[np.argmin(SLIP)] > loss[np.argmax(SLIP)]
+    np.testing.assert_allclose(sa["sinkage_m"], wong["sinkage_m"])
+    gr = _tm("grouser", height_ratio=0.05).drive_forces(LOAD, SLIP)
+    np.testing.assert_allclose(gr["torque_nm"], wheel_forces(SOIL, R, B, LOAD, SLIP, grouser=0.05 * R)["torque_nm"])
+    assert np.all(gr["drawbar_pull_n"] > wong["drawbar_pull_n"]) and np.all(gr["torque_nm"] > wong["torque_nm"])
+    # neither changes anything at zero size: the paper's wheel
+    for kw in ({"slip_angle": 0.0}, {"grouser": 0.0}):
+        np.testing.assert_allclose(wheel_forces(SOIL, R, B, LOAD, SLIP, **kw)["torque_nm"], wong["torque_nm"],
+                                   rtol=1e-12)
 
 
 @pytest.fixture(scope="module")
@@ -144,7 +158,7 @@ def base_run():
                                            ("load_gain", {"gain": 1.05}), ("angle_offset", {"offset_deg": 1.0}),
                                            ("zero_drift", {"drift_nm": 80.0}), ("gnss_gain", {"gain": 1.03}),
                                            ("inertia_error", {"e": 0.3}), ("fz_crosstalk", {"k": 0.03}),
-                                           ("load_radius", {"e": 0.5})])
+                                           ("load_radius", {"e": 0.5}), ("wheel_latency", {"delay_s": 0.1})])
 def test_sensor_effects_change_only_what_the_transducer_reports(base_run, effect, params):
     from wheelsoil.processing.decode import decode_batches
     from wheelsoil.daq import load_vehicle_config
@@ -177,7 +191,8 @@ def test_sensor_effects_change_only_what_the_transducer_reports(base_run, effect
         np.testing.assert_allclose(b.fx_n - a.fx_n, 0.3 * 80.0 * b.accel_mps2, atol=1e-6)
     elif effect == "fz_crosstalk":  # the load channel reads W + 0.03 Fx
         np.testing.assert_allclose(a.load_measured_n - a.load_n, 0.03 * b.fx_n, atol=1e-6)
-    elif effect == "load_radius":  # only the left-rear wheel-speed reading changes: omega (1 - 0.5 (W/W0 - 1))
+    elif effect in ("load_radius", "wheel_latency"):  # only the left-rear wheel-speed reading changes:
+        # omega (1 - 0.5 (W/W0 - 1)), or the omega of 0.1 s earlier
         from wheelsoil.processing.decode import decode_batches
         from wheelsoil.daq import load_vehicle_config
 

@@ -46,12 +46,13 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 
 from wheelsoil.sim.effects import (ACCEPTABLE, ALL_HELD_OUT, EFFECTS, HELD_OUT, HELD_OUT_2, HELD_OUT_3,
-                                   HELD_OUT_BATCHES, IN_FAMILY, OUT_OF_FAMILY, SENSOR_EFFECTS, VERDICTS, TruthModel,
+                                   HELD_OUT_4, HELD_OUT_BATCHES, IN_FAMILY, OUT_OF_FAMILY, SENSOR_EFFECTS, VERDICTS, TruthModel,
                                    draw_effect, family_of)
 from wheelsoil.sim.physics import bandlimited as _bandlimited
 from wheelsoil.sim.terra import soil_dict
 
-__all__ = ["EFFECTS", "IN_FAMILY", "OUT_OF_FAMILY", "HELD_OUT", "HELD_OUT_2", "HELD_OUT_3", "HELD_OUT_BATCHES",
+__all__ = ["EFFECTS", "IN_FAMILY", "OUT_OF_FAMILY", "HELD_OUT", "HELD_OUT_2", "HELD_OUT_3", "HELD_OUT_4",
+           "HELD_OUT_BATCHES",
            "ALL_HELD_OUT", "ACCEPTABLE", "VERDICTS",
            "SimulatedRun", "simulate_run", "write_simulation", "write_truth", "write_vehicle_config", "judge",
            "draw_case", "pack_signals", "vehicle_config_for", "SIMULATOR"]
@@ -351,6 +352,7 @@ def simulate_run(
     gnss_gain = float(params["gain"]) if effect == "gnss_gain" else 1.0
     # the left-rear wheel-speed channel reads omega r_roll / r (a rolling radius shrinking with the load)
     rl_gain = 1.0 - params["e"] * (load / static - 1.0) if effect == "load_radius" else None
+    rl_delay_s = float(params["delay_s"]) if effect == "wheel_latency" else 0.0
 
     start_s = 1765416600 + int(seed % 5000) * 3607 + rng.uniform(0, 1)  # a December morning, seeded
     gps_offset_s = float(rng.uniform(-2.0, 2.0))       # GPS - (host UTC + leap) at the start
@@ -360,7 +362,7 @@ def simulate_run(
                              angle_err_deg=angle_err_deg)
     frames_veh = _vehicle_bus_frames(dbs, rng, t_rel, speed, omega, slip, r, gnss_latency_s,
                                      start_s, gps_offset_s, gps_drift, front_wheels=front_wheels,
-                                     gnss_gain=gnss_gain, rl_gain=rl_gain)
+                                     gnss_gain=gnss_gain, rl_gain=rl_gain, rl_delay_s=rl_delay_s)
     start_ns = int(round(start_s * 1e9))
     frames = {}
     for bus, parts in ((BUS_WFT, frames_wft), (BUS_VEH, frames_veh)):
@@ -572,7 +574,7 @@ def _wft_frames(db, rng, t_rel, load, fx, my_true, angle_rad, angle_deg, drop_ra
 
 
 def _vehicle_bus_frames(dbs, rng, t_rel, speed, omega, slip, r, latency_s, start_s, gps_offset_s, gps_drift,
-                        front_wheels="driven", gnss_gain=1.0, rl_gain=None):
+                        front_wheels="driven", gnss_gain=1.0, rl_gain=None, rl_delay_s=0.0):
     """can1: wheel speeds (100 Hz), WSS status (10 Hz), GNSS speed/velocity/time (20 Hz), GPS status (1 Hz).
 
     All four wheels are driven through locked differentials: they turn at the
@@ -581,7 +583,8 @@ def _vehicle_bus_frames(dbs, rng, t_rel, speed, omega, slip, r, latency_s, start
     idealised undriven reference wheel (r omega = V, rolling slip -0.8 %) on the
     FL/FR channels instead (the dynamics stay 4x4); GNSS velocities are of the fix epoch
     and arrive ``latency_s`` later (their speeds read ``gnss_gain`` x the true ones); ``rl_gain``
-    (on the ``t_rel`` grid, or None) multiplies the left-rear wheel-speed reading only;
+    (on the ``t_rel`` grid, or None) multiplies the left-rear wheel-speed reading only, which
+    reads the omega of ``rl_delay_s`` earlier (a late channel, 0: none);
     ``RT_SB_GPS_Time`` carries the fix's GPS week and time of week on the GPS clock (host
     clock + offset + drift).
     """
@@ -604,6 +607,8 @@ def _vehicle_bus_frames(dbs, rng, t_rel, speed, omega, slip, r, latency_s, start
     om_rr = om_rl / tol[2]
     if rl_gain is not None:
         om_rl = om_rl * np.interp(t_w, t_rel, rl_gain)
+    if rl_delay_s:
+        om_rl = np.interp(t_w - rl_delay_s, t_rel, omega)
 
     def rpm(om):
         noisy = om * (1 + rng.normal(0, WSS_NOISE_REL, nw)) + rng.normal(0, 0.005, nw)
@@ -920,7 +925,7 @@ effects (--effect; parameters with --param NAME=VALUE, the others drawn at --siz
                          kphi and c x factor, so terrain_mismatch is acceptable too
     zero_drift           the transducer's My zero drifts over the run (drift_nm, end - start)
   held out (out of family, added after the diagnosis' rule to score it on causes it was
-  not developed on; bench_diagnosis.py --effects held-out / held-out-2):
+  not developed on; bench_diagnosis.py --effects held-out / held-out-2 / -3 / -4):
     exit_angle           a rebounding soil: contact on to theta2 = exit_frac theta1 behind the
                          bottom (a stress distribution: stress_distribution acceptable too)
     shear_hump           Wong's hump-shaped shear curve, residual Kr x the strength
@@ -931,6 +936,9 @@ effects (--effect; parameters with --param NAME=VALUE, the others drawn at --siz
     hard_layer           a firm layer at depth_ratio x the static sinkage caps the sinkage
     fz_crosstalk         the transducer's load channel reads W + k Fx
     load_radius          rolling radius r (1 - e (W - W0)/W0): slip off with the load
+    slip_angle           the wheel runs at a slip angle angle_deg: the soil is sheared sideways too
+    grouser              lugs of height_ratio x r: the soil is sheared at the lug tips
+    wheel_latency        the left-rear wheel-speed channel arrives delay_s late
 
 The recording holds only what a logger would record plus a provenance record
 (kind "simulated", the seed): the effect and its parameters go to --truth FILE
@@ -1012,6 +1020,7 @@ CLI_PARAMS = {
     "exit_angle": ("exit_frac",), "shear_hump": ("Kr",), "gnss_gain": ("gain",),
     "strength_softening": ("beta",), "tyre_hysteresis": ("f",), "inertia_error": ("e",),
     "hard_layer": ("depth_ratio",), "fz_crosstalk": ("k",), "load_radius": ("e",),
+    "slip_angle": ("angle_deg",), "grouser": ("height_ratio",), "wheel_latency": ("delay_s",),
 }
 
 OUTPUT_SUFFIXES = (".mcap", ".log", ".asc", ".blf", ".trc")

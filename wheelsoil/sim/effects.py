@@ -88,6 +88,16 @@ scored once with the rule as it then stood)
                        W0), e 0.1-1, so slip from r omega is off by a load-dependent amount
                        (the left-rear wheel-speed channel reads omega r_roll / r).
 
+Held out, fourth batch (``--effects held-out-4``; added after the third batch's score, with the rule
+unchanged since it, and scored once)
+  ``slip_angle``       the wheel runs at a slip angle alpha = 1-8 deg (toe or crabbing misalignment):
+                       the soil is sheared sideways too, and only the longitudinal part of the
+                       mobilised shear stress drives the wheel (terra.py; Wong, ch. 2).
+  ``grouser``          lugs of height h = 1-8 % of r: the soil is sheared at the lug tips, radius
+                       r + h, while the normal stress acts on the rim and slip is r omega based.
+  ``wheel_latency``    the left-rear wheel-speed channel arrives 20-250 ms late (a gateway's
+                       buffer, a filter in the sensor): slip is computed from an old omega.
+
 Sensor effects (``fx_gain``, ``my_gain``, ``load_gain``, ``angle_offset``, ``zero_drift``) change only
 what the transducer reports; the soil forces (and the vehicle) are Wong's.
 """
@@ -102,7 +112,8 @@ import numpy as np
 
 from .terra import sinkage_eq10, wheel_forces
 
-__all__ = ["EFFECTS", "IN_FAMILY", "OUT_OF_FAMILY", "HELD_OUT", "HELD_OUT_2", "HELD_OUT_3", "HELD_OUT_BATCHES",
+__all__ = ["EFFECTS", "IN_FAMILY", "OUT_OF_FAMILY", "HELD_OUT", "HELD_OUT_2", "HELD_OUT_3", "HELD_OUT_4",
+           "HELD_OUT_BATCHES",
            "ALL_HELD_OUT", "ACCEPTABLE", "VERDICTS", "SENSOR_EFFECTS", "draw_effect", "TruthModel", "family_of"]
 
 #: The verdicts a report can give (report.json ``diagnosis.effect``).
@@ -118,11 +129,14 @@ HELD_OUT = ("exit_angle", "shear_hump", "gnss_gain")
 HELD_OUT_2 = ("strength_softening", "tyre_hysteresis", "inertia_error")
 #: the third, scored once after the stand-ins the first two led to
 HELD_OUT_3 = ("hard_layer", "fz_crosstalk", "load_radius")
+#: the fourth, scored once with the rule unchanged since the third's score
+HELD_OUT_4 = ("slip_angle", "grouser", "wheel_latency")
 #: the batches by their ``bench_diagnosis.py --effects`` name, and all held-out effects
-HELD_OUT_BATCHES = {"held-out": HELD_OUT, "held-out-2": HELD_OUT_2, "held-out-3": HELD_OUT_3}
-ALL_HELD_OUT = HELD_OUT + HELD_OUT_2 + HELD_OUT_3
+HELD_OUT_BATCHES = {"held-out": HELD_OUT, "held-out-2": HELD_OUT_2, "held-out-3": HELD_OUT_3,
+                    "held-out-4": HELD_OUT_4}
+ALL_HELD_OUT = HELD_OUT + HELD_OUT_2 + HELD_OUT_3 + HELD_OUT_4
 SENSOR_EFFECTS = ("fx_gain", "my_gain", "load_gain", "angle_offset", "zero_drift", "gnss_gain", "inertia_error",
-                  "fz_crosstalk", "load_radius")
+                  "fz_crosstalk", "load_radius", "wheel_latency")
 
 #: Acceptable verdicts per effect (contract F). See the module docstring for the two
 #: out-of-family effects with an exact in-family equivalent (load_gain, width_error).
@@ -153,6 +167,9 @@ ACCEPTABLE: dict[str, tuple[str, ...]] = {
     "hard_layer": ("unexplained",),
     "fz_crosstalk": ("unexplained",),
     "load_radius": ("unexplained",),
+    "slip_angle": ("unexplained",),
+    "grouser": ("unexplained",),
+    "wheel_latency": ("unexplained",),
 }
 
 #: Terrain parameters a mismatch / drift may change, with the relative (or absolute) range
@@ -176,6 +193,7 @@ PARAM_NAMES: dict[str, tuple[str, ...]] = {
     "exit_angle": ("exit_frac",), "shear_hump": ("Kr",), "gnss_gain": ("gain",),
     "strength_softening": ("beta",), "tyre_hysteresis": ("f",), "inertia_error": ("e",),
     "hard_layer": ("depth_ratio",), "fz_crosstalk": ("k",), "load_radius": ("e",),
+    "slip_angle": ("angle_deg",), "grouser": ("height_ratio",), "wheel_latency": ("delay_s",),
 }
 
 
@@ -283,6 +301,12 @@ def draw_effect(effect: str, rng: np.random.Generator, *, size: float | None = N
         p = {"k": sign * _mag(u, 0.01, 0.06)}
     elif effect == "load_radius":
         p = {"e": _mag(u, 0.1, 1.0)}
+    elif effect == "slip_angle":
+        p = {"angle_deg": _mag(u, 1.0, 8.0)}
+    elif effect == "grouser":
+        p = {"height_ratio": _mag(u, 0.01, 0.08)}
+    elif effect == "wheel_latency":
+        p = {"delay_s": _mag(u, 0.02, 0.25, log=True)}
     p.update(given)
     p["size"] = u
     return p
@@ -392,6 +416,10 @@ class TruthModel:
             kw["hump"] = (p["Kr"], 2.5)
         elif e == "strength_softening":
             kw["tau_scale"] = 1.0 - p["beta"] * s
+        elif e == "slip_angle":
+            kw["slip_angle"] = math.radians(p["angle_deg"])
+        elif e == "grouser":
+            kw["grouser"] = p["height_ratio"] * self.radius_m
         elif e == "hard_layer":
             kw["z_cap"] = p["depth_ratio"] * float(sinkage_eq10(self.soil, r, b, self.static_load_n))
         elif e == "width_error":

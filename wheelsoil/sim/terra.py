@@ -29,7 +29,13 @@ sigma2(theta) = (kc/b + kphi) r^n [cos(theta1 - theta/theta_m (theta1 - theta_m)
 (exit angle theta2 = 0; a rebounding soil, ``exit_frac``: the rear region runs on to
 -theta2 and theta_e = theta1 - (theta + theta2)/(theta_m + theta2) (theta1 - theta_m)).
 a1 = a2 = 0 with theta2 = 0 is the paper's distribution exactly. ``hump``: Wong's
-hump-shaped shear curve of compact soils instead of Eq. (4).
+hump-shaped shear curve of compact soils instead of Eq. (4). ``slip_angle``: the wheel runs at
+a slip angle alpha (a toe or crabbing misalignment): the soil is also sheared sideways,
+j_y = r (1 - s)(theta1 - theta) tan alpha, the strength is mobilised by the resultant
+displacement and only its longitudinal part tau j_x / |j| drives the wheel (Wong, *Theory of
+Ground Vehicles*, 4th ed., ch. 2, lateral forces of a rigid wheel; Chiang & Wong). ``grouser``:
+lugs of height h: the soil is sheared at the lug tips, radius r_g = r + h (j of Eq. 5 with r_g for
+the wheel's own travel, the shear stress acting at r_g in Eqs. 7-9), the normal stress on the rim.
 
 Quadrature. ``scipy.integrate.quad_vec`` (adaptive Gauss-Kronrod 21, all
 samples and the five integrals of one call in one vector) over a normalised
@@ -100,12 +106,14 @@ def _shear_factor(j, K, hump):
     return kr * (1.0 + (1.0 / (kr * (1.0 - math.exp(-1.0))) - 1.0) * np.exp(1.0 - j / kw)) * (-np.expm1(-j / kw))
 
 
-def _integrals(soil, r, b, z, s, n, theta_m_frac, epsrel, exit_frac=0.0, hump=None, tau_scale=1.0):
+def _integrals(soil, r, b, z, s, n, theta_m_frac, epsrel, exit_frac=0.0, hump=None, tau_scale=1.0,
+               slip_angle=0.0, grouser=0.0):
     """The five integrals of Eqs. (7)-(9) for each sample: returns W, Dp, T, theta1 (all (N,)).
 
     ``exit_frac``: the soil's rebound behind the wheel, exit angle theta2 = exit_frac theta1 (the
     rear region runs from theta_m to -theta2); ``hump``: see :func:`_shear_factor`; ``tau_scale``
-    (N,) or scalar multiplies the shear strength."""
+    (N,) or scalar multiplies the shear strength; ``slip_angle`` [rad] and ``grouser`` (lug height h
+    [m]): see the module doc."""
     from scipy.integrate import quad_vec
 
     size = len(z)
@@ -118,6 +126,8 @@ def _integrals(soil, r, b, z, s, n, theta_m_frac, epsrel, exit_frac=0.0, hump=No
     th1 = np.arccos(1.0 - z / r)  # Eq. (1)
     thm = np.clip(_bc(theta_m_frac, size), 0.0, 0.999) * th1
     th2 = np.clip(_bc(exit_frac, size), 0.0, 1.0) * th1  # exit angle (rebound), 0 in the paper
+    r_g = r + float(grouser)  # radius at which the soil is sheared (lug tips; r without lugs)
+    tan_a = math.tan(float(slip_angle))
     # scales: the largest normal stress and shear stress (for relative error control)
     sig_max = k * np.maximum(z, 1e-300) ** n
     tau_max = c + sig_max * tanphi
@@ -145,8 +155,14 @@ def _integrals(soil, r, b, z, s, n, theta_m_frac, epsrel, exit_frac=0.0, hump=No
         with np.errstate(divide="ignore"):
             sigma = k * np.where(zt > 0, zt, 1.0) ** n * (zt > 0)  # Eq. (2)
         # Eq. (5): sin theta1 - sin theta = 2 cos((theta1 + theta)/2) sin(d/2)
-        j = r * (d - (1.0 - s) * 2.0 * np.cos(th1 - 0.5 * d) * np.sin(0.5 * d))
-        tau = (c + sigma * tanphi) * _shear_factor(j, K, hump)  # Eq. (4)
+        j = r_g * d - r * (1.0 - s) * 2.0 * np.cos(th1 - 0.5 * d) * np.sin(0.5 * d)
+        if tan_a:  # sheared sideways too: the strength mobilised by |j|, its longitudinal part drives
+            jy = r * (1.0 - s) * d * tan_a
+            jr = np.hypot(j, jy)
+            with np.errstate(invalid="ignore", divide="ignore"):
+                tau = (c + sigma * tanphi) * _shear_factor(jr, K, hump) * np.where(jr > 0, j / jr, 0.0)
+        else:
+            tau = (c + sigma * tanphi) * _shear_factor(j, K, hump)  # Eq. (4)
         ct, st = np.cos(theta), np.sin(theta)
         return np.concatenate([
             jac * sigma * ct / s_sig, jac * tau * st / s_tau, jac * tau * ct / s_tau,
@@ -156,9 +172,9 @@ def _integrals(soil, r, b, z, s, n, theta_m_frac, epsrel, exit_frac=0.0, hump=No
     res, _err = quad_vec(integrand, 0.0, 2.0, points=[1.0], epsabs=epsrel * 1e-3, epsrel=epsrel,
                          norm="max", limit=4000)
     i_sc, i_ts, i_tc, i_ss, i_t = res.reshape(5, size)
-    w = r * b * (i_sc * s_sig + i_ts * s_tau)  # Eq. (7)
-    dp = r * b * (i_tc * s_tau - i_ss * s_sig)  # Eq. (8)
-    t = r * r * b * i_t * s_tau  # Eq. (9)
+    w = r * b * i_sc * s_sig + r_g * b * i_ts * s_tau  # Eq. (7)
+    dp = r_g * b * i_tc * s_tau - r * b * i_ss * s_sig  # Eq. (8)
+    t = r_g * r_g * b * i_t * s_tau  # Eq. (9)
     return w, dp, t, th1
 
 
@@ -226,8 +242,8 @@ def balance_sinkage(soil, radius_m, width_m, load_n, slip, *, n=None, theta_m_fr
 
 def wheel_forces(soil: Mapping[str, Any], radius_m: float, width_m: float, load_n, slip, *,
                  sinkage: str = "eq10", H=None, m1=None, m2=None, n1=None, stress=None,
-                 exit_frac: float = 0.0, hump=None, tau_scale=1.0, z_cap=None,
-                 epsrel: float = EPSREL) -> dict[str, np.ndarray]:
+                 exit_frac: float = 0.0, hump=None, tau_scale=1.0, z_cap=None, slip_angle: float = 0.0,
+                 grouser: float = 0.0, epsrel: float = EPSREL) -> dict[str, np.ndarray]:
     """Reference forces of a rigid wheel on soil per sample (paper Eqs. 1-13, Wong-Reece stress).
 
     Parameters
@@ -247,6 +263,8 @@ def wheel_forces(soil: Mapping[str, Any], radius_m: float, width_m: float, load_
     tau_scale : factor on the shear strength c + sigma tan phi (scalar or (N,)), 1 in the paper.
     z_cap : depth [m] of a firm layer the sinkage cannot pass (smooth cap (z^-8 + d^-8)^(-1/8),
         after any slip-sinkage transform), or None.
+    slip_angle : the wheel's slip angle alpha [rad] (lateral shear, module doc); 0 in the paper.
+    grouser : lug height h [m]: the soil sheared at r + h (module doc); 0 in the paper.
     epsrel : quadrature tolerance.
 
     Returns
@@ -302,6 +320,6 @@ def wheel_forces(soil: Mapping[str, Any], radius_m: float, width_m: float, load_
     if np.any(~np.isfinite(z) | (z <= 0) | (z >= r)):
         i = int(np.flatnonzero(~np.isfinite(z) | (z <= 0) | (z >= r))[0])
         raise ValueError(f"sinkage[{i}] = {z[i]:.4g} m outside (0, r = {r[i]:.4g} m): the wheel buries itself")
-    w_m, dp, t, th1 = _integrals(soil_n, r, b, z, s, n, tm, epsrel, exit_frac, hump, tau_scale)
+    w_m, dp, t, th1 = _integrals(soil_n, r, b, z, s, n, tm, epsrel, exit_frac, hump, tau_scale, slip_angle, grouser)
     return {"sinkage_m": z, "static_sinkage_m": z0, "theta1_rad": th1, "load_model_n": w_m,
             "drawbar_pull_n": dp, "torque_nm": t}
