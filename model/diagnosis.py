@@ -194,7 +194,8 @@ class Diagnosis:
     effect, model, confidence, summary; channels (per-channel verdicts);
     probabilities (hypothesis -> posterior); effect_probabilities; alternatives;
     target_channels (the channels a named cause must improve out of sample, rule step 3);
-    separating_measurement; consistency; flags; data (:class:`FitData`);
+    separating_measurement; not_excluded (for a named cause: the causes on no list known to act
+    on the measured channels like it, and what would rule them out); consistency; flags; data (:class:`FitData`);
     fits (name -> :class:`~wheelsoil.model.crossval.HypFit`); structure
     (``{"wong": {channel: test}, "<model>": ...}``); load_test, time_test;
     binned (Wong's binned sample residuals per channel); sinkage_evidence;
@@ -229,6 +230,7 @@ class Diagnosis:
     effect_probabilities: dict = field(default_factory=dict)
     alternatives: list = field(default_factory=list)
     separating_measurement: str | None = None
+    not_excluded: str | None = None
     consistency: dict = field(default_factory=dict)
     flags: list = field(default_factory=list)
     tried: list = field(default_factory=list)
@@ -272,6 +274,7 @@ class Diagnosis:
             "effect_probabilities": self.effect_probabilities,
             "alternatives": self.alternatives,
             "separating_measurement": self.separating_measurement,
+            "not_excluded": self.not_excluded,
             "consistency": self.consistency,
             "flags": self.flags,
             "models": models,
@@ -829,6 +832,41 @@ def _separating(effects: set, channels: set, names=()) -> str | None:
     return "; ".join(parts) if parts else None
 
 
+#: Causes on no list that act on the forces like a named cause (measured: the held-out batches of
+#: ``benchmarks/bench_diagnosis.py``, README), and what would rule them out.
+_LOOK_ALIKES = {
+    "terrain_mismatch": ("a firm layer under the soil, a soil rebounding behind the wheel, lugs or a tread that "
+                         "shear the soil at a larger radius, a slip angle, a deflecting tyre: each changes the "
+                         "drawbar pull and torque as a soil of other values would (in the benchmark's held-out "
+                         "batches such causes were named terrain mismatches)",
+                         "plate-sinkage and shear tests of this soil in the field, the wheel's sinkage and rut "
+                         "depth against the load, and the wheel's tread, alignment and loaded radius"),
+    "stress_distribution": ("a shear strength that falls with slip (a soil remoulded at high shear) shifts the "
+                            "forces as a moving stress maximum does",
+                            "shear tests at several shear rates and the normal stress under the wheel (pressure "
+                            "sensors in the rim)"),
+    "terrain_drift": ("a transducer zero or gain drifting along the run (a bridge warming up) changes the "
+                      "readings as a changing soil would",
+                      "the transducer's zeros with the wheel lifted before and after the run, and the same slip "
+                      "sweep on fresh ground"),
+    "slip_sinkage": ("a shear strength that falls with slip, or a hump-shaped shear curve, lowers the drawbar pull "
+                     "at high slip as slip sinkage does",
+                     "the wheel's sinkage against slip"),
+}
+
+
+def _not_excluded(effect: str, sink_ev: dict | None) -> str | None:
+    """For a named ``effect``: the causes on no list known to act on the forces like it and the
+    measurement that would rule them out (:data:`_LOOK_ALIKES`); None for ``none``/``unexplained``
+    and for slip sinkage when the measured sinkage grows with slip (``sink_ev``, already shown)."""
+    if effect not in _LOOK_ALIKES:
+        return None
+    if effect == "slip_sinkage" and sink_ev is not None and sink_ev.get("significant"):
+        return None
+    what, how = _LOOK_ALIKES[effect]
+    return f"{what}; what would rule them out: {how}"
+
+
 # ----------------------------------------------------------------------------- diagnose
 
 
@@ -1112,6 +1150,7 @@ def diagnose(
         "cv_R0_n_before": wong.cv_R0_n,
         "cv_R0_n_after": (chosen or wong).cv_R0_n,
     }
+    not_excl = _not_excluded(effect, sink_ev)
     ident = {k: {"fitted": [p for p in f.params if p in ("k_eq", "n", "c", "phi", "K")],
                  "changed": _changed_terrain(f), "fixed": [p for p in ("k_eq", "n", "c", "phi", "K") if p not in f.params],
                  "condition_number": f.condition_number} for k, f in fits.items()}
@@ -1124,7 +1163,7 @@ def diagnose(
         sinkage_evidence=sink_ev, forms_distinguishable=forms_dist, indistinguishable_forms=tie_forms,
         confidence_reasons=creasons, thresholds=dict(THRESHOLDS), notes=notes + reasons, failures=failures,
         gain=gain, fit_terrain=fit_terrain, identifiability=ident, channels=channels, probabilities=probs,
-        effect_probabilities=eprobs, alternatives=alternatives, separating_measurement=sep,
+        effect_probabilities=eprobs, alternatives=alternatives, separating_measurement=sep, not_excluded=not_excl,
         consistency=consistency, flags=flags, tried=tried, c_hat=c_hat, deff=deff, paired=paired, supported=supported,
         target_channels=target,
     )
@@ -1417,6 +1456,8 @@ def _summary(d: Diagnosis) -> str:
             parts.append("Not supported: " + "; ".join(f"{TITLES[k]} {v}" for k, v in wn.items()) + ".")
     if d.separating_measurement:
         parts.append(f"What would separate them: {d.separating_measurement}.")
+    if d.not_excluded:
+        parts.append(f"Not excluded by these data: {d.not_excluded}.")
     if d.model and d.model != "wong" and d.model in d.paired:
         pr = d.paired[d.model]
         imp = [CHANNEL_TITLES[c] for c, r in pr.items() if r["improves"]]

@@ -14,7 +14,7 @@ SAND = load_terrain("sand")
 CLAY = load_terrain("clay")
 W = DEFAULT_WHEEL
 CONTRACT_KEYS = {"effect", "model", "confidence", "summary", "channels", "probabilities", "alternatives",
-                 "separating_measurement", "consistency", "flags", "models"}
+                 "separating_measurement", "not_excluded", "consistency", "flags", "models"}
 
 
 def _table(model="wong", params=None, *, terrain=SAND, truth=None, seed=0, n=120, **kw):
@@ -297,3 +297,13 @@ def test_the_separating_measurement_names_what_tells_each_stand_in_from_a_listed
         text = _separating({"terrain_mismatch", "unexplained"}, {"drawbar_pull_n", "torque_nm"}, [name])
         assert text and words in text, (name, text)
     assert _separating({"none"}, {"drawbar_pull_n"}, []) is None
+
+
+def test_a_named_cause_says_which_causes_on_no_list_it_does_not_exclude():
+    from wheelsoil.model.diagnosis import _not_excluded
+
+    assert "firm layer" in _not_excluded("terrain_mismatch", None)  # measured: held-out batches 3 and 4
+    assert "falls with slip" in _not_excluded("stress_distribution", None)
+    assert "sinkage against slip" in _not_excluded("slip_sinkage", {"significant": False})
+    assert _not_excluded("slip_sinkage", {"significant": True}) is None  # the sinkage channel rules them out
+    assert _not_excluded("none", None) is None and _not_excluded("unexplained", None) is None
