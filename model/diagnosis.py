@@ -94,7 +94,16 @@ decides with this rule (constants below; none was tuned on a benchmark):
    unsupported hypothesis of another effect has more evidence than the candidate (one whose
    effect parameters are null counts as the smaller model it reduces to).  If the candidate leaves relevant
    significant structure (step 1 on its own residuals) -> ``unexplained``
-   with what was tried.  No supported hypothesis -> ``unexplained``.
+   with what was tried.  The re-fit of all five lab soil values
+   (``terrain``) names no cause on its own: with five free values within the
+   lab's uncertainty it follows almost any smooth change of the forces with
+   slip, a terrain mismatch and, as measured on the benchmark's held-out
+   batches, a rebounding soil, a firm layer, lugs, a slip angle or a
+   deflecting tyre alike.  When it is the candidate, Wong with the lab's
+   terrain is shown to err, not that a soil value is what is wrong:
+   ``unexplained``, with the re-fit as the candidate.  A terrain mismatch is
+   named by the re-fit of a single lab value (a lab error the data point at).
+   No supported hypothesis -> ``unexplained``.
 6. **Confidence** follows the effect's posterior probability (``high`` >=
    ``P_HIGH``, ``medium`` >= ``P_NAME``), capped at ``medium`` when the
    named model is physically inconsistent, when one of the generic
@@ -115,8 +124,9 @@ decides with this rule (constants below; none was tuned on a benchmark):
 
 Per channel (``channels``): ``none`` when Wong shows no relevant structure
 in that channel, else the effect of the most probable hypothesis that
-improves that channel out of sample (``unexplained`` when none does, or when
-hypotheses of different effects improve it about equally).
+improves that channel out of sample (``unexplained`` when none does, when
+hypotheses of different effects improve it about equally, or when it is the
+five-value terrain re-fit, as in step 5).
 
 Flags: parameters on a bound, |correlation| > ``CORR_FLAG``, condition number
 of the column-normalised Jacobian above ``COND_FLAG`` (Belsley, Kuh & Welsch
@@ -694,6 +704,12 @@ def _effect_of(f: HypFit, fits: dict, not_beaten: list = ()) -> str:
     return f.effect
 
 
+def _catch_all(f: HypFit) -> bool:
+    """True for the re-fit of all five lab soil values (``terrain``): the hypothesis space's catch-all,
+    which names no cause on its own (module doc, step 5)."""
+    return f.effect == "terrain_mismatch" and f.hypothesis.terrain_block
+
+
 def _effective_terrain(f: HypFit) -> bool:
     """True when the terrain part of ``f`` moved from the lab values (Wald, as :func:`_effective`)."""
     if not f.prior:
@@ -836,9 +852,9 @@ def _separating(effects: set, channels: set, names=()) -> str | None:
 #: ``benchmarks/bench_diagnosis.py``, README), and what would rule them out.
 _LOOK_ALIKES = {
     "terrain_mismatch": ("a firm layer under the soil, a soil rebounding behind the wheel, lugs or a tread that "
-                         "shear the soil at a larger radius, a slip angle, a deflecting tyre: each changes the "
-                         "drawbar pull and torque as a soil of other values would (in the benchmark's held-out "
-                         "batches such causes were named terrain mismatches)",
+                         "shear the soil at a larger radius, a slip angle, a deflecting tyre: each can change the "
+                         "drawbar pull and torque as a soil of other values would (measured on the benchmark's "
+                         "held-out batches)",
                          "plate-sinkage and shear tests of this soil in the field, the wheel's sinkage and rut "
                          "depth against the load, and the wheel's tread, alignment and loaded radius"),
     "stress_distribution": ("a shear strength that falls with slip (a soil remoulded at high shear) shifts the "
@@ -1092,6 +1108,11 @@ def diagnose(
             effect = "unexplained"
             reasons.append(f"{TITLES[best]} lowers the drawbar pull error but leaves significant structure ("
                            + ", ".join(remain) + ")")
+        elif _catch_all(fits[best]):
+            effect = "unexplained"
+            reasons.append(f"only {TITLES[best]} explains the data, no re-fit of a single lab value does: Wong "
+                           "with the lab's terrain errs, but the data do not show which value is wrong, nor that a "
+                           "soil value is what is wrong (" + _LOOK_ALIKES["terrain_mismatch"][0] + ")")
         else:
             effect = fits[best].effect
         sep_names = [best, *alternatives, *rivals[:1]]
@@ -1117,7 +1138,7 @@ def diagnose(
         else:
             bc = max(imp, key=lambda k: probs.get(k, 0.0))
             near = [k for k in imp if fits[k].effect != fits[bc].effect and probs.get(k, 0) * BF_ALTERNATIVE >= probs.get(bc, 0)]
-            row["effect"] = "unexplained" if near else fits[bc].effect
+            row["effect"] = "unexplained" if near or _catch_all(fits[bc]) else fits[bc].effect
             row["model"] = bc
             if near:
                 row["alternatives"] = near

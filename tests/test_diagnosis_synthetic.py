@@ -307,3 +307,16 @@ def test_a_named_cause_says_which_causes_on_no_list_it_does_not_exclude():
     assert "sinkage against slip" in _not_excluded("slip_sinkage", {"significant": False})
     assert _not_excluded("slip_sinkage", {"significant": True}) is None  # the sinkage channel rules them out
     assert _not_excluded("none", None) is None and _not_excluded("unexplained", None) is None
+
+
+def test_only_the_five_value_terrain_refit_explains_it_then_no_cause_is_named():
+    """The five-value re-fit follows causes on no list as well as a terrain mismatch (held-out
+    batches): when no re-fit of a single lab value explains the data, Wong is shown to err, not that
+    a soil value is what is wrong."""
+    d = diagnose(_table(truth=SAND.replace(K=SAND.K * 0.5, phi=SAND.phi + math.radians(3)), seed=1, n=150),
+                 SAND, W)
+    _invariants(d)
+    assert d.model == "terrain" and d.effect == "unexplained", d.summary
+    assert "single lab value" in d.summary and d.not_excluded is None
+    assert d.to_dict()["channels"]["drawbar_pull_n"]["effect"] == "unexplained"
+

@@ -36,8 +36,7 @@ def _unexplained():
 CASES = {
     "none": lambda: _tab(seed=1),
     "slip_sinkage": lambda: _tab("lyasko", {"m1": 0.6, "m2": 0.03}, seed=5),
-    "terrain_mismatch": lambda: _tab(seed=1, n_rows=150,
-                                     terrain_truth=SAND.replace(K=SAND.K * 0.5, phi=SAND.phi + math.radians(3))),
+    "terrain_mismatch": lambda: _tab(seed=1, n_rows=150, terrain_truth=SAND.replace(phi=SAND.phi + math.radians(3))),
     "unexplained": _unexplained,
 }
 

@@ -143,6 +143,17 @@ def test_held_out_effects_exit_angle_and_hump_shaped_shear(wong):
     gr = _tm("grouser", height_ratio=0.05).drive_forces(LOAD, SLIP)
     np.testing.assert_allclose(gr["torque_nm"], wheel_forces(SOIL, R, B, LOAD, SLIP, grouser=0.05 * R)["torque_nm"])
     assert np.all(gr["drawbar_pull_n"] > wong["drawbar_pull_n"]) and np.all(gr["torque_nm"] > wong["torque_nm"])
+    # fifth batch: a curved failure envelope (beta = 1 is the lab's straight line), mud on the tyre
+    s0 = 50e3
+    np.testing.assert_allclose(wheel_forces(SOIL, R, B, LOAD, SLIP, envelope=(s0, 1.0))["torque_nm"],
+                               wong["torque_nm"], rtol=1e-12)
+    ce = _tm("curved_envelope", beta=0.8).drive_forces(LOAD, SLIP)
+    assert not np.allclose(ce["drawbar_pull_n"], wong["drawbar_pull_n"], rtol=1e-3)
+    mud = _tm("mud_buildup", e=0.1)
+    np.testing.assert_allclose(mud.drive_forces(LOAD, SLIP, frac=0.0)["torque_nm"], wong["torque_nm"], rtol=1e-12)
+    end = mud.drive_forces(LOAD, SLIP, frac=1.0)  # a wheel 1.1 r that the configured r computes the slip of
+    ref = wheel_forces(SOIL, 1.1 * R, B, LOAD, 1.0 - (1.0 - SLIP) / 1.1)
+    np.testing.assert_allclose(end["drawbar_pull_n"], ref["drawbar_pull_n"], rtol=1e-9)
     # neither changes anything at zero size: the paper's wheel
     for kw in ({"slip_angle": 0.0}, {"grouser": 0.0}):
         np.testing.assert_allclose(wheel_forces(SOIL, R, B, LOAD, SLIP, **kw)["torque_nm"], wong["torque_nm"],
@@ -158,7 +169,8 @@ def base_run():
                                            ("load_gain", {"gain": 1.05}), ("angle_offset", {"offset_deg": 1.0}),
                                            ("zero_drift", {"drift_nm": 80.0}), ("gnss_gain", {"gain": 1.03}),
                                            ("inertia_error", {"e": 0.3}), ("fz_crosstalk", {"k": 0.03}),
-                                           ("load_radius", {"e": 0.5}), ("wheel_latency", {"delay_s": 0.1})])
+                                           ("load_radius", {"e": 0.5}), ("wheel_latency", {"delay_s": 0.1}),
+                                           ("fx_gain_drift", {"g": 0.1})])
 def test_sensor_effects_change_only_what_the_transducer_reports(base_run, effect, params):
     from wheelsoil.processing.decode import decode_batches
     from wheelsoil.daq import load_vehicle_config
@@ -189,6 +201,10 @@ def test_sensor_effects_change_only_what_the_transducer_reports(base_run, effect
     elif effect == "inertia_error":  # a wheel 1.3 x the configured one: 0.3 x its inertial part more
         np.testing.assert_allclose(a.my_nm - b.my_nm, 0.3 * 11.5 * b.omega_dot_radps2, atol=1e-6)
         np.testing.assert_allclose(b.fx_n - a.fx_n, 0.3 * 80.0 * b.accel_mps2, atol=1e-6)
+    elif effect == "fx_gain_drift":  # Fx reads (1 + 0.1 (t/t_end - 1/2)) x the truth
+        t = a.t_s.to_numpy()
+        np.testing.assert_allclose(a.fx_n, b.fx_n * (1.0 + 0.1 * ((t - t[0]) / (t[-1] - t[0]) - 0.5)), rtol=1e-6,
+                                   atol=1e-6)
     elif effect == "fz_crosstalk":  # the load channel reads W + 0.03 Fx
         np.testing.assert_allclose(a.load_measured_n - a.load_n, 0.03 * b.fx_n, atol=1e-6)
     elif effect in ("load_radius", "wheel_latency"):  # only the left-rear wheel-speed reading changes:

@@ -46,13 +46,13 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 
 from wheelsoil.sim.effects import (ACCEPTABLE, ALL_HELD_OUT, EFFECTS, HELD_OUT, HELD_OUT_2, HELD_OUT_3,
-                                   HELD_OUT_4, HELD_OUT_BATCHES, IN_FAMILY, OUT_OF_FAMILY, SENSOR_EFFECTS, VERDICTS, TruthModel,
+                                   HELD_OUT_4, HELD_OUT_5, HELD_OUT_BATCHES, IN_FAMILY, OUT_OF_FAMILY, SENSOR_EFFECTS, VERDICTS, TruthModel,
                                    draw_effect, family_of)
 from wheelsoil.sim.physics import bandlimited as _bandlimited
 from wheelsoil.sim.terra import soil_dict
 
 __all__ = ["EFFECTS", "IN_FAMILY", "OUT_OF_FAMILY", "HELD_OUT", "HELD_OUT_2", "HELD_OUT_3", "HELD_OUT_4",
-           "HELD_OUT_BATCHES",
+           "HELD_OUT_5", "HELD_OUT_BATCHES",
            "ALL_HELD_OUT", "ACCEPTABLE", "VERDICTS",
            "SimulatedRun", "simulate_run", "write_simulation", "write_truth", "write_vehicle_config", "judge",
            "draw_case", "pack_signals", "vehicle_config_for", "SIMULATOR"]
@@ -347,6 +347,8 @@ def simulate_run(
     elif effect == "inertia_error":  # the true wheel is (1 + e) x the configured one: the reading's inertia too
         fx -= params["e"] * WHEEL_MASS_KG * w["accel_mps2"]
         my += params["e"] * WHEEL_INERTIA_KGM2 * w["omega_dot_radps2"]
+    elif effect == "fx_gain_drift":  # the Fx gain drifts linearly over the run
+        fx *= 1.0 + params["g"] * ((t_rel - t_rel[0]) / (t_rel[-1] - t_rel[0]) - 0.5)
     elif effect == "fz_crosstalk":  # the load channel picks up k x the hub Fx
         w_meas += params["k"] * fx
     gnss_gain = float(params["gain"]) if effect == "gnss_gain" else 1.0
@@ -925,7 +927,7 @@ effects (--effect; parameters with --param NAME=VALUE, the others drawn at --siz
                          kphi and c x factor, so terrain_mismatch is acceptable too
     zero_drift           the transducer's My zero drifts over the run (drift_nm, end - start)
   held out (out of family, added after the diagnosis' rule to score it on causes it was
-  not developed on; bench_diagnosis.py --effects held-out / held-out-2 / -3 / -4):
+  not developed on; bench_diagnosis.py --effects held-out / held-out-2 / ... / -5):
     exit_angle           a rebounding soil: contact on to theta2 = exit_frac theta1 behind the
                          bottom (a stress distribution: stress_distribution acceptable too)
     shear_hump           Wong's hump-shaped shear curve, residual Kr x the strength
@@ -939,6 +941,9 @@ effects (--effect; parameters with --param NAME=VALUE, the others drawn at --siz
     slip_angle           the wheel runs at a slip angle angle_deg: the soil is sheared sideways too
     grouser              lugs of height_ratio x r: the soil is sheared at the lug tips
     wheel_latency        the left-rear wheel-speed channel arrives delay_s late
+    fx_gain_drift        the transducer's Fx gain drifts by g over the run (1 + g (t/t_end - 1/2))
+    mud_buildup          mud on the tyre: the radius grows to r (1 + e) along the run
+    curved_envelope      a curved failure envelope: c + tan phi sigma0 (sigma/sigma0)^beta
 
 The recording holds only what a logger would record plus a provenance record
 (kind "simulated", the seed): the effect and its parameters go to --truth FILE
@@ -1021,6 +1026,7 @@ CLI_PARAMS = {
     "strength_softening": ("beta",), "tyre_hysteresis": ("f",), "inertia_error": ("e",),
     "hard_layer": ("depth_ratio",), "fz_crosstalk": ("k",), "load_radius": ("e",),
     "slip_angle": ("angle_deg",), "grouser": ("height_ratio",), "wheel_latency": ("delay_s",),
+    "fx_gain_drift": ("g",), "mud_buildup": ("e",), "curved_envelope": ("beta",),
 }
 
 OUTPUT_SUFFIXES = (".mcap", ".log", ".asc", ".blf", ".trc")

@@ -98,6 +98,17 @@ unchanged since it, and scored once)
   ``wheel_latency``    the left-rear wheel-speed channel arrives 20-250 ms late (a gateway's
                        buffer, a filter in the sensor): slip is computed from an old omega.
 
+Held out, fifth batch (``--effects held-out-5``; added with the rule that the five-value terrain
+re-fit names no cause on its own, scored once with it)
+  ``fx_gain_drift``    the transducer's Fx gain drifts over the run (a bridge warming up):
+                       Fx_meas = Fx (1 + g (t / t_end - 1/2)), g 3-20 %, either sign.
+  ``mud_buildup``      mud building up on the tyre: the wheel's radius grows along the run to
+                       r (1 + e x), x the distance fraction, e 2-12 %; the soil sees that wheel and
+                       its slip 1 - (1 - s)/(1 + e x), while slip is computed with r.
+  ``curved_envelope``  a curved failure envelope: the strength c + tan phi sigma0 (sigma/sigma0)^beta,
+                       beta 0.7-0.95, meeting the lab's straight line at sigma0, the peak normal
+                       stress at the static load.
+
 Sensor effects (``fx_gain``, ``my_gain``, ``load_gain``, ``angle_offset``, ``zero_drift``) change only
 what the transducer reports; the soil forces (and the vehicle) are Wong's.
 """
@@ -113,7 +124,7 @@ import numpy as np
 from .terra import sinkage_eq10, wheel_forces
 
 __all__ = ["EFFECTS", "IN_FAMILY", "OUT_OF_FAMILY", "HELD_OUT", "HELD_OUT_2", "HELD_OUT_3", "HELD_OUT_4",
-           "HELD_OUT_BATCHES",
+           "HELD_OUT_5", "HELD_OUT_BATCHES", "ALONG_RUN",
            "ALL_HELD_OUT", "ACCEPTABLE", "VERDICTS", "SENSOR_EFFECTS", "draw_effect", "TruthModel", "family_of"]
 
 #: The verdicts a report can give (report.json ``diagnosis.effect``).
@@ -131,12 +142,16 @@ HELD_OUT_2 = ("strength_softening", "tyre_hysteresis", "inertia_error")
 HELD_OUT_3 = ("hard_layer", "fz_crosstalk", "load_radius")
 #: the fourth, scored once with the rule unchanged since the third's score
 HELD_OUT_4 = ("slip_angle", "grouser", "wheel_latency")
+#: the fifth, scored once with the rule that the five-value terrain re-fit names no cause on its own
+HELD_OUT_5 = ("fx_gain_drift", "mud_buildup", "curved_envelope")
 #: the batches by their ``bench_diagnosis.py --effects`` name, and all held-out effects
 HELD_OUT_BATCHES = {"held-out": HELD_OUT, "held-out-2": HELD_OUT_2, "held-out-3": HELD_OUT_3,
-                    "held-out-4": HELD_OUT_4}
-ALL_HELD_OUT = HELD_OUT + HELD_OUT_2 + HELD_OUT_3 + HELD_OUT_4
+                    "held-out-4": HELD_OUT_4, "held-out-5": HELD_OUT_5}
+ALL_HELD_OUT = HELD_OUT + HELD_OUT_2 + HELD_OUT_3 + HELD_OUT_4 + HELD_OUT_5
 SENSOR_EFFECTS = ("fx_gain", "my_gain", "load_gain", "angle_offset", "zero_drift", "gnss_gain", "inertia_error",
-                  "fz_crosstalk", "load_radius", "wheel_latency")
+                  "fz_crosstalk", "load_radius", "wheel_latency", "fx_gain_drift")
+#: effects whose truth changes along the run (the simulator tabulates their forces against distance too)
+ALONG_RUN = ("terrain_drift", "mud_buildup")
 
 #: Acceptable verdicts per effect (contract F). See the module docstring for the two
 #: out-of-family effects with an exact in-family equivalent (load_gain, width_error).
@@ -170,6 +185,9 @@ ACCEPTABLE: dict[str, tuple[str, ...]] = {
     "slip_angle": ("unexplained",),
     "grouser": ("unexplained",),
     "wheel_latency": ("unexplained",),
+    "fx_gain_drift": ("unexplained",),
+    "mud_buildup": ("unexplained",),
+    "curved_envelope": ("unexplained",),
 }
 
 #: Terrain parameters a mismatch / drift may change, with the relative (or absolute) range
@@ -194,6 +212,7 @@ PARAM_NAMES: dict[str, tuple[str, ...]] = {
     "strength_softening": ("beta",), "tyre_hysteresis": ("f",), "inertia_error": ("e",),
     "hard_layer": ("depth_ratio",), "fz_crosstalk": ("k",), "load_radius": ("e",),
     "slip_angle": ("angle_deg",), "grouser": ("height_ratio",), "wheel_latency": ("delay_s",),
+    "fx_gain_drift": ("g",), "mud_buildup": ("e",), "curved_envelope": ("beta",),
 }
 
 
@@ -307,6 +326,12 @@ def draw_effect(effect: str, rng: np.random.Generator, *, size: float | None = N
         p = {"height_ratio": _mag(u, 0.01, 0.08)}
     elif effect == "wheel_latency":
         p = {"delay_s": _mag(u, 0.02, 0.25, log=True)}
+    elif effect == "fx_gain_drift":
+        p = {"g": sign * _mag(u, 0.03, 0.20)}
+    elif effect == "mud_buildup":
+        p = {"e": _mag(u, 0.02, 0.12)}
+    elif effect == "curved_envelope":
+        p = {"beta": _mag(u, 0.95, 0.7)}
     p.update(given)
     p["size"] = u
     return p
@@ -420,6 +445,13 @@ class TruthModel:
             kw["slip_angle"] = math.radians(p["angle_deg"])
         elif e == "grouser":
             kw["grouser"] = p["height_ratio"] * self.radius_m
+        elif e == "curved_envelope":  # sigma0: the peak normal stress at the static load (Eq. 2 at z0)
+            z0 = float(sinkage_eq10(self.soil, r, b, self.static_load_n))
+            kw["envelope"] = ((self.soil["kc"] / b + self.soil["kphi"]) * z0 ** self.soil["n"], p["beta"])
+        elif e == "mud_buildup":  # a wheel growing along the run; slip is computed with the configured r
+            g = 1.0 + p["e"] * np.asarray(frac, float)
+            r = self.radius_m * g
+            s = 1.0 - (1.0 - s) / g
         elif e == "hard_layer":
             kw["z_cap"] = p["depth_ratio"] * float(sinkage_eq10(self.soil, r, b, self.static_load_n))
         elif e == "width_error":

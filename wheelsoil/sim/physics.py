@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from .effects import TruthModel
+from .effects import ALONG_RUN, TruthModel
 from .vehicle import DT_S, ForceTable, VehicleParams, check_can_move, simulate_dynamics, skid_forces
 
 __all__ = ["simulate_physics", "WFT_RATE_HZ"]
@@ -73,7 +73,7 @@ def simulate_physics(truth: TruthModel, rng: np.random.Generator, *, added_load_
     m, wf0, wr0 = veh.loads(added_load_n)
     r = truth.radius_m
     grade = float(rng.uniform(-0.005, 0.005))
-    drift = truth.effect == "terrain_drift"
+    drift = truth.effect in ALONG_RUN
     fracs = np.linspace(0.0, 1.0, 9) if drift else (0.5,)
     lo, hi = 0.45 * min(wf0, wr0), 1.35 * max(wf0, wr0)
     table = ForceTable(truth, (lo, hi), fracs=fracs)
