@@ -866,7 +866,7 @@ _LOOK_ALIKES = {
                       "the transducer's zeros with the wheel lifted before and after the run, and the same slip "
                       "sweep on fresh ground"),
     "slip_sinkage": ("a shear strength that falls with slip, or a hump-shaped shear curve, lowers the drawbar pull "
-                     "at high slip as slip sinkage does",
+                     "at high slip as slip sinkage can",
                      "the wheel's sinkage against slip"),
 }
 
