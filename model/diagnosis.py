@@ -99,10 +99,13 @@ decides with this rule (constants below; none was tuned on a benchmark):
    lab's uncertainty it follows almost any smooth change of the forces with
    slip, a terrain mismatch and, as measured on the benchmark's held-out
    batches, a rebounding soil, a firm layer, lugs, a slip angle or a
-   deflecting tyre alike.  When it is the candidate, Wong with the lab's
-   terrain is shown to err, not that a soil value is what is wrong:
-   ``unexplained``, with the re-fit as the candidate.  A terrain mismatch is
-   named by the re-fit of a single lab value (a lab error the data point at).
+   deflecting tyre alike; so do its drifting forms (``drift_linear``,
+   ``drift_step``: all five values changing along the run) with anything
+   that changes along the run (mud building up on the tyre).  When one of
+   them is the candidate, Wong with the lab's terrain is shown to err, not
+   that a soil value is what is wrong: ``unexplained``, with it as the
+   candidate.  A terrain mismatch or drift is named by the re-fit of a
+   single lab value (a lab error the data point at).
    No supported hypothesis -> ``unexplained``.
 6. **Confidence** follows the effect's posterior probability (``high`` >=
    ``P_HIGH``, ``medium`` >= ``P_NAME``), capped at ``medium`` when the
@@ -705,9 +708,10 @@ def _effect_of(f: HypFit, fits: dict, not_beaten: list = ()) -> str:
 
 
 def _catch_all(f: HypFit) -> bool:
-    """True for the re-fit of all five lab soil values (``terrain``): the hypothesis space's catch-all,
-    which names no cause on its own (module doc, step 5)."""
-    return f.effect == "terrain_mismatch" and f.hypothesis.terrain_block
+    """True for the re-fit of all five lab soil values (``terrain``) and its drifting forms
+    (``drift_linear``, ``drift_step``): the hypothesis space's catch-alls, which name no cause on
+    their own (module doc, step 5)."""
+    return f.effect in ("terrain_mismatch", "terrain_drift") and f.hypothesis.terrain_block
 
 
 def _effective_terrain(f: HypFit) -> bool:
@@ -861,8 +865,8 @@ _LOOK_ALIKES = {
                             "forces as a moving stress maximum does",
                             "shear tests at several shear rates and the normal stress under the wheel (pressure "
                             "sensors in the rim)"),
-    "terrain_drift": ("a transducer zero or gain drifting along the run (a bridge warming up) changes the "
-                      "readings as a changing soil would",
+    "terrain_drift": ("a transducer zero or gain drifting along the run (a bridge warming up), or mud building "
+                      "up on the tyre, changes the readings as a changing soil would",
                       "the transducer's zeros with the wheel lifted before and after the run, and the same slip "
                       "sweep on fresh ground"),
     "slip_sinkage": ("a shear strength that falls with slip, or a hump-shaped shear curve, lowers the drawbar pull "
@@ -1112,7 +1116,7 @@ def diagnose(
             effect = "unexplained"
             reasons.append(f"only {TITLES[best]} explains the data, no re-fit of a single lab value does: Wong "
                            "with the lab's terrain errs, but the data do not show which value is wrong, nor that a "
-                           "soil value is what is wrong (" + _LOOK_ALIKES["terrain_mismatch"][0] + ")")
+                           "soil value is what is wrong (" + _LOOK_ALIKES[fits[best].effect][0] + ")")
         else:
             effect = fits[best].effect
         sep_names = [best, *alternatives, *rivals[:1]]

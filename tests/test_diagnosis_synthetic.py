@@ -320,3 +320,13 @@ def test_only_the_five_value_terrain_refit_explains_it_then_no_cause_is_named():
     assert "single lab value" in d.summary and d.not_excluded is None
     assert d.to_dict()["channels"]["drawbar_pull_n"]["effect"] == "unexplained"
 
+
+def test_the_catch_alls_are_the_five_value_refit_and_its_drifts():
+    from types import SimpleNamespace
+
+    from wheelsoil.model.diagnosis import _catch_all
+    from wheelsoil.model.hypotheses import HYPOTHESES
+
+    caught = {k for k, h in HYPOTHESES.items() if _catch_all(SimpleNamespace(effect=h.effect, hypothesis=h))}
+    assert caught == {"terrain", "drift_linear", "drift_step"}  # slip sinkage + terrain names its slip part
+
