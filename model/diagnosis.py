@@ -128,8 +128,8 @@ decides with this rule (constants below; none was tuned on a benchmark):
 Per channel (``channels``): ``none`` when Wong shows no relevant structure
 in that channel, else the effect of the most probable hypothesis that
 improves that channel out of sample (``unexplained`` when none does, when
-hypotheses of different effects improve it about equally, or when it is the
-five-value terrain re-fit, as in step 5).
+hypotheses of different effects improve it about equally, or when it is one
+of step 5's catch-alls, the five-value terrain re-fit or its drifts).
 
 Flags: parameters on a bound, |correlation| > ``CORR_FLAG``, condition number
 of the column-normalised Jacobian above ``COND_FLAG`` (Belsley, Kuh & Welsch
@@ -852,8 +852,9 @@ def _separating(effects: set, channels: set, names=()) -> str | None:
     return "; ".join(parts) if parts else None
 
 
-#: Causes on no list that act on the forces like a named cause (measured: the held-out batches of
-#: ``benchmarks/bench_diagnosis.py``, README), and what would rule them out.
+#: Causes on no list that act on the forces like a named cause, and what would rule them out (for a
+#: terrain mismatch, a drift and a stress distribution measured on the held-out batches of
+#: ``benchmarks/bench_diagnosis.py``, README; for slip sinkage from the shapes of the shear curves).
 _LOOK_ALIKES = {
     "terrain_mismatch": ("a firm layer under the soil, a soil rebounding behind the wheel, lugs or a tread that "
                          "shear the soil at a larger radius, a slip angle, a deflecting tyre: each can change the "

@@ -35,9 +35,10 @@ j_y = r (1 - s)(theta1 - theta) tan alpha, the strength is mobilised by the resu
 displacement and only its longitudinal part tau j_x / |j| drives the wheel (Wong, *Theory of
 Ground Vehicles*, 4th ed., ch. 2, lateral forces of a rigid wheel; Chiang & Wong). ``grouser``:
 lugs of height h: the soil is sheared at the lug tips, radius r_g = r + h (j of Eq. 5 with r_g for
-the wheel's own travel, the shear stress acting at r_g in Eqs. 7-9), the normal stress on the rim. ``envelope``: a curved
-failure envelope, the strength c + tan phi sigma0 (sigma/sigma0)^beta (a power law, beta < 1: it meets
-the lab's straight Mohr-Coulomb line at sigma0; real envelopes curve at higher normal stress).
+the wheel's own travel, the shear stress acting at r_g in Eqs. 7-9), the normal stress on the rim.
+``envelope``: a curved failure envelope, the strength c + tan phi sigma0 (sigma/sigma0)^beta (a power
+law, beta < 1: it meets the lab's straight Mohr-Coulomb line at sigma0; real envelopes curve at higher
+normal stress).
 
 Quadrature. ``scipy.integrate.quad_vec`` (adaptive Gauss-Kronrod 21, all
 samples and the five integrals of one call in one vector) over a normalised
