@@ -46,14 +46,14 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 
 from wheelsoil.sim.effects import (ACCEPTABLE, ALL_HELD_OUT, EFFECTS, HELD_OUT, HELD_OUT_2, HELD_OUT_3,
-                                   HELD_OUT_4, HELD_OUT_5, HELD_OUT_BATCHES, IN_FAMILY, OUT_OF_FAMILY,
+                                   HELD_OUT_4, HELD_OUT_5, HELD_OUT_6, HELD_OUT_BATCHES, IN_FAMILY, OUT_OF_FAMILY,
                                    SENSOR_EFFECTS, VERDICTS, TruthModel,
                                    draw_effect, family_of)
 from wheelsoil.sim.physics import bandlimited as _bandlimited
 from wheelsoil.sim.terra import soil_dict
 
 __all__ = ["EFFECTS", "IN_FAMILY", "OUT_OF_FAMILY", "HELD_OUT", "HELD_OUT_2", "HELD_OUT_3", "HELD_OUT_4",
-           "HELD_OUT_5", "HELD_OUT_BATCHES",
+           "HELD_OUT_5", "HELD_OUT_6", "HELD_OUT_BATCHES",
            "ALL_HELD_OUT", "ACCEPTABLE", "VERDICTS",
            "SimulatedRun", "simulate_run", "write_simulation", "write_truth", "write_vehicle_config", "judge",
            "draw_case", "pack_signals", "vehicle_config_for", "SIMULATOR"]
@@ -352,6 +352,11 @@ def simulate_run(
         fx *= 1.0 + params["g"] * ((t_rel - t_rel[0]) / (t_rel[-1] - t_rel[0]) - 0.5)
     elif effect == "fz_crosstalk":  # the load channel picks up k x the hub Fx
         w_meas += params["k"] * fx
+    elif effect == "load_lag":  # a first-order filter of time constant tau_s on the load channel
+        from scipy.signal import lfilter
+
+        a = dt / (float(params["tau_s"]) + dt)
+        w_meas, _ = lfilter([a], [1.0, a - 1.0], w_meas, zi=[(1.0 - a) * w_meas[0]])
     gnss_gain = float(params["gain"]) if effect == "gnss_gain" else 1.0
     # the left-rear wheel-speed channel reads omega r_roll / r (a rolling radius shrinking with the load)
     rl_gain = 1.0 - params["e"] * (load / static - 1.0) if effect == "load_radius" else None
@@ -928,7 +933,7 @@ effects (--effect; parameters with --param NAME=VALUE, the others drawn at --siz
                          kphi and c x factor, so terrain_mismatch is acceptable too
     zero_drift           the transducer's My zero drifts over the run (drift_nm, end - start)
   held out (out of family, added after the diagnosis' rule to score it on causes it was
-  not developed on; bench_diagnosis.py --effects held-out / held-out-2 / ... / -5):
+  not developed on; bench_diagnosis.py --effects held-out / held-out-2 / ... / -6):
     exit_angle           a rebounding soil: contact on to theta2 = exit_frac theta1 behind the
                          bottom (a stress distribution: stress_distribution acceptable too)
     shear_hump           Wong's hump-shaped shear curve, residual Kr x the strength
@@ -945,6 +950,9 @@ effects (--effect; parameters with --param NAME=VALUE, the others drawn at --siz
     fx_gain_drift        the transducer's Fx gain drifts by g over the run (1 + g (t/t_end - 1/2))
     mud_buildup          mud on the tyre: the radius grows to r (1 + e) along the run
     curved_envelope      a curved failure envelope: c + tan phi sigma0 (sigma/sigma0)^beta
+    load_lag             the transducer's load channel lags with time constant tau_s
+    pressure_k           K grows with the normal stress: K (sigma/sigma0)^gamma
+    radius_error         the tyre's true rolling radius is (1 + e) r (slip computed with r)
 
 The recording holds only what a logger would record plus a provenance record
 (kind "simulated", the seed): the effect and its parameters go to --truth FILE
@@ -1028,6 +1036,7 @@ CLI_PARAMS = {
     "hard_layer": ("depth_ratio",), "fz_crosstalk": ("k",), "load_radius": ("e",),
     "slip_angle": ("angle_deg",), "grouser": ("height_ratio",), "wheel_latency": ("delay_s",),
     "fx_gain_drift": ("g",), "mud_buildup": ("e",), "curved_envelope": ("beta",),
+    "load_lag": ("tau_s",), "pressure_k": ("gamma",), "radius_error": ("e",),
 }
 
 OUTPUT_SUFFIXES = (".mcap", ".log", ".asc", ".blf", ".trc")

@@ -109,6 +109,15 @@ re-fit names no cause on its own, scored once with it)
                        beta 0.7-0.95, meeting the lab's straight line at sigma0, the peak normal
                        stress at the static load.
 
+Held out, sixth batch (``--effects held-out-6``; added with the rule of the fifth unchanged after its
+second round, scored once)
+  ``load_lag``         the transducer's load channel lags: a first-order filter of time constant
+                       0.1-1 s in the sensor's electronics.
+  ``pressure_k``       the shear deformation modulus grows with the normal stress, K (sigma/sigma0)^gamma,
+                       gamma 0.2-0.8, the lab's K at sigma0 (the static peak normal stress).
+  ``radius_error``     the tyre's true rolling radius is (1 + e) r, e 2-8 %, either sign: the soil sees
+                       that wheel and its slip, while slip is computed with the configured r.
+
 Sensor effects (``fx_gain``, ``my_gain``, ``load_gain``, ``angle_offset``, ``zero_drift``) change only
 what the transducer reports; the soil forces (and the vehicle) are Wong's.
 """
@@ -124,7 +133,7 @@ import numpy as np
 from .terra import sinkage_eq10, wheel_forces
 
 __all__ = ["EFFECTS", "IN_FAMILY", "OUT_OF_FAMILY", "HELD_OUT", "HELD_OUT_2", "HELD_OUT_3", "HELD_OUT_4",
-           "HELD_OUT_5", "HELD_OUT_BATCHES", "ALONG_RUN",
+           "HELD_OUT_5", "HELD_OUT_6", "HELD_OUT_BATCHES", "ALONG_RUN",
            "ALL_HELD_OUT", "ACCEPTABLE", "VERDICTS", "SENSOR_EFFECTS", "draw_effect", "TruthModel", "family_of"]
 
 #: The verdicts a report can give (report.json ``diagnosis.effect``).
@@ -144,12 +153,14 @@ HELD_OUT_3 = ("hard_layer", "fz_crosstalk", "load_radius")
 HELD_OUT_4 = ("slip_angle", "grouser", "wheel_latency")
 #: the fifth, scored once with the rule that the five-value terrain re-fit names no cause on its own
 HELD_OUT_5 = ("fx_gain_drift", "mud_buildup", "curved_envelope")
+#: the sixth, scored once with the rule of the fifth (catch-alls and their drifts)
+HELD_OUT_6 = ("load_lag", "pressure_k", "radius_error")
 #: the batches by their ``bench_diagnosis.py --effects`` name, and all held-out effects
 HELD_OUT_BATCHES = {"held-out": HELD_OUT, "held-out-2": HELD_OUT_2, "held-out-3": HELD_OUT_3,
-                    "held-out-4": HELD_OUT_4, "held-out-5": HELD_OUT_5}
-ALL_HELD_OUT = HELD_OUT + HELD_OUT_2 + HELD_OUT_3 + HELD_OUT_4 + HELD_OUT_5
+                    "held-out-4": HELD_OUT_4, "held-out-5": HELD_OUT_5, "held-out-6": HELD_OUT_6}
+ALL_HELD_OUT = HELD_OUT + HELD_OUT_2 + HELD_OUT_3 + HELD_OUT_4 + HELD_OUT_5 + HELD_OUT_6
 SENSOR_EFFECTS = ("fx_gain", "my_gain", "load_gain", "angle_offset", "zero_drift", "gnss_gain", "inertia_error",
-                  "fz_crosstalk", "load_radius", "wheel_latency", "fx_gain_drift")
+                  "fz_crosstalk", "load_radius", "wheel_latency", "fx_gain_drift", "load_lag")
 #: effects whose truth changes along the run (the simulator tabulates their forces against distance too)
 ALONG_RUN = ("terrain_drift", "mud_buildup")
 
@@ -188,6 +199,9 @@ ACCEPTABLE: dict[str, tuple[str, ...]] = {
     "fx_gain_drift": ("unexplained",),
     "mud_buildup": ("unexplained",),
     "curved_envelope": ("unexplained",),
+    "load_lag": ("unexplained",),
+    "pressure_k": ("unexplained",),
+    "radius_error": ("unexplained",),
 }
 
 #: Terrain parameters a mismatch / drift may change, with the relative (or absolute) range
@@ -213,6 +227,7 @@ PARAM_NAMES: dict[str, tuple[str, ...]] = {
     "hard_layer": ("depth_ratio",), "fz_crosstalk": ("k",), "load_radius": ("e",),
     "slip_angle": ("angle_deg",), "grouser": ("height_ratio",), "wheel_latency": ("delay_s",),
     "fx_gain_drift": ("g",), "mud_buildup": ("e",), "curved_envelope": ("beta",),
+    "load_lag": ("tau_s",), "pressure_k": ("gamma",), "radius_error": ("e",),
 }
 
 
@@ -332,6 +347,12 @@ def draw_effect(effect: str, rng: np.random.Generator, *, size: float | None = N
         p = {"e": _mag(u, 0.02, 0.12)}
     elif effect == "curved_envelope":
         p = {"beta": _mag(u, 0.95, 0.7)}
+    elif effect == "load_lag":
+        p = {"tau_s": _mag(u, 0.1, 1.0, log=True)}
+    elif effect == "pressure_k":
+        p = {"gamma": _mag(u, 0.2, 0.8)}
+    elif effect == "radius_error":
+        p = {"e": sign * _mag(u, 0.02, 0.08)}
     p.update(given)
     p["size"] = u
     return p
@@ -448,8 +469,11 @@ class TruthModel:
         elif e == "curved_envelope":  # sigma0: the peak normal stress at the static load (Eq. 2 at z0)
             z0 = float(sinkage_eq10(self.soil, r, b, self.static_load_n))
             kw["envelope"] = ((self.soil["kc"] / b + self.soil["kphi"]) * z0 ** self.soil["n"], p["beta"])
-        elif e == "mud_buildup":  # a wheel growing along the run; slip is computed with the configured r
-            g = 1.0 + p["e"] * np.asarray(frac, float)
+        elif e == "pressure_k":
+            z0 = float(sinkage_eq10(self.soil, r, b, self.static_load_n))
+            kw["k_pressure"] = ((self.soil["kc"] / b + self.soil["kphi"]) * z0 ** self.soil["n"], p["gamma"])
+        elif e in ("mud_buildup", "radius_error"):  # another wheel; slip is computed with the configured r
+            g = 1.0 + p["e"] * (np.asarray(frac, float) if e == "mud_buildup" else 1.0)
             r = self.radius_m * g
             s = 1.0 - (1.0 - s) / g
         elif e == "hard_layer":
