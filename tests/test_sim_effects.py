@@ -154,6 +154,14 @@ def test_held_out_effects_exit_angle_and_hump_shaped_shear(wong):
     end = mud.drive_forces(LOAD, SLIP, frac=1.0)  # a wheel 1.1 r that the configured r computes the slip of
     ref = wheel_forces(SOIL, 1.1 * R, B, LOAD, 1.0 - (1.0 - SLIP) / 1.1)
     np.testing.assert_allclose(end["drawbar_pull_n"], ref["drawbar_pull_n"], rtol=1e-9)
+    # sixth batch: K growing with the normal stress (gamma = 0 is the lab's K), a rolling-radius error
+    np.testing.assert_allclose(_tm("pressure_k", gamma=0.0).drive_forces(LOAD, SLIP)["torque_nm"], wong["torque_nm"],
+                               rtol=1e-12)
+    pk = _tm("pressure_k", gamma=0.5).drive_forces(LOAD, SLIP)
+    assert not np.allclose(pk["drawbar_pull_n"], wong["drawbar_pull_n"], rtol=1e-3)
+    re_ = _tm("radius_error", e=-0.05).drive_forces(LOAD, SLIP)
+    ref = wheel_forces(SOIL, 0.95 * R, B, LOAD, np.maximum(1.0 - (1.0 - SLIP) / 0.95, 0.0))
+    np.testing.assert_allclose(re_["drawbar_pull_n"], ref["drawbar_pull_n"], rtol=1e-9)
     # neither changes anything at zero size: the paper's wheel
     for kw in ({"slip_angle": 0.0}, {"grouser": 0.0}):
         np.testing.assert_allclose(wheel_forces(SOIL, R, B, LOAD, SLIP, **kw)["torque_nm"], wong["torque_nm"],
@@ -170,7 +178,7 @@ def base_run():
                                            ("zero_drift", {"drift_nm": 80.0}), ("gnss_gain", {"gain": 1.03}),
                                            ("inertia_error", {"e": 0.3}), ("fz_crosstalk", {"k": 0.03}),
                                            ("load_radius", {"e": 0.5}), ("wheel_latency", {"delay_s": 0.1}),
-                                           ("fx_gain_drift", {"g": 0.1})])
+                                           ("fx_gain_drift", {"g": 0.1}), ("load_lag", {"tau_s": 0.5})])
 def test_sensor_effects_change_only_what_the_transducer_reports(base_run, effect, params):
     from wheelsoil.processing.decode import decode_batches
     from wheelsoil.daq import load_vehicle_config
@@ -205,6 +213,14 @@ def test_sensor_effects_change_only_what_the_transducer_reports(base_run, effect
         t = a.t_s.to_numpy()
         np.testing.assert_allclose(a.fx_n, b.fx_n * (1.0 + 0.1 * ((t - t[0]) / (t[-1] - t[0]) - 0.5)), rtol=1e-6,
                                    atol=1e-6)
+    elif effect == "load_lag":  # the load channel is W through a first-order lag of 0.5 s
+        from scipy.signal import lfilter
+
+        w = b.load_n.to_numpy()
+        a_ = (1.0 / 500.0) / (0.5 + 1.0 / 500.0)
+        lagged, _ = lfilter([a_], [1.0, a_ - 1.0], w, zi=[(1.0 - a_) * w[0]])
+        np.testing.assert_allclose(a.load_measured_n, lagged, rtol=1e-9)
+        assert np.abs(a.load_measured_n - w).max() > 100.0  # the load transfer arrives late
     elif effect == "fz_crosstalk":  # the load channel reads W + 0.03 Fx
         np.testing.assert_allclose(a.load_measured_n - a.load_n, 0.03 * b.fx_n, atol=1e-6)
     elif effect in ("load_radius", "wheel_latency"):  # only the left-rear wheel-speed reading changes:

@@ -116,7 +116,8 @@ second round, scored once)
   ``pressure_k``       the shear deformation modulus grows with the normal stress, K (sigma/sigma0)^gamma,
                        gamma 0.2-0.8, the lab's K at sigma0 (the static peak normal stress).
   ``radius_error``     the tyre's true rolling radius is (1 + e) r, e 2-8 %, either sign: the soil sees
-                       that wheel and its slip, while slip is computed with the configured r.
+                       that wheel and its slip (at least 0: Wong's driving model), while slip is
+                       computed with the configured r.
 
 Sensor effects (``fx_gain``, ``my_gain``, ``load_gain``, ``angle_offset``, ``zero_drift``) change only
 what the transducer reports; the soil forces (and the vehicle) are Wong's.
@@ -475,7 +476,7 @@ class TruthModel:
         elif e in ("mud_buildup", "radius_error"):  # another wheel; slip is computed with the configured r
             g = 1.0 + p["e"] * (np.asarray(frac, float) if e == "mud_buildup" else 1.0)
             r = self.radius_m * g
-            s = 1.0 - (1.0 - s) / g
+            s = np.maximum(1.0 - (1.0 - s) / g, 0.0)  # a smaller wheel at the lowest slips: rolling, s = 0
         elif e == "hard_layer":
             kw["z_cap"] = p["depth_ratio"] * float(sinkage_eq10(self.soil, r, b, self.static_load_n))
         elif e == "width_error":
