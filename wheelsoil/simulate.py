@@ -47,8 +47,7 @@ import numpy as np
 
 from wheelsoil.sim.effects import (ACCEPTABLE, ALL_HELD_OUT, EFFECTS, HELD_OUT, HELD_OUT_2, HELD_OUT_3,
                                    HELD_OUT_4, HELD_OUT_5, HELD_OUT_6, HELD_OUT_BATCHES, IN_FAMILY, OUT_OF_FAMILY,
-                                   SENSOR_EFFECTS, VERDICTS, TruthModel,
-                                   draw_effect, family_of)
+                                   PARAM_NAMES, SENSOR_EFFECTS, VERDICTS, TruthModel, draw_effect, family_of)
 from wheelsoil.sim.physics import bandlimited as _bandlimited
 from wheelsoil.sim.terra import soil_dict
 
@@ -1024,20 +1023,9 @@ def _parse_params(items) -> dict[str, float]:
     return out
 
 
-#: Parameters each effect takes on the command line.
-CLI_PARAMS = {
-    "none": (), "vasilev": ("H",), "lyasko": ("m1", "m2"), "ding": ("n1",),
-    "stress_distribution": ("a1", "a2"), "fx_gain": ("gain",), "my_gain": ("gain",), "load_gain": ("gain",),
-    "angle_offset": ("offset_deg",), "tyre_deflection": ("kappa",), "bulldozing": ("factor",),
-    "load_dependent": ("beta",), "vertical_balance": (), "width_error": ("factor",), "zero_drift": ("drift_nm",),
-    "terrain_mismatch": ("k_eq", "n", "c", "phi", "K"), "terrain_drift": ("k_eq", "n", "c", "phi", "K"),
-    "exit_angle": ("exit_frac",), "shear_hump": ("Kr",), "gnss_gain": ("gain",),
-    "strength_softening": ("beta",), "tyre_hysteresis": ("f",), "inertia_error": ("e",),
-    "hard_layer": ("depth_ratio",), "fz_crosstalk": ("k",), "load_radius": ("e",),
-    "slip_angle": ("angle_deg",), "grouser": ("height_ratio",), "wheel_latency": ("delay_s",),
-    "fx_gain_drift": ("g",), "mud_buildup": ("e",), "curved_envelope": ("beta",),
-    "load_lag": ("tau_s",), "pressure_k": ("gamma",), "radius_error": ("e",),
-}
+#: Parameters each effect takes on the command line: the drawn ones, but a terrain change as its soil values.
+CLI_PARAMS = {**PARAM_NAMES, "terrain_mismatch": ("k_eq", "n", "c", "phi", "K"),
+              "terrain_drift": ("k_eq", "n", "c", "phi", "K")}
 
 OUTPUT_SUFFIXES = (".mcap", ".log", ".asc", ".blf", ".trc")
 

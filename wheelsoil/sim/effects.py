@@ -216,19 +216,45 @@ _MISMATCH = {  # name: (kind, small, large)
 }
 
 
+#: Effects of one parameter: (name, value at size 0, at size 1, log-uniform, form). Forms: ``plain``
+#: the magnitude, ``signed`` with a random sign, ``gain`` 1 +- it, ``one_minus`` 1 - it.
+_ONE_PARAM: dict[str, tuple[str, float, float, bool, str]] = {
+    "fx_gain": ("gain", 0.03, 0.20, False, "gain"),
+    "my_gain": ("gain", 0.03, 0.20, False, "gain"),
+    "load_gain": ("gain", 0.02, 0.12, False, "gain"),
+    "angle_offset": ("offset_deg", 0.15, 2.0, True, "signed"),
+    "tyre_deflection": ("kappa", 0.04, 0.40, True, "plain"),
+    "bulldozing": ("factor", 0.02, 0.30, True, "plain"),
+    "load_dependent": ("beta", 0.5, 3.0, False, "signed"),
+    "width_error": ("factor", 0.05, 0.30, False, "gain"),
+    "zero_drift": ("drift_nm", 20.0, 200.0, True, "signed"),  # 0.2-2 % of a 10 kN m channel over a run
+    "exit_angle": ("exit_frac", 0.03, 0.25, False, "plain"),
+    "shear_hump": ("Kr", 0.05, 0.40, False, "one_minus"),
+    "gnss_gain": ("gain", 0.005, 0.05, True, "gain"),
+    "strength_softening": ("beta", 0.03, 0.30, True, "plain"),
+    "tyre_hysteresis": ("f", 0.005, 0.05, True, "plain"),
+    "inertia_error": ("e", 0.1, 0.6, False, "signed"),
+    "hard_layer": ("depth_ratio", 1.3, 0.8, False, "plain"),
+    "fz_crosstalk": ("k", 0.01, 0.06, False, "signed"),
+    "load_radius": ("e", 0.1, 1.0, False, "plain"),
+    "slip_angle": ("angle_deg", 1.0, 8.0, False, "plain"),
+    "grouser": ("height_ratio", 0.01, 0.08, False, "plain"),
+    "wheel_latency": ("delay_s", 0.02, 0.25, True, "plain"),
+    "fx_gain_drift": ("g", 0.03, 0.20, False, "signed"),
+    "mud_buildup": ("e", 0.02, 0.12, False, "plain"),
+    "curved_envelope": ("beta", 0.95, 0.7, False, "plain"),
+    "load_lag": ("tau_s", 0.1, 1.0, True, "plain"),
+    "pressure_k": ("gamma", 0.2, 0.8, False, "plain"),
+    "radius_error": ("e", 0.02, 0.08, False, "signed"),
+}
+
+
 #: Parameter names each effect takes (``size`` always allowed).
 PARAM_NAMES: dict[str, tuple[str, ...]] = {
     "none": (), "vasilev": ("H",), "lyasko": ("m1", "m2"), "ding": ("n1",),
     "terrain_mismatch": ("changes",), "terrain_drift": ("changes", "mode", "change_at"),
-    "stress_distribution": ("a1", "a2"), "fx_gain": ("gain",), "my_gain": ("gain",), "load_gain": ("gain",),
-    "angle_offset": ("offset_deg",), "tyre_deflection": ("kappa",), "bulldozing": ("factor",),
-    "load_dependent": ("beta",), "vertical_balance": (), "width_error": ("factor",), "zero_drift": ("drift_nm",),
-    "exit_angle": ("exit_frac",), "shear_hump": ("Kr",), "gnss_gain": ("gain",),
-    "strength_softening": ("beta",), "tyre_hysteresis": ("f",), "inertia_error": ("e",),
-    "hard_layer": ("depth_ratio",), "fz_crosstalk": ("k",), "load_radius": ("e",),
-    "slip_angle": ("angle_deg",), "grouser": ("height_ratio",), "wheel_latency": ("delay_s",),
-    "fx_gain_drift": ("g",), "mud_buildup": ("e",), "curved_envelope": ("beta",),
-    "load_lag": ("tau_s",), "pressure_k": ("gamma",), "radius_error": ("e",),
+    "stress_distribution": ("a1", "a2"), "vertical_balance": (),
+    **{e: (v[0],) for e, v in _ONE_PARAM.items()},
 }
 
 
@@ -298,62 +324,12 @@ def draw_effect(effect: str, rng: np.random.Generator, *, size: float | None = N
             p["change_at"] = float(rng.uniform(0.3, 0.7))  # fraction of the distance (patch)
     elif effect == "stress_distribution":
         p = {"a1": _mag(u, 0.08, 0.45), "a2": float(rng.uniform(0.0, 0.3))}
-    elif effect == "fx_gain":
-        p = {"gain": 1.0 + sign * _mag(u, 0.03, 0.20)}
-    elif effect == "my_gain":
-        p = {"gain": 1.0 + sign * _mag(u, 0.03, 0.20)}
-    elif effect == "load_gain":
-        p = {"gain": 1.0 + sign * _mag(u, 0.02, 0.12)}
-    elif effect == "angle_offset":
-        p = {"offset_deg": sign * _mag(u, 0.15, 2.0, log=True)}
-    elif effect == "tyre_deflection":
-        p = {"kappa": _mag(u, 0.04, 0.40, log=True)}
-    elif effect == "bulldozing":
-        p = {"factor": _mag(u, 0.02, 0.30, log=True)}
-    elif effect == "load_dependent":
-        p = {"beta": sign * _mag(u, 0.5, 3.0)}
     elif effect == "vertical_balance":
         p = {}
-    elif effect == "width_error":
-        p = {"factor": 1.0 + sign * _mag(u, 0.05, 0.30)}
-    elif effect == "zero_drift":  # 0.2-2 % of a 10 kN m channel over a run
-        p = {"drift_nm": sign * _mag(u, 20.0, 200.0, log=True)}
-    elif effect == "exit_angle":
-        p = {"exit_frac": _mag(u, 0.03, 0.25)}
-    elif effect == "shear_hump":
-        p = {"Kr": 1.0 - _mag(u, 0.05, 0.40)}
-    elif effect == "gnss_gain":
-        p = {"gain": 1.0 + sign * _mag(u, 0.005, 0.05, log=True)}
-    elif effect == "strength_softening":
-        p = {"beta": _mag(u, 0.03, 0.30, log=True)}
-    elif effect == "tyre_hysteresis":
-        p = {"f": _mag(u, 0.005, 0.05, log=True)}
-    elif effect == "inertia_error":
-        p = {"e": sign * _mag(u, 0.1, 0.6)}
-    elif effect == "hard_layer":
-        p = {"depth_ratio": _mag(u, 1.3, 0.8)}
-    elif effect == "fz_crosstalk":
-        p = {"k": sign * _mag(u, 0.01, 0.06)}
-    elif effect == "load_radius":
-        p = {"e": _mag(u, 0.1, 1.0)}
-    elif effect == "slip_angle":
-        p = {"angle_deg": _mag(u, 1.0, 8.0)}
-    elif effect == "grouser":
-        p = {"height_ratio": _mag(u, 0.01, 0.08)}
-    elif effect == "wheel_latency":
-        p = {"delay_s": _mag(u, 0.02, 0.25, log=True)}
-    elif effect == "fx_gain_drift":
-        p = {"g": sign * _mag(u, 0.03, 0.20)}
-    elif effect == "mud_buildup":
-        p = {"e": _mag(u, 0.02, 0.12)}
-    elif effect == "curved_envelope":
-        p = {"beta": _mag(u, 0.95, 0.7)}
-    elif effect == "load_lag":
-        p = {"tau_s": _mag(u, 0.1, 1.0, log=True)}
-    elif effect == "pressure_k":
-        p = {"gamma": _mag(u, 0.2, 0.8)}
-    elif effect == "radius_error":
-        p = {"e": sign * _mag(u, 0.02, 0.08)}
+    else:  # one parameter: _ONE_PARAM's range at size u
+        name, lo, hi, log, form = _ONE_PARAM[effect]
+        m = _mag(u, lo, hi, log=log)
+        p = {name: {"plain": m, "signed": sign * m, "gain": 1.0 + sign * m, "one_minus": 1.0 - m}[form]}
     p.update(given)
     p["size"] = u
     return p
@@ -467,18 +443,16 @@ class TruthModel:
             kw["slip_angle"] = math.radians(p["angle_deg"])
         elif e == "grouser":
             kw["grouser"] = p["height_ratio"] * self.radius_m
-        elif e == "curved_envelope":  # sigma0: the peak normal stress at the static load (Eq. 2 at z0)
-            z0 = float(sinkage_eq10(self.soil, r, b, self.static_load_n))
-            kw["envelope"] = ((self.soil["kc"] / b + self.soil["kphi"]) * z0 ** self.soil["n"], p["beta"])
+        elif e == "curved_envelope":
+            kw["envelope"] = (self.static_peak_stress(), p["beta"])
         elif e == "pressure_k":
-            z0 = float(sinkage_eq10(self.soil, r, b, self.static_load_n))
-            kw["k_pressure"] = ((self.soil["kc"] / b + self.soil["kphi"]) * z0 ** self.soil["n"], p["gamma"])
+            kw["k_pressure"] = (self.static_peak_stress(), p["gamma"])
         elif e in ("mud_buildup", "radius_error"):  # another wheel; slip is computed with the configured r
             g = 1.0 + p["e"] * (np.asarray(frac, float) if e == "mud_buildup" else 1.0)
             r = self.radius_m * g
             s = np.maximum(1.0 - (1.0 - s) / g, 0.0)  # a smaller wheel at the lowest slips: rolling, s = 0
         elif e == "hard_layer":
-            kw["z_cap"] = p["depth_ratio"] * float(sinkage_eq10(self.soil, r, b, self.static_load_n))
+            kw["z_cap"] = p["depth_ratio"] * float(self.static_sinkage(self.static_load_n))
         elif e == "width_error":
             b = self.width_m * p["factor"]
         elif e == "tyre_deflection":
@@ -499,3 +473,9 @@ class TruthModel:
     def static_sinkage(self, load_n) -> np.ndarray:
         """Eq. (10) sinkage of the lab soil [m] for ``load_n`` (N,) (for messages and checks)."""
         return sinkage_eq10(self.soil, self.radius_m, self.width_m, load_n)
+
+    def static_peak_stress(self) -> float:
+        """The lab soil's peak normal stress sigma0 [Pa] under the wheel at the static load: Eq. (2)
+        at the Eq. (10) sinkage z0, (kc/b + kphi) z0^n (the reference of the stress-dependent effects)."""
+        z0 = float(self.static_sinkage(self.static_load_n))
+        return float((self.soil["kc"] / self.width_m + self.soil["kphi"]) * z0 ** self.soil["n"])
