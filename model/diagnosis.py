@@ -205,7 +205,10 @@ class Diagnosis:
     """Result of :func:`diagnose`; :meth:`to_dict` is the report's ``diagnosis`` object (contract D).
 
     effect, model, confidence, summary; channels (per-channel verdicts);
-    probabilities (hypothesis -> posterior); effect_probabilities; alternatives;
+    probabilities (hypothesis -> posterior); effect_probabilities; alternatives; holds_against
+    (each supported hypothesis of another effect with less evidence than the candidate, outside
+    the Bayes-factor band -> how the candidate holds against it: ``"out of sample"``,
+    ``"relevant error"``, ``"evidence"``, or None: it does not, and it is an alternative);
     target_channels (the channels a named cause must improve out of sample, rule step 3);
     separating_measurement; not_excluded (for a named cause: the causes on no list known to act
     on the measured channels like it, and what would rule them out); consistency; flags; data (:class:`FitData`);
@@ -242,6 +245,7 @@ class Diagnosis:
     probabilities: dict = field(default_factory=dict)
     effect_probabilities: dict = field(default_factory=dict)
     alternatives: list = field(default_factory=list)
+    holds_against: dict = field(default_factory=dict)
     separating_measurement: str | None = None
     not_excluded: str | None = None
     consistency: dict = field(default_factory=dict)
@@ -286,6 +290,7 @@ class Diagnosis:
             "probabilities": self.probabilities,
             "effect_probabilities": self.effect_probabilities,
             "alternatives": self.alternatives,
+            "holds_against": self.holds_against,
             "separating_measurement": self.separating_measurement,
             "not_excluded": self.not_excluded,
             "consistency": self.consistency,
@@ -632,18 +637,23 @@ def _paired(data: FitData, wong: HypFit, f: HypFit) -> dict:
     return out
 
 
-def _holds_against(data: FitData, f: HypFit, rival: HypFit, target, relevant=()) -> bool:
-    """True when ``f`` predicts new data at least as well as ``rival``, a supported hypothesis of another
-    effect (a listed cause, or a generic alternative for causes on no list) with less evidence
-    (module doc, step 5): out of sample (step 2's paired test of
-    ``f`` against ``rival``) ``f`` improves every target channel, or it improves a channel of
+def _holds_against(data: FitData, f: HypFit, rival: HypFit, target, relevant=()) -> str | None:
+    """How ``f`` holds against ``rival``, a supported hypothesis of another effect (a listed cause, or a
+    generic alternative for causes on no list) with less evidence (module doc, step 5), or None when it
+    does not.  Out of sample (step 2's paired test of ``f`` against ``rival``): ``"out of sample"``
+    when ``f`` improves every target channel; ``"relevant error"`` when it improves a channel of
     ``relevant`` (those where Wong's error is relevant): the rival leaves an error there that ``f``
-    explains, so it does not explain the data as well; or its mean held-out gain is not
-    negative in any target channel and it worsens no measured channel."""
+    explains, so it does not explain the data as well; ``"evidence"`` when its mean held-out gain is
+    not negative in any target channel and it worsens no measured channel (the in-sample evidence
+    decides, as the caller has checked it is more than ``BF_ALTERNATIVE`` times the rival's)."""
     pr = _paired(data, rival, f)
-    if all(pr[c]["improves"] for c in target) or any(pr[c]["improves"] for c in relevant if c in pr):
-        return True
-    return all(pr[c]["gain_noise_var"] >= 0 for c in target) and not any(r["worsens"] for r in pr.values())
+    if all(pr[c]["improves"] for c in target):
+        return "out of sample"
+    if any(pr[c]["improves"] for c in relevant if c in pr):
+        return "relevant error"
+    if all(pr[c]["gain_noise_var"] >= 0 for c in target) and not any(r["worsens"] for r in pr.values()):
+        return "evidence"
+    return None
 
 
 def _effective(f: HypFit) -> bool:
@@ -1064,6 +1074,7 @@ def diagnose(
     reasons: list[str] = []
     effect, model, best = "none", None, None
     alternatives: list = []
+    holds: dict = {}
     sep = None
     remain = {}
     if not structured:
@@ -1087,9 +1098,9 @@ def diagnose(
         # a supported hypothesis of another effect, a listed cause or a stand-in for causes on no list,
         # that the candidate does not hold against out of sample explains the data as well where it
         # matters, whatever the in-sample evidence says
-        alternatives += [k for k in supported if k != best and k not in alternatives
-                         and eff_of[k] != fits[best].effect
-                         and not _holds_against(data, fits[best], fits[k], target, relevant)]
+        holds = {k: _holds_against(data, fits[best], fits[k], target, relevant) for k in supported
+                 if k != best and k not in alternatives and eff_of[k] != fits[best].effect}
+        alternatives += [k for k, route in holds.items() if route is None]
         other_eff = {fits[k].effect for k in alternatives} - {fits[best].effect}
         pe = eprobs.get(fits[best].effect, 0.0)
         tests_b = _structure_cells(data, fits[best].cell_pred)
@@ -1189,7 +1200,7 @@ def diagnose(
         sinkage_evidence=sink_ev, forms_distinguishable=forms_dist, indistinguishable_forms=tie_forms,
         confidence_reasons=creasons, thresholds=dict(THRESHOLDS), notes=notes + reasons, failures=failures,
         gain=gain, fit_terrain=fit_terrain, identifiability=ident, channels=channels, probabilities=probs,
-        effect_probabilities=eprobs, alternatives=alternatives, separating_measurement=sep, not_excluded=not_excl,
+        effect_probabilities=eprobs, alternatives=alternatives, holds_against=holds, separating_measurement=sep, not_excluded=not_excl,
         consistency=consistency, flags=flags, tried=tried, c_hat=c_hat, deff=deff, paired=paired, supported=supported,
         target_channels=target,
     )
