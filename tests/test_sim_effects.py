@@ -162,6 +162,15 @@ def test_held_out_effects_exit_angle_and_hump_shaped_shear(wong):
     re_ = _tm("radius_error", e=-0.05).drive_forces(LOAD, SLIP)
     ref = wheel_forces(SOIL, 0.95 * R, B, LOAD, np.maximum(1.0 - (1.0 - SLIP) / 0.95, 0.0))
     np.testing.assert_allclose(re_["drawbar_pull_n"], ref["drawbar_pull_n"], rtol=1e-9)
+    # seventh batch: a shear strength growing with the shear rate (beta = 0 is the lab's soil), more so at
+    # high slip
+    np.testing.assert_allclose(_tm("rate_shear", beta=0.0).drive_forces(LOAD, SLIP)["torque_nm"], wong["torque_nm"],
+                               rtol=1e-12)
+    rs = _tm("rate_shear", beta=0.1).drive_forces(LOAD, SLIP)
+    ref = wheel_forces(SOIL, R, B, LOAD, SLIP, tau_scale=1.0 + 0.1 * np.log1p(SLIP / 0.02))
+    np.testing.assert_allclose(rs["torque_nm"], ref["torque_nm"], rtol=1e-9)
+    gain = rs["torque_nm"] / wong["torque_nm"] - 1.0
+    assert np.all(gain > 0) and np.all(np.diff(gain) > 0) and np.all(rs["drawbar_pull_n"] > wong["drawbar_pull_n"])
     # neither changes anything at zero size: the paper's wheel
     for kw in ({"slip_angle": 0.0}, {"grouser": 0.0}):
         np.testing.assert_allclose(wheel_forces(SOIL, R, B, LOAD, SLIP, **kw)["torque_nm"], wong["torque_nm"],
@@ -178,7 +187,8 @@ def base_run():
                                            ("zero_drift", {"drift_nm": 80.0}), ("gnss_gain", {"gain": 1.03}),
                                            ("inertia_error", {"e": 0.3}), ("fz_crosstalk", {"k": 0.03}),
                                            ("load_radius", {"e": 0.5}), ("wheel_latency", {"delay_s": 0.1}),
-                                           ("fx_gain_drift", {"g": 0.1}), ("load_lag", {"tau_s": 0.5})])
+                                           ("fx_gain_drift", {"g": 0.1}), ("load_lag", {"tau_s": 0.5}),
+                                           ("fz_zero_drift", {"drift_ratio": -0.05}), ("my_crosstalk", {"k": 0.03})])
 def test_sensor_effects_change_only_what_the_transducer_reports(base_run, effect, params):
     from wheelsoil.processing.decode import decode_batches
     from wheelsoil.daq import load_vehicle_config
@@ -223,6 +233,14 @@ def test_sensor_effects_change_only_what_the_transducer_reports(base_run, effect
         assert np.abs(a.load_measured_n - w).max() > 100.0  # the load transfer arrives late
     elif effect == "fz_crosstalk":  # the load channel reads W + 0.03 Fx
         np.testing.assert_allclose(a.load_measured_n - a.load_n, 0.03 * b.fx_n, atol=1e-6)
+    elif effect == "fz_zero_drift":  # the load channel's zero runs linearly from +2.5 % to -2.5 % of W0
+        d = a.load_measured_n.to_numpy() - a.load_n.to_numpy()
+        w0 = r.info["static_load_n"] + r.info["added_load_n"]
+        assert d[0] == pytest.approx(0.025 * w0) and d[-1] == pytest.approx(-0.025 * w0)
+        assert np.all(np.diff(d) <= 1e-9)
+    elif effect == "my_crosstalk":  # the torque channel reads My + 0.03 r Fx
+        np.testing.assert_allclose(a.my_nm - b.my_nm, 0.03 * r.info["wheel"]["radius_m"] * b.fx_n, atol=1e-6)
+        np.testing.assert_allclose(a.fx_n, b.fx_n)
     elif effect in ("load_radius", "wheel_latency"):  # only the left-rear wheel-speed reading changes:
         # omega (1 - 0.5 (W/W0 - 1)), or the omega of 0.1 s earlier
         from wheelsoil.processing.decode import decode_batches

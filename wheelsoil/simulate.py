@@ -46,13 +46,13 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 
 from wheelsoil.sim.effects import (ACCEPTABLE, ALL_HELD_OUT, EFFECTS, HELD_OUT, HELD_OUT_2, HELD_OUT_3,
-                                   HELD_OUT_4, HELD_OUT_5, HELD_OUT_6, HELD_OUT_BATCHES, IN_FAMILY, OUT_OF_FAMILY,
+                                   HELD_OUT_4, HELD_OUT_5, HELD_OUT_6, HELD_OUT_7, HELD_OUT_BATCHES, IN_FAMILY, OUT_OF_FAMILY,
                                    PARAM_NAMES, SENSOR_EFFECTS, VERDICTS, TruthModel, draw_effect, family_of)
 from wheelsoil.sim.physics import bandlimited as _bandlimited
 from wheelsoil.sim.terra import soil_dict
 
 __all__ = ["EFFECTS", "IN_FAMILY", "OUT_OF_FAMILY", "HELD_OUT", "HELD_OUT_2", "HELD_OUT_3", "HELD_OUT_4",
-           "HELD_OUT_5", "HELD_OUT_6", "HELD_OUT_BATCHES",
+           "HELD_OUT_5", "HELD_OUT_6", "HELD_OUT_7", "HELD_OUT_BATCHES",
            "ALL_HELD_OUT", "ACCEPTABLE", "VERDICTS",
            "SimulatedRun", "simulate_run", "write_simulation", "write_truth", "write_vehicle_config", "judge",
            "draw_case", "pack_signals", "vehicle_config_for", "SIMULATOR"]
@@ -351,6 +351,10 @@ def simulate_run(
         fx *= 1.0 + params["g"] * ((t_rel - t_rel[0]) / (t_rel[-1] - t_rel[0]) - 0.5)
     elif effect == "fz_crosstalk":  # the load channel picks up k x the hub Fx
         w_meas += params["k"] * fx
+    elif effect == "fz_zero_drift":  # the load channel's zero drifts linearly over the run
+        w_meas += params["drift_ratio"] * static * ((t_rel - t_rel[0]) / (t_rel[-1] - t_rel[0]) - 0.5)
+    elif effect == "my_crosstalk":  # the torque channel picks up k x r x the hub Fx
+        my += params["k"] * r * fx
     elif effect == "load_lag":  # a first-order filter of time constant tau_s on the load channel
         from scipy.signal import lfilter
 
@@ -932,7 +936,7 @@ effects (--effect; parameters with --param NAME=VALUE, the others drawn at --siz
                          kphi and c x factor, so terrain_mismatch is acceptable too
     zero_drift           the transducer's My zero drifts over the run (drift_nm, end - start)
   held out (out of family, added after the diagnosis' rule to score it on causes it was
-  not developed on; bench_diagnosis.py --effects held-out / held-out-2 / ... / -6):
+  not developed on; bench_diagnosis.py --effects held-out / held-out-2 / ... / -7):
     exit_angle           a rebounding soil: contact on to theta2 = exit_frac theta1 behind the
                          bottom (a stress distribution: stress_distribution acceptable too)
     shear_hump           Wong's hump-shaped shear curve, residual Kr x the strength
@@ -952,6 +956,9 @@ effects (--effect; parameters with --param NAME=VALUE, the others drawn at --siz
     load_lag             the transducer's load channel lags with time constant tau_s
     pressure_k           K grows with the normal stress: K (sigma/sigma0)^gamma
     radius_error         the tyre's true rolling radius is (1 + e) r (slip computed with r)
+    fz_zero_drift        the transducer's load zero drifts by drift_ratio x the static load
+    my_crosstalk         the transducer's torque channel reads My + k r Fx
+    rate_shear           shear strength x (1 + beta ln(1 + s/0.02)): a rate-dependent soil
 
 The recording holds only what a logger would record plus a provenance record
 (kind "simulated", the seed): the effect and its parameters go to --truth FILE

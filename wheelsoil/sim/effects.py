@@ -119,6 +119,19 @@ second round, scored once)
                        that wheel and its slip (at least 0: Wong's driving model), while slip is
                        computed with the configured r.
 
+Held out, seventh batch (``--effects held-out-7``; added with the rule of the sixth unchanged, scored
+once)
+  ``fz_zero_drift``    the transducer's load zero drifts over the run (a bridge warming up):
+                       W_meas = W + d W0 (t / t_end - 1/2), d 2-10 % of the static load W0, either
+                       sign: the model's input drifts, not its output.
+  ``my_crosstalk``     the transducer's torque channel picks up its longitudinal force:
+                       My_meas = My + k r Fx, k 1-6 %, either sign (bridge crosstalk).
+  ``rate_shear``       a soil whose shear strength grows with the shear rate (viscous clays, wet
+                       soils; Wong, Theory of Ground Vehicles, ch. 2): the strength is
+                       (c + sigma tan phi)(1 + beta ln(1 + s / s_ref)), s_ref = 0.02, beta 0.02-0.12
+                       (slip standing for the slip velocity r omega s at the sweep's wheel speed);
+                       the lab's value at the shear box's slow rate.
+
 Sensor effects (``fx_gain``, ``my_gain``, ``load_gain``, ``angle_offset``, ``zero_drift``) change only
 what the transducer reports; the soil forces (and the vehicle) are Wong's.
 """
@@ -134,7 +147,7 @@ import numpy as np
 from .terra import sinkage_eq10, wheel_forces
 
 __all__ = ["EFFECTS", "IN_FAMILY", "OUT_OF_FAMILY", "HELD_OUT", "HELD_OUT_2", "HELD_OUT_3", "HELD_OUT_4",
-           "HELD_OUT_5", "HELD_OUT_6", "HELD_OUT_BATCHES", "ALONG_RUN",
+           "HELD_OUT_5", "HELD_OUT_6", "HELD_OUT_7", "HELD_OUT_BATCHES", "ALONG_RUN",
            "ALL_HELD_OUT", "ACCEPTABLE", "VERDICTS", "SENSOR_EFFECTS", "draw_effect", "TruthModel", "family_of"]
 
 #: The verdicts a report can give (report.json ``diagnosis.effect``).
@@ -156,14 +169,21 @@ HELD_OUT_4 = ("slip_angle", "grouser", "wheel_latency")
 HELD_OUT_5 = ("fx_gain_drift", "mud_buildup", "curved_envelope")
 #: the sixth, scored once with the rule of the fifth (catch-alls and their drifts)
 HELD_OUT_6 = ("load_lag", "pressure_k", "radius_error")
+#: the seventh, scored once with the rule of the sixth
+HELD_OUT_7 = ("fz_zero_drift", "my_crosstalk", "rate_shear")
 #: the batches by their ``bench_diagnosis.py --effects`` name, and all held-out effects
 HELD_OUT_BATCHES = {"held-out": HELD_OUT, "held-out-2": HELD_OUT_2, "held-out-3": HELD_OUT_3,
-                    "held-out-4": HELD_OUT_4, "held-out-5": HELD_OUT_5, "held-out-6": HELD_OUT_6}
-ALL_HELD_OUT = HELD_OUT + HELD_OUT_2 + HELD_OUT_3 + HELD_OUT_4 + HELD_OUT_5 + HELD_OUT_6
+                    "held-out-4": HELD_OUT_4, "held-out-5": HELD_OUT_5, "held-out-6": HELD_OUT_6,
+                    "held-out-7": HELD_OUT_7}
+ALL_HELD_OUT = HELD_OUT + HELD_OUT_2 + HELD_OUT_3 + HELD_OUT_4 + HELD_OUT_5 + HELD_OUT_6 + HELD_OUT_7
 SENSOR_EFFECTS = ("fx_gain", "my_gain", "load_gain", "angle_offset", "zero_drift", "gnss_gain", "inertia_error",
-                  "fz_crosstalk", "load_radius", "wheel_latency", "fx_gain_drift", "load_lag")
+                  "fz_crosstalk", "load_radius", "wheel_latency", "fx_gain_drift", "load_lag",
+                  "fz_zero_drift", "my_crosstalk")
 #: effects whose truth changes along the run (the simulator tabulates their forces against distance too)
 ALONG_RUN = ("terrain_drift", "mud_buildup")
+
+#: ``rate_shear``'s reference slip: the strength is the lab's at slips well below it
+RATE_SLIP_REF = 0.02
 
 #: Acceptable verdicts per effect (contract F). See the module docstring for the two
 #: out-of-family effects with an exact in-family equivalent (load_gain, width_error).
@@ -203,6 +223,9 @@ ACCEPTABLE: dict[str, tuple[str, ...]] = {
     "load_lag": ("unexplained",),
     "pressure_k": ("unexplained",),
     "radius_error": ("unexplained",),
+    "fz_zero_drift": ("unexplained",),
+    "my_crosstalk": ("unexplained",),
+    "rate_shear": ("unexplained",),
 }
 
 #: Terrain parameters a mismatch / drift may change, with the relative (or absolute) range
@@ -246,6 +269,9 @@ _ONE_PARAM: dict[str, tuple[str, float, float, bool, str]] = {
     "load_lag": ("tau_s", 0.1, 1.0, True, "plain"),
     "pressure_k": ("gamma", 0.2, 0.8, False, "plain"),
     "radius_error": ("e", 0.02, 0.08, False, "signed"),
+    "fz_zero_drift": ("drift_ratio", 0.02, 0.10, False, "signed"),
+    "my_crosstalk": ("k", 0.01, 0.06, False, "signed"),
+    "rate_shear": ("beta", 0.02, 0.12, True, "plain"),
 }
 
 
@@ -439,6 +465,8 @@ class TruthModel:
             kw["hump"] = (p["Kr"], 2.5)
         elif e == "strength_softening":
             kw["tau_scale"] = 1.0 - p["beta"] * s
+        elif e == "rate_shear":
+            kw["tau_scale"] = 1.0 + p["beta"] * np.log1p(s / RATE_SLIP_REF)
         elif e == "slip_angle":
             kw["slip_angle"] = math.radians(p["angle_deg"])
         elif e == "grouser":
