@@ -656,6 +656,14 @@ def _holds_against(data: FitData, f: HypFit, rival: HypFit, target, relevant=())
     return None
 
 
+#: How a named cause held against a supported rival of another effect (:func:`_holds_against`), in words.
+_ROUTE_TEXT = {
+    "out of sample": "it predicts new data better",
+    "relevant error": "they leave an error of Wong's that it explains",
+    "evidence": f"more than {BF_ALTERNATIVE:g} times their evidence, and no worse on new data",
+}
+
+
 def _effective(f: HypFit) -> bool:
     """True when the hypothesis' own effect parameters differ from their null values: joint Wald
     test ``d^T Sigma^-1 d`` against the chi-square quantile of the same level as |z| > WALD_Z
@@ -1484,6 +1492,12 @@ def _summary(d: Diagnosis) -> str:
             parts.append("Terrain values that moved beyond their lab uncertainty: " + ", ".join(chg) + ".")
         if d.alternatives:
             parts.append("Explaining the data about equally well: " + ", ".join(TITLES[k] for k in d.alternatives) + ".")
+        by_route = {}
+        for k, route in d.holds_against.items():
+            by_route.setdefault(route, []).append(TITLES[k])
+        held = [f"against {', '.join(ks)} ({_ROUTE_TEXT[r]})" for r, ks in by_route.items() if r in _ROUTE_TEXT]
+        if held:
+            parts.append("Named over the other supported causes: " + "; ".join(held) + ".")
     elif d.effect == "unexplained":
         parts.append("The cause is unexplained: " + "; ".join(r for r in d.notes if r in d.confidence_reasons) + ".")
         if d.alternatives or d.model:

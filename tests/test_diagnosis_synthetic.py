@@ -38,6 +38,12 @@ def _invariants(d):
             assert d.target_channels == ["drawbar_pull_n"]
         assert not any(r["worsens"] for r in pr.values()), "a named cause must worsen no channel"
         assert d.fits[d.model].effect == d.effect
+        # every supported rival of another effect is an alternative or says how the cause held against it
+        for k, route in d.holds_against.items():
+            assert k in d.supported and route in ("out of sample", "relevant error", "evidence", None)
+            assert (route is None) == (k in d.alternatives) and out["holds_against"][k] == route
+        if any(d.holds_against.values()):
+            assert "Named over the other supported causes" in d.summary
     if d.effect == "unexplained":
         assert d.confidence != "high"
     return out
