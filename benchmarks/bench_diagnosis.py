@@ -53,6 +53,8 @@ import time
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
+import numpy as np
+
 
 def _runs_to_try(terrain: str, case: dict, terrains: list[str] | None) -> list[tuple]:
     """(terrain, wheel, added load) to try in order: the drawn run, then the next plausible ones
@@ -68,16 +70,11 @@ def _runs_to_try(terrain: str, case: dict, terrains: list[str] | None) -> list[t
     return [keys[(i + k) % len(keys)] for k in range(len(keys))]
 
 
-def run_seed(seed: int, duration_s: float, front_wheels: str, keep_dir: str | None = None,
-             terrains: list[str] | None = None, sim_options: dict | None = None, effects: str = "listed") -> dict:
-    """Simulate, fit and judge one seed; returns a row dict (never raises: errors are rows).
-
-    ``sim_options``: further keywords of ``simulate_run`` (``soil_variability``, ``slip_max``);
-    ``effects``: ``listed`` (``EFFECTS[seed % 17]``) or a key of ``HELD_OUT_BATCHES`` (causes
-    added after the rule, :mod:`wheelsoil.sim.effects`).
-    """
-    from wheelsoil.pipeline import run_fit
-    from wheelsoil.simulate import EFFECTS, HELD_OUT_BATCHES, draw_case, judge, simulate_run, write_simulation
+def simulate_seed(seed: int, duration_s: float, front_wheels: str, terrains: list[str] | None = None,
+                  sim_options: dict | None = None, effects: str = "listed") -> tuple:
+    """Simulate seed ``seed``'s case (``run_seed``'s arguments); returns ``(run, row)``, ``run`` None when
+    no plausible run could be made (the row says why). Never raises."""
+    from wheelsoil.simulate import EFFECTS, HELD_OUT_BATCHES, draw_case, simulate_run
 
     pool = EFFECTS if effects == "listed" else HELD_OUT_BATCHES[effects]
     case = draw_case(seed, terrains=terrains, effects=pool)
@@ -110,7 +107,55 @@ def run_seed(seed: int, duration_s: float, front_wheels: str, keep_dir: str | No
     if run is None:
         row.update(verdict="(not simulated)", right=False, wrong_cause=False, confidence=None, model=None,
                    family=None)
+    else:
+        row["imprint"] = imprint(run)
+    return run, row
+
+
+def imprint(run, n_max: int = 300) -> dict | None:
+    """How much a soil or tyre effect changes the true forces of ``run``: per channel (``drawbar_pull_n``,
+    ``torque_nm``), the RMS of (truth - Wong's model on the lab soil at the same load, slip, place and
+    soil variability) over the RMS of the latter, on up to ``n_max`` driven samples with 0.1 < s < 0.95
+    (the slip range the fit uses), past the pull-away. None for a sensor effect (the soil forces are Wong's; the error is
+    in what is reported). Computed from the simulator's truth alone, never from the diagnosis: it says
+    how large an effect is against the rule's relevance floor (``min_effect_rel``)."""
+    from wheelsoil.sim.effects import SENSOR_EFFECTS, TruthModel
+
+    if run.info["effect"] in SENSOR_EFFECTS:
+        return None
+    tr = run.truth
+    slip = tr["slip"].to_numpy()
+    moving = np.maximum(tr["speed_mps"].to_numpy(), tr["omega_radps"].to_numpy() * run.wheel[0]) >= 0.05
+    idx = np.flatnonzero(np.isfinite(slip) & (slip > 0.1) & (slip < 0.95) & moving)  # past pull-away
+    if idx.size == 0:
+        return None
+    idx = idx[np.linspace(0, idx.size - 1, min(n_max, idx.size)).astype(int)]
+    dist = tr["distance_m"].to_numpy()
+    lab = TruthModel(run.terrain_lab, run.wheel[0], run.wheel[1], "none", {})
+    wong = lab.drive_forces(tr["load_n"].to_numpy()[idx], slip[idx], frac=dist[idx] / max(dist[-1], 1.0),
+                            variability=tr["soil_factor"].to_numpy()[idx])
+    out = {}
+    for c in ("drawbar_pull_n", "torque_nm"):
+        ref = wong[c]
+        out[c] = float(np.sqrt(np.mean((tr[c].to_numpy()[idx] - ref) ** 2)) / max(np.sqrt(np.mean(ref ** 2)), 1e-9))
+    return out
+
+
+def run_seed(seed: int, duration_s: float, front_wheels: str, keep_dir: str | None = None,
+             terrains: list[str] | None = None, sim_options: dict | None = None, effects: str = "listed") -> dict:
+    """Simulate, fit and judge one seed; returns a row dict (never raises: errors are rows).
+
+    ``sim_options``: further keywords of ``simulate_run`` (``soil_variability``, ``slip_max``);
+    ``effects``: ``listed`` (``EFFECTS[seed % 17]``) or a key of ``HELD_OUT_BATCHES`` (causes
+    added after the rule, :mod:`wheelsoil.sim.effects`).
+    """
+    from wheelsoil.pipeline import run_fit
+    from wheelsoil.simulate import judge, write_simulation
+
+    run, row = simulate_seed(seed, duration_s, front_wheels, terrains, sim_options, effects)
+    if run is None:
         return row
+    terrain = row["terrain"]
     row["params"] = run.info["params"]
     with tempfile.TemporaryDirectory(prefix="bench-diag-") as tmp:
         base = Path(keep_dir) if keep_dir else Path(tmp)
@@ -188,6 +233,13 @@ def report(rows: list[dict], wall_s: float, args) -> str:
     lines += ["", "Summary (issue 11 acceptance: in-family right >= 95 %; out-of-family wrong named cause "
               "<= 5 % and never at 'high'; 'high' right >= 95 %)", ""]
     lines.append(f"- in-family verdicts right: {_pct(sum(r['right'] for r in fin), len(fin))}")
+    floor = thresholds().get("MIN_REL", 0.03)
+    big = [r for r in fin if r["effect"] != "none" and r.get("imprint")
+           and max(r["imprint"].values()) >= floor]
+    small = [r for r in fin if r["effect"] != "none" and r.get("imprint") and r not in big]
+    lines.append(f"  - effects changing the true Dp or T by >= {100 * floor:g} % RMS (the rule's relevance floor; from the "
+                 f"simulator's truth): {_pct(sum(r['right'] for r in big), len(big))}; by less: "
+                 f"{_pct(sum(r['right'] for r in small), len(small))} (`none` {sum(r['verdict'] == 'none' for r in small)})")
     lines.append(f"- out-of-family wrong named cause: {_pct(sum(r['wrong_cause'] for r in fout), len(fout))}"
                  f"; at 'high': {sum(r['wrong_cause'] for r in fout if r.get('confidence') == 'high')}")
     lines.append(f"- out-of-family 'unexplained' (or an acceptable equivalent): "
