@@ -1208,7 +1208,8 @@ def diagnose(
         sinkage_evidence=sink_ev, forms_distinguishable=forms_dist, indistinguishable_forms=tie_forms,
         confidence_reasons=creasons, thresholds=dict(THRESHOLDS), notes=notes + reasons, failures=failures,
         gain=gain, fit_terrain=fit_terrain, identifiability=ident, channels=channels, probabilities=probs,
-        effect_probabilities=eprobs, alternatives=alternatives, holds_against=holds, separating_measurement=sep, not_excluded=not_excl,
+        effect_probabilities=eprobs, alternatives=alternatives, holds_against=holds, separating_measurement=sep,
+        not_excluded=not_excl,
         consistency=consistency, flags=flags, tried=tried, c_hat=c_hat, deff=deff, paired=paired, supported=supported,
         target_channels=target,
     )
