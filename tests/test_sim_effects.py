@@ -329,3 +329,24 @@ def test_a_width_error_is_exactly_a_terrain_mismatch_so_both_verdicts_are_accept
     for k in ("drawbar_pull_n", "torque_nm", "sinkage_m"):
         np.testing.assert_allclose(wide[k], same[k], rtol=1e-12)
     assert set(ACCEPTABLE["width_error"]) == {"unexplained", "terrain_mismatch"}
+
+
+def test_the_benchmark_measures_an_effects_imprint_on_the_true_forces():
+    """bench_diagnosis' imprint: the RMS change of the true Dp and T against Wong on the lab soil, from the
+    simulator's truth alone (zero without an effect, None for a sensor effect, growing with the size)."""
+    import sys
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
+    from bench_diagnosis import imprint
+
+    kw = dict(seed=31, duration_s=30.0, added_load_n=5000.0)
+    assert imprint(simulate_run("sand", **kw)) == pytest.approx({"drawbar_pull_n": 0.0, "torque_nm": 0.0}, abs=1e-9)
+    assert imprint(simulate_run("sand", effect="fx_gain", params={"gain": 1.1}, **kw)) is None
+
+    def phi_off(deg):
+        changes = {"phi": {"kind": "delta_deg", "value": deg}}
+        return imprint(simulate_run("sand", effect="terrain_mismatch", params={"changes": changes}, **kw))
+
+    small, big = phi_off(0.5), phi_off(3.0)
+    assert 0.0 < small["drawbar_pull_n"] < big["drawbar_pull_n"] and 0.0 < small["torque_nm"] < big["torque_nm"]
