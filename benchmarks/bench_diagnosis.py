@@ -46,6 +46,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
 import sys
 import tempfile
@@ -116,7 +117,8 @@ def imprint(run, n_max: int = 300) -> dict | None:
     """How much a soil or tyre effect changes the true forces of ``run``: per channel (``drawbar_pull_n``,
     ``torque_nm``), the RMS of (truth - Wong's model on the lab soil at the same load, slip, place and
     soil variability) over the RMS of the latter, on up to ``n_max`` driven samples with 0.1 < s < 0.95
-    (the slip range the fit uses), past the pull-away. None for a sensor effect (the soil forces are Wong's; the error is
+    (the slip range the fit uses), past the pull-away; inf when Wong on the lab soil buries the wheel
+    there (Eq. 10 sinkage >= r) while the true soil carries it. None for a sensor effect (the soil forces are Wong's; the error is
     in what is reported). Computed from the simulator's truth alone, never from the diagnosis: it says
     how large an effect is against the rule's relevance floor (``min_effect_rel``)."""
     from wheelsoil.sim.effects import SENSOR_EFFECTS, TruthModel
@@ -132,8 +134,11 @@ def imprint(run, n_max: int = 300) -> dict | None:
     idx = idx[np.linspace(0, idx.size - 1, min(n_max, idx.size)).astype(int)]
     dist = tr["distance_m"].to_numpy()
     lab = TruthModel(run.terrain_lab, run.wheel[0], run.wheel[1], "none", {})
-    wong = lab.drive_forces(tr["load_n"].to_numpy()[idx], slip[idx], frac=dist[idx] / max(dist[-1], 1.0),
-                            variability=tr["soil_factor"].to_numpy()[idx])
+    try:
+        wong = lab.drive_forces(tr["load_n"].to_numpy()[idx], slip[idx], frac=dist[idx] / max(dist[-1], 1.0),
+                                variability=tr["soil_factor"].to_numpy()[idx])
+    except ValueError:  # the lab soil buries the wheel where the true one carries it: no finite measure
+        return {"drawbar_pull_n": math.inf, "torque_nm": math.inf}
     out = {}
     for c in ("drawbar_pull_n", "torque_nm"):
         ref = wong[c]

@@ -331,7 +331,7 @@ def test_a_width_error_is_exactly_a_terrain_mismatch_so_both_verdicts_are_accept
     assert set(ACCEPTABLE["width_error"]) == {"unexplained", "terrain_mismatch"}
 
 
-def test_the_benchmark_measures_an_effects_imprint_on_the_true_forces():
+def test_the_benchmark_measures_an_effects_imprint_on_the_true_forces(monkeypatch):
     """bench_diagnosis' imprint: the RMS change of the true Dp and T against Wong on the lab soil, from the
     simulator's truth alone (zero without an effect, None for a sensor effect, growing with the size)."""
     import sys
@@ -350,3 +350,10 @@ def test_the_benchmark_measures_an_effects_imprint_on_the_true_forces():
 
     small, big = phi_off(0.5), phi_off(3.0)
     assert 0.0 < small["drawbar_pull_n"] < big["drawbar_pull_n"] and 0.0 < small["torque_nm"] < big["torque_nm"]
+    run = simulate_run("sand", **kw)
+
+    def buries(self, *a, **k):  # a soft lab soil that the true, firmer one is not (a library soil, round 4915)
+        raise ValueError("sinkage[0] = 0.5 m outside (0, r = 0.47 m): the wheel buries itself")
+
+    monkeypatch.setattr(TruthModel, "drive_forces", buries)
+    assert imprint(run) == {"drawbar_pull_n": math.inf, "torque_nm": math.inf}  # no finite measure, no crash
