@@ -118,9 +118,10 @@ def imprint(run, n_max: int = 300) -> dict | None:
     ``torque_nm``), the RMS of (truth - Wong's model on the lab soil at the same load, slip, place and
     soil variability) over the RMS of the latter, on up to ``n_max`` driven samples with 0.1 < s < 0.95
     (the slip range the fit uses), past the pull-away; inf when Wong on the lab soil buries the wheel
-    there (Eq. 10 sinkage >= r) while the true soil carries it. None for a sensor effect (the soil forces are Wong's; the error is
-    in what is reported). Computed from the simulator's truth alone, never from the diagnosis: it says
-    how large an effect is against the rule's relevance floor (``min_effect_rel``)."""
+    there (Eq. 10 sinkage >= r) while the true soil carries it. None for a sensor effect (the soil
+    forces are Wong's; the error is in what is reported). Computed from the simulator's truth alone,
+    never from the diagnosis: it says how large an effect is against the rule's relevance floor
+    (``MIN_REL``)."""
     from wheelsoil.sim.effects import SENSOR_EFFECTS, TruthModel
 
     if run.info["effect"] in SENSOR_EFFECTS:

@@ -341,7 +341,8 @@ def test_the_benchmark_measures_an_effects_imprint_on_the_true_forces(monkeypatc
     from bench_diagnosis import imprint
 
     kw = dict(seed=31, duration_s=30.0, added_load_n=5000.0)
-    assert imprint(simulate_run("sand", **kw)) == pytest.approx({"drawbar_pull_n": 0.0, "torque_nm": 0.0}, abs=1e-9)
+    run = simulate_run("sand", **kw)
+    assert imprint(run) == pytest.approx({"drawbar_pull_n": 0.0, "torque_nm": 0.0}, abs=1e-9)
     assert imprint(simulate_run("sand", effect="fx_gain", params={"gain": 1.1}, **kw)) is None
 
     def phi_off(deg):
@@ -350,7 +351,6 @@ def test_the_benchmark_measures_an_effects_imprint_on_the_true_forces(monkeypatc
 
     small, big = phi_off(0.5), phi_off(3.0)
     assert 0.0 < small["drawbar_pull_n"] < big["drawbar_pull_n"] and 0.0 < small["torque_nm"] < big["torque_nm"]
-    run = simulate_run("sand", **kw)
 
     def buries(self, *a, **k):  # a soft lab soil that the true, firmer one is not (a library soil, round 4915)
         raise ValueError("sinkage[0] = 0.5 m outside (0, r = 0.47 m): the wheel buries itself")
