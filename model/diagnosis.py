@@ -116,7 +116,8 @@ decides with this rule (constants below; none was tuned on a benchmark):
    ``LOAD_RATIO_TOL`` in a slip bin, Eq. 7, or static sinkage above D/6, the
    limit of Eq. 10's small-angle form), when there are fewer than
    ``MIN_UNITS_HIGH`` independent units, or when a fold could not be refitted.
-   ``unexplained`` is at most ``medium``.  ``none`` is ``high`` only when the
+   ``unexplained`` is at most ``medium``.  ``none`` is ``low`` when fewer than ``MIN_UNITS_HIGH``
+   independent units cannot exclude a relevant error (below), and ``high`` only when the
    posterior probability of no effect is at least ``P_HIGH`` (the probabilities
    may favour an effect below the relevance threshold), no
    structure test comes near significance (p >= 0.05), the measured sinkage does
@@ -1361,7 +1362,8 @@ def _confidence(effect, model, fits, eprobs, consistency, data, tests_w, sink_ev
         # makes an error unpredictable cycle by cycle, not absent)
         loose = [t for t in tests_w.values() if t.get("level_upper_rel", 0.0) >= MIN_REL]
         if loose:
-            level = max(level, 1)
+            # few independent units that cannot exclude a relevant error: the run cannot tell
+            level = max(level, 2 if n_units < MIN_UNITS_HIGH else 1)
             why.append("the accelerate cycles scatter too much to exclude a relevant error: Wong's mean error "
                        "may be as large as " + ", ".join(
                            f"{_fmt(t['level_upper_abs'], _UNITS[t['channel']])} ({t['level_upper_rel']:.1%} of the "

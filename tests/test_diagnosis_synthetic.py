@@ -295,6 +295,26 @@ def test_none_on_rough_ground_is_not_high():
         assert any("scatter too much" in r for r in d.confidence_reasons), d.confidence_reasons
 
 
+def test_none_from_a_few_units_that_cannot_exclude_a_relevant_error_is_low():
+    """A run of few independent units whose scatter leaves room for a relevant mean error (a vehicle that
+    barely moves: library round 4915, heavy clay) cannot tell 'none': low; with many units, or precise
+    enough, at most medium."""
+    from types import SimpleNamespace
+
+    from wheelsoil.model.diagnosis import MIN_REL, MIN_UNITS_HIGH, _confidence
+
+    def conf(n_units, upper_rel):
+        tests = {"drawbar_pull_n": {"p": 0.5, "channel": "drawbar_pull_n", "level_upper_rel": upper_rel,
+                                    "level_upper_abs": upper_rel * 1000.0}}
+        return _confidence("none", "wong", {}, {"none": 1.0}, {}, SimpleNamespace(n_units=n_units), tests, None,
+                           [], [], {}, {}, [])[0]
+
+    assert conf(MIN_UNITS_HIGH - 1, 10 * MIN_REL) == "low"
+    assert conf(MIN_UNITS_HIGH + 20, 10 * MIN_REL) == "medium"
+    assert conf(MIN_UNITS_HIGH - 1, 0.5 * MIN_REL) == "medium"  # few units cap "high" only
+    assert conf(MIN_UNITS_HIGH + 20, 0.5 * MIN_REL) == "high"
+
+
 def test_the_separating_measurement_names_what_tells_each_stand_in_from_a_listed_cause():
     from wheelsoil.model.diagnosis import _separating
 
