@@ -240,7 +240,7 @@ def report(rows: list[dict], wall_s: float, args) -> str:
     lines += ["", "Summary (issue 11 acceptance: in-family right >= 95 %; out-of-family wrong named cause "
               "<= 5 % and never at 'high'; 'high' right >= 95 %)", ""]
     lines.append(f"- in-family verdicts right: {_pct(sum(r['right'] for r in fin), len(fin))}")
-    floor = thresholds().get("MIN_REL", 0.03)
+    floor = thresholds()["MIN_REL"]
     big = [r for r in fin if r["effect"] != "none" and r.get("imprint")
            and max(r["imprint"].values()) >= floor]
     small = [r for r in fin if r["effect"] != "none" and r.get("imprint") and r not in big]

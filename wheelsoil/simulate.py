@@ -333,6 +333,7 @@ def simulate_run(
     angle_deg = np.degrees(angle_rad) % 360.0
     # what the transducer reports: inertia included (physics), then its own errors (sensor effects)
     fx, my, w_meas = w["fx_n"].copy(), w["my_nm"].copy(), load.copy()
+    ramp = (t_rel - t_rel[0]) / (t_rel[-1] - t_rel[0]) - 0.5  # -1/2 .. 1/2 over the run: the drifts' shape
     angle_err_deg = 0.0
     if effect == "fx_gain":
         fx *= params["gain"]
@@ -343,16 +344,16 @@ def simulate_run(
     elif effect == "angle_offset":
         angle_err_deg = float(params["offset_deg"])
     elif effect == "zero_drift":
-        my += params["drift_nm"] * ((t_rel - t_rel[0]) / (t_rel[-1] - t_rel[0]) - 0.5)
+        my += params["drift_nm"] * ramp
     elif effect == "inertia_error":  # the true wheel is (1 + e) x the configured one: the reading's inertia too
         fx -= params["e"] * WHEEL_MASS_KG * w["accel_mps2"]
         my += params["e"] * WHEEL_INERTIA_KGM2 * w["omega_dot_radps2"]
     elif effect == "fx_gain_drift":  # the Fx gain drifts linearly over the run
-        fx *= 1.0 + params["g"] * ((t_rel - t_rel[0]) / (t_rel[-1] - t_rel[0]) - 0.5)
+        fx *= 1.0 + params["g"] * ramp
     elif effect == "fz_crosstalk":  # the load channel picks up k x the hub Fx
         w_meas += params["k"] * fx
     elif effect == "fz_zero_drift":  # the load channel's zero drifts linearly over the run
-        w_meas += params["drift_ratio"] * static * ((t_rel - t_rel[0]) / (t_rel[-1] - t_rel[0]) - 0.5)
+        w_meas += params["drift_ratio"] * static * ramp
     elif effect == "my_crosstalk":  # the torque channel picks up k x r x the hub Fx
         my += params["k"] * r * fx
     elif effect == "load_lag":  # a first-order filter of time constant tau_s on the load channel
