@@ -151,7 +151,8 @@ def run_seed(seed: int, duration_s: float, front_wheels: str, keep_dir: str | No
              terrains: list[str] | None = None, sim_options: dict | None = None, effects: str = "listed") -> dict:
     """Simulate, fit and judge one seed; returns a row dict (never raises: errors are rows).
 
-    ``sim_options``: further keywords of ``simulate_run`` (``soil_variability``, ``slip_max``);
+    ``sim_options``: further keywords of ``simulate_run`` (``soil_variability``, ``slip_max``,
+    ``procedure``);
     ``effects``: ``listed`` (``EFFECTS[seed % 17]``) or a key of ``HELD_OUT_BATCHES`` (causes
     added after the rule, :mod:`wheelsoil.sim.effects`).
     """
@@ -304,6 +305,9 @@ def main(argv=None) -> int:
     ap.add_argument("--slip-max", type=float, default=None, metavar="S",
                     help="the highest slip of the driver's sweeps, 0.2 .. 0.95 (default: the simulator's, about "
                     "0.9, as in the paper): a narrower slip range than the rule was developed on")
+    ap.add_argument("--procedure", choices=("sweeps", "tow"), default=None,
+                    help="the test procedure: 'sweeps' (default: accelerate-brake slip sweeps, what the rule was "
+                    "developed on) or 'tow' (steady drawbar-pull passes, slip levels held against a towed load)")
     ap.add_argument("--terrains", default=None, metavar="SLUGS",
                     help="draw each seed's soil from these built-in terrains (comma-separated slugs, or 'library': "
                     "every built-in terrain but the paper's clay and sand, which the rule was developed on); the "
@@ -334,12 +338,13 @@ def main(argv=None) -> int:
         unknown = [t for t in terrains if t not in TERRAINS]
         if unknown or not terrains:
             ap.error(f"--terrains: unknown {unknown} (built-in: {', '.join(TERRAINS)})")
-    sim_options = {k: v for k, v in (("soil_variability", args.soil_variability), ("slip_max", args.slip_max))
-                   if v is not None}
+    sim_options = {k: v for k, v in (("soil_variability", args.soil_variability), ("slip_max", args.slip_max),
+                                     ("procedure", args.procedure)) if v is not None}
     seeds = args.seed if args.seed else list(range(args.first, args.first + (6 if args.quick else args.seeds)))
     print(f"bench_diagnosis: {len(seeds)} seeds, {args.duration:.0f} s runs, {args.jobs} process(es), "
           f"front wheels {args.front_wheels}"
-          + "".join(f", {k.replace('_', ' ')} {v:g}" for k, v in sim_options.items())
+          + "".join(f", {k.replace('_', ' ')} {v:g}" if isinstance(v, float) else f", {k} {v}"
+                    for k, v in sim_options.items())
           + ("" if terrains is None else f", terrains {', '.join(terrains)}")
           + ("" if args.effects == "listed" else f", effects {args.effects}"))
     print("diagnosis thresholds as the code holds them (wheelsoil.model.diagnosis):",

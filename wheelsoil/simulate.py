@@ -256,6 +256,7 @@ def simulate_run(
     usb_batching_s: float = 0.0,
     front_wheels: str = "driven",
     slip_max: float | None = None,
+    procedure: str = "sweeps",
 ) -> SimulatedRun:
     """Simulate one physical field run of the instrumented left-rear wheel (paper section 2.2).
 
@@ -279,6 +280,9 @@ def simulate_run(
         r omega = V: what processing's GNSS-latency estimate assumes; the dynamics stay 4x4).
     slip_max : the highest slip the driver sweeps to, 0.2 .. 0.95 (each sweep peaks at 0.925 .. 1
         times it); default about 0.9, as in the paper's sweeps.
+    procedure : ``"sweeps"`` (accelerate-brake slip sweeps, as in the paper) or ``"tow"`` (the
+        field's steady drawbar-pull test: slip levels held in turn against a towed load vehicle
+        that holds the speed; :mod:`wheelsoil.sim.vehicle`).
 
     Returns
     -------
@@ -314,6 +318,8 @@ def simulate_run(
         raise ValueError(f"front_wheels must be 'driven' or 'reference', got {front_wheels!r}")
     if slip_max is not None and not 0.2 <= slip_max <= 0.95:
         raise ValueError(f"slip_max={slip_max} outside 0.2..0.95")
+    if procedure not in ("sweeps", "tow"):
+        raise ValueError(f"procedure must be 'sweeps' or 'tow', got {procedure!r}")
     r, b = _wheel_dims(wheel)
     if not (0.05 <= r <= 2.0 and 0.02 <= b <= 2.0):
         raise ValueError(f"wheel {r} x {b} m: radius must be in 0.05..2 m and width in 0.02..2 m")
@@ -323,7 +329,8 @@ def simulate_run(
     static = STATIC_LOAD_N + added_load_n
     truth_model = TruthModel(soil, r, b, effect if effect not in SENSOR_EFFECTS else "none", params, static)
     phys = simulate_physics(truth_model, rng, added_load_n=added_load_n, duration_s=duration_s,
-                            n_cycles=n_cycles, soil_variability=soil_variability, slip_max=slip_max)
+                            n_cycles=n_cycles, soil_variability=soil_variability, slip_max=slip_max,
+                            procedure=procedure)
     w = phys["wft"]
     n = len(w["t_s"])
     dt = 1.0 / WFT_RATE_HZ
@@ -450,6 +457,7 @@ def simulate_run(
         "usb_batching_s": float(usb_batching_s),
         "front_wheels": front_wheels,
         "slip_max": None if slip_max is None else float(slip_max),
+        "procedure": procedure,
         "lost_wft_samples": lost,
         "duration_s": float(n * dt),
         "n_cycles": int(w["cycle"].max() + 1) if n else 0,
@@ -1010,6 +1018,10 @@ def register(subparsers) -> None:
                    "physical) or an idealised undriven reference wheel (r omega = V)")
     p.add_argument("--slip-max", type=float, default=None, metavar="S",
                    help="the highest slip the driver sweeps to, 0.2 .. 0.95 (default: about 0.9, as in the paper)")
+    p.add_argument("--procedure", choices=("sweeps", "tow"), default="sweeps",
+                   help="the test: 'sweeps' (default; accelerate-brake slip sweeps, as in the paper) or 'tow' (the "
+                   "field's steady drawbar-pull test: slip levels held a few seconds each against a towed load "
+                   "vehicle that holds the speed; --cycles then counts the passes)")
     p.add_argument("--truth", default=None, metavar="FILE", help="also write the hidden truth to this JSON file")
     p.add_argument("--vehicle-out", default=None, metavar="TOML",
                    help="also write the simulated wheel's vehicle configuration (for `wheelsoil import "
@@ -1073,6 +1085,7 @@ def _cmd_simulate(args) -> int:
         wheel=wheel, added_load_n=added, gnss_latency_s=args.gnss_latency, drop_rate=args.drop_rate,
         seed=args.seed, duration_s=args.duration, n_cycles=args.cycles, soil_variability=args.soil_variability,
         usb_batching_s=args.usb_batching, front_wheels=args.front_wheels, slip_max=args.slip_max,
+        procedure=args.procedure,
     )
     out = write_simulation(run, args.output)
     per_bus = ", ".join(f"{b}: {len(f['timestamp_ns'])}" for b, f in sorted(run.frames.items()))

@@ -52,7 +52,8 @@ def spatial_field(rng, distance_m, corr_m, sigma):
 
 def simulate_physics(truth: TruthModel, rng: np.random.Generator, *, added_load_n: float,
                      duration_s: float | None, n_cycles: int = 6, soil_variability: float = 0.02,
-                     vehicle: VehicleParams | None = None, slip_max: float | None = None) -> dict[str, Any]:
+                     vehicle: VehicleParams | None = None, slip_max: float | None = None,
+                     procedure: str = "sweeps") -> dict[str, Any]:
     """Simulate the run's physics; returns a dict.
 
     ``wft``: dict of arrays on the 500 Hz grid (shape (N,)): ``t_s``, ``speed_mps`` V,
@@ -64,7 +65,8 @@ def simulate_physics(truth: TruthModel, rng: np.random.Generator, *, added_load_
     :func:`~.vehicle.simulate_dynamics`). ``table_max_error_n``: the force table's
     largest interpolation error on random points; ``can_move``: :func:`check_can_move`'s dict;
     ``grade``, ``vehicle`` (VehicleParams). ``slip_max``: the highest slip of the driver's sweeps
-    (None: about 0.9, see :func:`~.vehicle.simulate_dynamics`).
+    (None: about 0.9, see :func:`~.vehicle.simulate_dynamics`). ``procedure``: ``"sweeps"``
+    (accelerate-brake slip sweeps) or ``"tow"`` (steady drawbar-pull passes against a towed load).
 
     Raises ValueError when the vehicle cannot move (message says why and what to change)
     or the wheel would bury itself.
@@ -97,7 +99,7 @@ def simulate_physics(truth: TruthModel, rng: np.random.Generator, *, added_load_
                                 n_cycles=n_cycles, grade=grade, bumps_front=bump(bf), bumps_rear=bump(br),
                                 dist_total_guess_m=dist_guess, slip_noise=slip_noise,
                                 can_start=can_move["can_start"], slip_best=can_move["slip_at_max"],
-                                slip_max=slip_max)
+                                slip_max=slip_max, procedure=procedure)
         total = max(float(dyn["distance_m"][-1]), 1.0)
         if abs(total - dist_guess) < 0.5:
             break

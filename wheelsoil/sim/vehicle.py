@@ -23,6 +23,17 @@ wheel-speed sensor's range (slip <= 1 - V/(r omega_max)). Integrated with
 explicit Euler at ``DT_S`` (10 ms); V >= 0 (the brakes hold the vehicle).
 If the four wheels' summed drawbar pull cannot overcome the resistance at any
 slip, :func:`check_can_move` refuses the run with a message saying so.
+
+A second procedure, ``"tow"``, is the steady drawbar-pull test of the field
+(Wong, *Theory of Ground Vehicles*, 4th ed., §4.1 and §6.1; ASABE S296 and
+the OECD tractor code's drawbar tests): the vehicle pulls a towed load
+vehicle whose brake holds the speed near a test speed while the driver holds
+the wheels' slip at one level after another, each for a few seconds:
+
+    m dV/dt = 2 Dp_f + 2 Dp_r - resistance - F_tow,   F_tow = max(0, ... ) (speed held)
+
+There is no acceleration to speak of: the data are steady holds joined by
+short slip transitions, a shape the slip sweeps never give.
 """
 
 from __future__ import annotations
@@ -197,8 +208,9 @@ def simulate_dynamics(table: ForceTable, veh: VehicleParams, rng: np.random.Gene
                       added_load_n: float, radius_m: float, duration_s: float | None, n_cycles: int,
                       grade: float = 0.0, bumps_front=None, bumps_rear=None, dist_total_guess_m: float = 300.0,
                       slip_noise=None, can_start: bool = True, slip_best: float = 0.5,
-                      slip_max: float | None = None):
-    """Integrate the vehicle through accelerate-brake cycles.
+                      slip_max: float | None = None, procedure: str = "sweeps"):
+    """Integrate the vehicle through accelerate-brake cycles (``procedure="sweeps"``) or through
+    steady drawbar-pull passes against a towed load (``"tow"``; module doc).
 
     ``bumps_front/rear``: callables t -> load disturbance [N] (or None); ``slip_noise``:
     array of the slip controller's wobble per step (band-limited, or None); ``can_start``: False
@@ -212,8 +224,17 @@ def simulate_dynamics(table: ForceTable, veh: VehicleParams, rng: np.random.Gene
     (per wheel, as used), resistance_n, distance_m, phase (object), cycle (int)``, and
     ``mass_kg``. The distance fraction used for terrain drift is distance /
     ``dist_total_guess_m`` clipped to [0, 1] (the caller iterates to the true total).
-    Raises ValueError when the vehicle stalls in a pull-away for 20 s (cannot move).
+    ``"tow"``: each pass pulls away, then holds 6 to 9 slip levels from about 0.12 up to the
+    sweeps' highest slip, 3 to 6 s each, joined by 0.8 to 1.5 s transitions, at a test speed of
+    1.0 to 1.6 m/s held by the towed vehicle's brake (``F_tow`` >= 0: where the wheels cannot
+    pull the resistance the vehicle slows, and below 0.5 m/s the driver ends the pass), then
+    brakes; ``phase`` is ``"tow"`` in the holds and transitions, ``cycle`` the pass; the arrays
+    add ``tow_n``.
+    Raises ValueError when the vehicle stalls in a pull-away for 20 s (cannot move), or for an
+    unknown ``procedure``.
     """
+    if procedure not in ("sweeps", "tow"):
+        raise ValueError(f"procedure must be 'sweeps' or 'tow', got {procedure!r}")
     m, wf0, wr0 = veh.loads(added_load_n)
     r = radius_m
     dt = DT_S
@@ -222,7 +243,7 @@ def simulate_dynamics(table: ForceTable, veh: VehicleParams, rng: np.random.Gene
     wn, zeta = 2 * math.pi * 1.4, 0.35  # body pitch mode
     out = {k: [] for k in ("t_s", "speed_mps", "accel_mps2", "omega_radps", "slip", "slip_cmd",
                            "load_front_n", "load_rear_n", "dp_front_n", "dp_rear_n", "resistance_n",
-                           "distance_m", "phase", "cycle")}
+                           "distance_m", "phase", "cycle", "tow_n")}
     V = 0.0 if can_start else 1.0
     x = 0.0
     lt, lt_dot = 0.0, 0.0  # pitch load transfer state [N]
@@ -239,9 +260,11 @@ def simulate_dynamics(table: ForceTable, veh: VehicleParams, rng: np.random.Gene
             return 0.0
         return float(slip_noise[min(nstep[0], len(slip_noise) - 1)])
 
-    def step(phase, cyc, s_cmd=None, rw_cmd=None):
-        """One Euler step with commanded slip or commanded wheel rim speed r*omega."""
+    def step(phase, cyc, s_cmd=None, rw_cmd=None, v_hold=None):
+        """One Euler step with commanded slip or commanded wheel rim speed r*omega; ``v_hold``:
+        the towed vehicle's brake holds this speed (its force >= 0)."""
         nonlocal V, x, lt, lt_dot, a_prev, t
+        tow = 0.0
         frac = min(max(x / dist_total_guess_m, 0.0), 1.0)
         bf = bumps_front(t) if bumps_front else 0.0
         br = bumps_rear(t) if bumps_rear else 0.0
@@ -272,6 +295,9 @@ def simulate_dynamics(table: ForceTable, veh: VehicleParams, rng: np.random.Gene
             dpr = table.dp(w_r, s, frac)
             res = float(resistance_n(veh, m, V, grade))
             a = (2 * dpf + 2 * dpr - res) / m
+            if v_hold is not None:  # the load vehicle's brake: a speed controller (time constant 1 s)
+                tow = max(m * (a - (v_hold - V) / 1.0), 0.0)
+                a -= tow / m
             if V <= 0.0 and a < 0:
                 a = 0.0  # brakes / static friction hold the vehicle
         # pitch load transfer: 2nd-order response to kt * a
@@ -281,7 +307,7 @@ def simulate_dynamics(table: ForceTable, veh: VehicleParams, rng: np.random.Gene
         for k, v in (("t_s", t), ("speed_mps", V), ("accel_mps2", a), ("omega_radps", om), ("slip", s),
                      ("slip_cmd", s_cmd if s_cmd is not None else float("nan")), ("load_front_n", w_f),
                      ("load_rear_n", w_r), ("dp_front_n", dpf), ("dp_rear_n", dpr), ("resistance_n", res),
-                     ("distance_m", x), ("phase", phase), ("cycle", cyc)):
+                     ("distance_m", x), ("phase", phase), ("cycle", cyc), ("tow_n", tow)):
             out[k].append(v)
         V = max(V + a * dt, 0.0)
         x += V * dt
@@ -308,6 +334,13 @@ def simulate_dynamics(table: ForceTable, veh: VehicleParams, rng: np.random.Gene
                                      f"its speed is {V:.2f} m/s (summed drawbar pull too small)")
                 ramp = min((t - t0) / 1.5, 1.0) * 0.35
                 step("other", -1, rw_cmd=max(V / (1.0 - s_pa), ramp))
+        if procedure == "tow":
+            _tow_pass(step, rng, cycle, lambda: t, lambda: V, t_end, out, slip_max, wobble)
+            cycle += 1
+            cycles_done += 1
+            stop_next = can_start
+            _brake(step, rng, lambda: t, lambda: V, t_end, stop_next, 0.0 if stop_next else rng.uniform(0.8, 1.4))
+            continue
         # slip down to rolling slip before the sweep
         s_roll = rng.uniform(0.03, 0.06)
         s_now = out["slip"][-1] if out["slip"] and np.isfinite(out["slip"][-1]) else s_roll
@@ -335,17 +368,7 @@ def simulate_dynamics(table: ForceTable, veh: VehicleParams, rng: np.random.Gene
         cycles_done += 1
         last = cycles_done >= want
         stop_next = can_start and (last or rng.random() < 0.5)
-        v_stop = 0.0 if stop_next else rng.uniform(0.8, 1.4)
-        s_br = rng.uniform(0.08, 0.25)
-        t0 = t
-        while t < t_end:
-            tb = t - t0
-            s_b = -s_br * _smooth(tb / 0.6)
-            if tb > 0.3 and ((stop_next and V <= 0.0) or (not stop_next and V <= v_stop)):
-                break
-            if tb > 30.0:
-                break
-            step("brake", -1, s_cmd=s_b)
+        _brake(step, rng, lambda: t, lambda: V, t_end, stop_next, 0.0 if stop_next else rng.uniform(0.8, 1.4))
     if duration_s is None and can_start:
         t0 = t
         while t - t0 < 2.0:
@@ -355,3 +378,34 @@ def simulate_dynamics(table: ForceTable, veh: VehicleParams, rng: np.random.Gene
     res["cycle"] = np.asarray(out["cycle"], dtype=int)
     res["mass_kg"] = m
     return res
+
+
+def _brake(step, rng, now, speed, t_end, stop, v_stop):
+    """Brake with skid slip (-0.08 .. -0.25) to ``v_stop`` (or to a stop when ``stop``)."""
+    s_br = rng.uniform(0.08, 0.25)
+    t0 = now()
+    while now() < t_end:
+        tb = now() - t0
+        if tb > 0.3 and ((stop and speed() <= 0.0) or (not stop and speed() <= v_stop)):
+            break
+        if tb > 30.0:
+            break
+        step("brake", -1, s_cmd=-s_br * _smooth(tb / 0.6))
+
+
+def _tow_pass(step, rng, cycle, now, speed, t_end, out, slip_max, wobble):
+    """One steady drawbar-pull pass of the ``"tow"`` procedure (module doc): slip levels held in
+    turn against the towed load at a held test speed; ends early when the vehicle bogs down."""
+    v_test = rng.uniform(1.0, 1.6)
+    top = rng.uniform(0.86, 0.93) if slip_max is None else rng.uniform(0.925, 1.0) * slip_max
+    levels = np.linspace(rng.uniform(0.10, 0.15), top, int(rng.integers(6, 10)))
+    s_prev = out["slip"][-1] if out["slip"] and np.isfinite(out["slip"][-1]) else 0.05
+    for lvl in levels:
+        t_tr, t_hold = rng.uniform(0.8, 1.5), rng.uniform(3.0, 6.0)
+        t0 = now()
+        while now() - t0 < t_tr + t_hold and now() < t_end:
+            u = min((now() - t0) / t_tr, 1.0)
+            step("tow", cycle, s_cmd=s_prev + (lvl - s_prev) * _smooth(u) + 0.5 * wobble(), v_hold=v_test)
+            if speed() < 0.5 and now() - t0 > t_tr:
+                return  # bogged down: the driver ends the pass
+        s_prev = lvl
