@@ -49,6 +49,10 @@ CHANNELS: dict[str, str] = {
     "sinkage_m": "sinkage_m",
 }
 
+#: Phases of a processed recording (``phase`` column) that are driving the steady-state model
+#: describes outside an accelerate cycle (:func:`wheelsoil.processing.slip.classify_phases`).
+DRIVING_PHASES = ("accel", "drive")
+
 #: Slip bins per accelerate cycle (cells).  With slip in (0.1, 0.9) a bin is ~0.067 wide: the
 #: error of predicting a cell at its mean slip instead of averaging the model over the bin is
 #: 0.5 f'' var(s) ~ 1e-3 of Dp, far below the noise of a cell mean.
@@ -295,14 +299,22 @@ def prepare_data(df, *, slip_min: float = 0.1, source: str = "data", n_blocks: i
     keep &= (s > slip_min) & (s < 1.0) & (w > 0)
     if "cycle" in df.columns and keep.any():
         # a time series with accelerate cycles: the steady-state model is fitted to the accelerate
-        # phases processing identified; driving samples outside them (wheel spin-up, transitions,
-        # braking with the slip still positive) are transients the model does not describe
+        # phases processing identified and to steady driving (phase ``drive``: the slip levels of a
+        # steady drawbar-pull test, which then join the preceding cycle as their CV unit); other
+        # samples outside the cycles (slowing with the torque still on, coasting) are transients
+        # the model does not describe
         cyc_all = pd.to_numeric(df["cycle"], errors="coerce").to_numpy(float)
         in_cycle = np.isfinite(cyc_all) & (cyc_all >= 0)
-        if np.unique(cyc_all[keep & in_cycle]).size >= 2 and (keep & ~in_cycle).any():
-            notes.append(f"{int((keep & ~in_cycle).sum())} driving sample(s) outside the accelerate cycles excluded "
-                         "(transients: the model is a steady-state one).")
-            keep &= in_cycle
+        steady = (df["phase"].astype(str).isin(DRIVING_PHASES).to_numpy() if "phase" in df.columns
+                  else np.zeros(n_input, bool))
+        if np.unique(cyc_all[keep & in_cycle]).size >= 2:
+            if (keep & ~in_cycle & steady).any():
+                notes.append(f"{int((keep & ~in_cycle & steady).sum())} sample(s) of steady driving outside the "
+                             "accelerate cycles used (each joins the preceding cycle).")
+            if (keep & ~in_cycle & ~steady).any():
+                notes.append(f"{int((keep & ~in_cycle & ~steady).sum())} driving sample(s) outside the accelerate "
+                             "cycles and not driving steadily excluded (transients: the model is a steady-state one).")
+            keep &= in_cycle | steady
     n = int(keep.sum())
     if n == 0:
         raise ValueError(

@@ -707,10 +707,7 @@ def exclusion_masks(signals, slip_min: float, excluded_spans=None, used=None) ->
     Returns ``(used (N,) bool, {reason: (N,) bool})``; reasons overlap (a
     standstill sample has no slip either).
     """
-    try:
-        from .data import _ZERO_SLIP
-    except ImportError:  # before the diagnosis split
-        from .fit import _ZERO_SLIP
+    from .data import _ZERO_SLIP, DRIVING_PHASES
 
     t = signals["t_s"].to_numpy(float)
     s = signals["slip"].to_numpy(float)
@@ -722,7 +719,8 @@ def exclusion_masks(signals, slip_min: float, excluded_spans=None, used=None) ->
     cyc = signals["cycle"].to_numpy(float) if "cycle" in signals else np.zeros(t.size)
     with np.errstate(invalid="ignore"):
         driving = valid & fin & (s > slip_min) & (s < 1.0) & (w > 0)
-        outside = driving & ~(cyc >= 0) if (cyc >= 0).any() else np.zeros(t.size, bool)
+        steady = np.isin(phase, DRIVING_PHASES)
+        outside = driving & ~(cyc >= 0) & ~steady if (cyc >= 0).any() else np.zeros(t.size, bool)
         given = used is not None
         used = np.asarray(used, bool) if given else driving & ~outside
         reasons = {
@@ -733,7 +731,7 @@ def exclusion_masks(signals, slip_min: float, excluded_spans=None, used=None) ->
             "s ~ 0": valid & fin & (np.abs(s) <= _ZERO_SLIP),
             f"0 < s <= slip_min = {slip_min:g}": valid & fin & (s > _ZERO_SLIP) & (s <= slip_min),
             "s >= 1 or W <= 0": valid & fin & ((s >= 1.0) | (w <= 0)),
-            "outside the accelerate cycles (transients)": outside,
+            "outside the accelerate cycles, not driving steadily (transients)": outside,
         }
     for e in excluded_spans or []:
         try:
@@ -759,7 +757,8 @@ def _runs(mask: np.ndarray) -> list:
     return list(zip(np.flatnonzero(d == 1), np.flatnonzero(d == -1)))
 
 
-_PHASE_COLORS = {"accel": ("#2ca02c", "shaded: accelerate phase"), "brake": ("#d62728", "shaded: brake phase"),
+_PHASE_COLORS = {"accel": ("#2ca02c", "shaded: accelerate phase"), "drive": ("#bcbd22", "shaded: steady driving"),
+                 "brake": ("#d62728", "shaded: brake phase"),
                  "standstill": ("#7f7f7f", "shaded: standstill")}
 
 

@@ -48,7 +48,7 @@ import pandas as pd
 
 from .decode import DecodedMessage, Decoder, decode_batches
 from .filters import DEFAULT_CUTOFF_HZ, MAX_FILL_SAMPLES, filter_to_grid, segments
-from .slip import accel_cycles, classify_phases, slip_ratio
+from .slip import PHASES, accel_cycles, classify_phases, slip_ratio
 from .timebase import MAX_GRID_ROWS, cycle_loss, find_time_outliers, robust_period, split_joined_parts
 from .timesync import LatencyEstimate, estimate_latency, estimate_latency_traction, fit_gps_time_mapping
 from .wft import assemble_wft_samples, rotate_to_hub
@@ -192,7 +192,7 @@ class ProcessResult:
         counts = s["phase"].value_counts().to_dict() if n else {}
         n_cycles = int(self.cycle.max()) + 1 if self.cycle.size and self.cycle.max() >= 0 else 0
         lines.append(f"valid samples: {share * 100:.1f} % of {n}; phases: "
-                     + ", ".join(f"{k} {counts.get(k, 0)}" for k in ("accel", "brake", "standstill", "other"))
+                     + ", ".join(f"{k} {counts.get(k, 0)}" for k in PHASES)
                      + f"; accelerate cycles: {n_cycles}")
         q = self.quality or {}
         ts = q.get("timestamps") or {}

@@ -14,8 +14,12 @@ Phases (per sample, on the filtered signals):
 * ``accel``: ``T > torque_min_nm`` and (``dV/dt > accel_min_mps2`` or
   ``d(r*omega)/dt > accel_min_mps2``): the driver opens the throttle, the
   wheel speeds up first (slip rises) and the vehicle follows;
+* ``drive``: the wheel drives steadily: ``T > torque_min_nm``, neither accelerating
+  (as above) nor slowing (``dV/dt >= -accel_min_mps2``): the slip levels held against a
+  towed load in the field's steady drawbar-pull test (Wong, *Theory of Ground Vehicles*,
+  §4.1), cruising with traction;
 * ``brake``: ``dV/dt < -accel_min_mps2`` and ``T <= torque_min_nm``;
-* ``other``: everything else (cruising, coasting, unknown inputs).
+* ``other``: everything else (coasting, slowing with the torque still on, unknown inputs).
 
 Derivatives are taken of V and r*omega smoothed by a moving average over ``smooth_s``.
 """
@@ -26,7 +30,7 @@ import numpy as np
 
 __all__ = ["slip_ratio", "classify_phases", "accel_cycles", "PHASES"]
 
-PHASES = ("accel", "brake", "standstill", "other")
+PHASES = ("accel", "drive", "brake", "standstill", "other")
 
 
 def slip_ratio(wheel_speed_mps: np.ndarray, speed_mps: np.ndarray, *,
@@ -58,7 +62,7 @@ def classify_phases(t_s: np.ndarray, speed_mps: np.ndarray, wheel_speed_mps: np.
     Inputs (N,): time [s] (uniform grid), V [m/s], r*omega [m/s], T [N m]
     (NaN allowed: a sample whose inputs are missing falls to ``other``, or
     ``standstill`` if both speeds say so). Rules in the module docstring.
-    Returns an object array (N,) of phase names.
+    Returns an object array (N,) of phase names (:data:`PHASES`).
     """
     t = np.asarray(t_s, dtype=np.float64)
     v = np.asarray(speed_mps, dtype=np.float64)
@@ -73,7 +77,9 @@ def classify_phases(t_s: np.ndarray, speed_mps: np.ndarray, wheel_speed_mps: np.
     with np.errstate(invalid="ignore"):
         accel = (T > torque_min_nm) & ((dvdt > accel_min_mps2) | (drwdt > accel_min_mps2))
         brake = (dvdt < -accel_min_mps2) & (T <= torque_min_nm)
+        drive = (T > torque_min_nm) & (dvdt >= -accel_min_mps2)
         stand = (np.abs(v) < standstill_mps) & (np.abs(rw) < standstill_mps)
+    phase[drive] = "drive"
     phase[brake] = "brake"
     phase[accel] = "accel"
     phase[stand] = "standstill"

@@ -210,3 +210,21 @@ def test_a_fit_of_other_cells_is_cross_validated_without_its_jacobian():
     other = cross_validate(half, ctx, data.cells)
     assert other.cv["failed_folds"] == 0 and same.cv["failed_folds"] == 0
     assert other.cv["n_groups"] == same.cv["n_groups"] >= 5
+
+
+def test_steady_driving_outside_the_cycles_is_fitted_and_transients_are_not():
+    """Samples outside the accelerate cycles: steady driving (phase ``drive``, the slip levels of a
+    steady drawbar-pull test) is used and joins the preceding cycle as its CV unit; samples slowing
+    with the torque on (``other``) are left out, with a note for each."""
+    df = synthetic_data(SAND, DEFAULT_WHEEL, "wong", {}, kind="timeseries", duration_s=60.0, seed=4)
+    base = prepare_data(df)
+    df["phase"] = np.where(df["cycle"] >= 0, "accel", "other")
+    down = (df["cycle"] < 0) & (df["slip"] > 0.1)  # the ramp down of each cycle
+    steady = down & (np.arange(len(df)) % 2 == 0)
+    df.loc[steady, "phase"] = "drive"
+    d = prepare_data(df)
+    assert d.n == base.n + int(steady.sum())
+    assert any("steady driving" in n and str(int(steady.sum())) in n for n in d.notes)
+    assert any("not driving steadily excluded" in n for n in d.notes)
+    # a steady sample belongs to the cycle before it
+    assert np.unique(d.groups).size == np.unique(base.groups).size

@@ -36,7 +36,7 @@ def test_columns_exact_and_types(processed):
     s = res.signals
     assert tuple(s.columns) == COLUMNS
     assert s["valid"].dtype == bool
-    assert set(s["phase"].unique()) <= {"accel", "brake", "standstill", "other"}
+    assert set(s["phase"].unique()) <= {"accel", "drive", "brake", "standstill", "other"}
     assert np.allclose(np.diff(s["t_s"]), 0.01)
     assert res.cycle.shape == (len(s),)
 

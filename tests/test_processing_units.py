@@ -132,7 +132,10 @@ def test_phases_and_cycle_ids():
     assert (phase[(t > 3) & (t < 7)] == "accel").all()
     assert (phase[(t > 11) & (t < 13)] == "brake").all()
     assert (phase[t < 1.5] == "standstill").all()
-    assert (phase[(t > 8.5) & (t < 9.5)] == "other").all()
+    assert (phase[(t > 8.5) & (t < 9.5)] == "drive").all()  # cruising with the torque on: steady driving
+    coast = classify_phases(t, v, v / 0.8, np.where(np.gradient(v, t) < 0, 300.0, 0.0))
+    assert (coast[(t > 8.5) & (t < 9.5)] == "other").all()  # no torque: coasting
+    assert (coast[(t > 11) & (t < 13)] == "other").all()  # slowing with the torque still on: a transient
     cyc = accel_cycles(t, phase)
     assert set(np.unique(cyc)) == {-1, 0, 1}
     assert (cyc[(t > 3) & (t < 7)] == 0).all() and (cyc[(t > 17) & (t < 21)] == 1).all()

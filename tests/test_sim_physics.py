@@ -77,3 +77,27 @@ def test_wheel_speed_stays_in_the_sensor_range_and_loads_transfer_with_accelerat
     brk = (d["phase"] == "brake") & (d["speed_mps"] > 0.5)
     assert d["load_rear_n"][acc].mean() > d["load_rear_n"][brk].mean() + 100.0
     assert d["load_rear_n"].mean() == pytest.approx(13000.0, rel=0.05)
+
+
+def test_tow_procedure_holds_slip_levels_at_a_held_speed_by_newton():
+    """The steady drawbar-pull test: the towed load vehicle's brake force is never negative (it
+    cannot push), Newton holds with it, and the slip is held at several levels while the speed
+    stays near the test speed (the holds are steady: no acceleration to speak of)."""
+    r = simulate_run("sand", effect="none", seed=8, duration_s=90.0, added_load_n=5000.0, procedure="tow")
+    d = r.dynamics
+    m = d["mass_kg"]
+    tow = d["tow_n"]
+    assert np.all(tow >= 0) and tow.max() > 1000.0
+    net = 2 * d["dp_front_n"] + 2 * d["dp_rear_n"] - d["resistance_n"] - tow
+    moving = (d["phase"] != "standstill") & ~((d["speed_mps"] <= 0) & (net < 0))
+    np.testing.assert_allclose(m * d["accel_mps2"][moving], net[moving], rtol=1e-9, atol=1e-6)
+    held = d["phase"] == "tow"
+    s = d["slip"][held]
+    # slip levels from ~0.1 to ~0.9, each held: most steps change the slip by little
+    assert s.min() < 0.2 and s.max() > 0.7
+    assert np.median(np.abs(np.diff(s))) < 0.002
+    late = held & (np.abs(d["accel_mps2"]) < 0.05)
+    assert late.mean() > 0.5 * held.mean(), "the holds should be steady"
+    assert r.info["procedure"] == "tow"
+    with pytest.raises(ValueError, match="procedure"):
+        simulate_run("sand", duration_s=60.0, procedure="coast")
