@@ -305,9 +305,10 @@ def main(argv=None) -> int:
     ap.add_argument("--slip-max", type=float, default=None, metavar="S",
                     help="the highest slip of the driver's sweeps, 0.2 .. 0.95 (default: the simulator's, about "
                     "0.9, as in the paper): a narrower slip range than the rule was developed on")
-    ap.add_argument("--procedure", choices=("sweeps", "tow"), default=None,
+    ap.add_argument("--procedure", choices=("sweeps", "tow", "tow-down"), default=None,
                     help="the test procedure: 'sweeps' (default: accelerate-brake slip sweeps, what the rule was "
-                    "developed on) or 'tow' (steady drawbar-pull passes, slip levels held against a towed load)")
+                    "developed on), 'tow' (steady drawbar-pull passes, slip levels held against a towed load) or "
+                    "'tow-down' (the same, the levels from the highest down)")
     ap.add_argument("--terrains", default=None, metavar="SLUGS",
                     help="draw each seed's soil from these built-in terrains (comma-separated slugs, or 'library': "
                     "every built-in terrain but the paper's clay and sand, which the rule was developed on); the "

@@ -1338,6 +1338,18 @@ def _changed_terrain(f: HypFit) -> list:
     return out
 
 
+def _loose(tests_w: dict) -> list:
+    """The structure tests whose 95 % bound on Wong's mean error (over the cycles) reaches
+    ``MIN_REL`` of the channel: the run cannot exclude a relevant error there."""
+    return [t for t in tests_w.values() if t.get("level_upper_rel", 0.0) >= MIN_REL]
+
+
+def _loose_text(loose: list) -> str:
+    return ("Wong's mean error may be as large as " + ", ".join(
+        f"{_fmt(t['level_upper_abs'], _UNITS[t['channel']])} ({t['level_upper_rel']:.1%} of the "
+        f"{CHANNEL_TITLES[t['channel']]})" for t in loose) + " (95 % confidence bound)")
+
+
 def _confidence(effect, model, fits, eprobs, consistency, data, tests_w, sink_ev, reasons, supported, probs, paired,
                 target):
     """Confidence word and its reasons (module doc, step 6)."""
@@ -1360,14 +1372,11 @@ def _confidence(effect, model, fits, eprobs, consistency, data, tests_w, sink_ev
         # "none" is only as sure as the run is precise: the cycles' scatter must exclude an error of
         # MIN_REL of the channel (however large the cell noise: that it is under one cell-noise sigma
         # makes an error unpredictable cycle by cycle, not absent)
-        loose = [t for t in tests_w.values() if t.get("level_upper_rel", 0.0) >= MIN_REL]
+        loose = _loose(tests_w)
         if loose:
             # few independent units that cannot exclude a relevant error: the run cannot tell
             level = max(level, 2 if n_units < MIN_UNITS_HIGH else 1)
-            why.append("the accelerate cycles scatter too much to exclude a relevant error: Wong's mean error "
-                       "may be as large as " + ", ".join(
-                           f"{_fmt(t['level_upper_abs'], _UNITS[t['channel']])} ({t['level_upper_rel']:.1%} of the "
-                           f"{CHANNEL_TITLES[t['channel']]})" for t in loose) + " (95 % confidence bound)")
+            why.append("the accelerate cycles scatter too much to exclude a relevant error: " + _loose_text(loose))
         # the confidence words follow the posterior (as for a named cause): the probabilities may
         # favour an effect too small to matter
         p_none = eprobs.get("none", 0.0)
@@ -1466,9 +1475,12 @@ def _summary(d: Diagnosis) -> str:
     ptxt = ", ".join(f"{k.replace('drawbar_pull_n', 'Dp').replace('torque_nm', 'T').replace('sinkage_m', 'z')} "
                      f"p = {t['p']:.2g}" for k, t in tw.items() if np.isfinite(t["p"]))
     if d.effect == "none":
+        loose = _loose(tw)
         parts.append(f"Wong's residuals show no significant systematic structure of relevant size ({ptxt}; threshold "
                      f"{ALPHA:g} Bonferroni-corrected, size >= {MIN_EFFECT:g} cell-noise sigma and >= {MIN_REL:.0%} "
-                     "of the channel's magnitude): the data show no effect Wong's model misses, so Wong's model is kept.")
+                     "of the channel's magnitude): the data show no effect Wong's model misses, "
+                     + (f"but they cannot exclude one either ({_loose_text(loose)}): Wong's model is kept for want of "
+                        "evidence, not because the data confirm it." if loose else "so Wong's model is kept."))
         small = _detectable_only(tw, len(tw))
         if small:
             parts.append("A small systematic error is statistically detectable in " + ", ".join(small)

@@ -50,6 +50,7 @@ from wheelsoil.sim.effects import (ACCEPTABLE, ALL_HELD_OUT, EFFECTS, HELD_OUT, 
                                    OUT_OF_FAMILY, PARAM_NAMES, SENSOR_EFFECTS, VERDICTS, TruthModel, draw_effect, family_of)
 from wheelsoil.sim.physics import bandlimited as _bandlimited
 from wheelsoil.sim.terra import soil_dict
+from wheelsoil.sim.vehicle import PROCEDURES
 
 __all__ = ["EFFECTS", "IN_FAMILY", "OUT_OF_FAMILY", "HELD_OUT", "HELD_OUT_2", "HELD_OUT_3", "HELD_OUT_4",
            "HELD_OUT_5", "HELD_OUT_6", "HELD_OUT_7", "HELD_OUT_BATCHES",
@@ -280,9 +281,10 @@ def simulate_run(
         r omega = V: what processing's GNSS-latency estimate assumes; the dynamics stay 4x4).
     slip_max : the highest slip the driver sweeps to, 0.2 .. 0.95 (each sweep peaks at 0.925 .. 1
         times it); default about 0.9, as in the paper's sweeps.
-    procedure : ``"sweeps"`` (accelerate-brake slip sweeps, as in the paper) or ``"tow"`` (the
+    procedure : ``"sweeps"`` (accelerate-brake slip sweeps, as in the paper), ``"tow"`` (the
         field's steady drawbar-pull test: slip levels held in turn against a towed load vehicle
-        that holds the speed; :mod:`wheelsoil.sim.vehicle`).
+        that holds the speed; :mod:`wheelsoil.sim.vehicle`) or ``"tow-down"`` (the levels from the
+        highest down).
 
     Returns
     -------
@@ -318,8 +320,8 @@ def simulate_run(
         raise ValueError(f"front_wheels must be 'driven' or 'reference', got {front_wheels!r}")
     if slip_max is not None and not 0.2 <= slip_max <= 0.95:
         raise ValueError(f"slip_max={slip_max} outside 0.2..0.95")
-    if procedure not in ("sweeps", "tow"):
-        raise ValueError(f"procedure must be 'sweeps' or 'tow', got {procedure!r}")
+    if procedure not in PROCEDURES:
+        raise ValueError(f"procedure must be one of {PROCEDURES}, got {procedure!r}")
     r, b = _wheel_dims(wheel)
     if not (0.05 <= r <= 2.0 and 0.02 <= b <= 2.0):
         raise ValueError(f"wheel {r} x {b} m: radius must be in 0.05..2 m and width in 0.02..2 m")
@@ -1018,10 +1020,11 @@ def register(subparsers) -> None:
                    "physical) or an idealised undriven reference wheel (r omega = V)")
     p.add_argument("--slip-max", type=float, default=None, metavar="S",
                    help="the highest slip the driver sweeps to, 0.2 .. 0.95 (default: about 0.9, as in the paper)")
-    p.add_argument("--procedure", choices=("sweeps", "tow"), default="sweeps",
-                   help="the test: 'sweeps' (default; accelerate-brake slip sweeps, as in the paper) or 'tow' (the "
+    p.add_argument("--procedure", choices=PROCEDURES, default="sweeps",
+                   help="the test: 'sweeps' (default; accelerate-brake slip sweeps, as in the paper), 'tow' (the "
                    "field's steady drawbar-pull test: slip levels held a few seconds each against a towed load "
-                   "vehicle that holds the speed; --cycles then counts the passes)")
+                   "vehicle that holds the speed; --cycles then counts the passes) or 'tow-down' (the same, the "
+                   "levels from the highest down)")
     p.add_argument("--truth", default=None, metavar="FILE", help="also write the hidden truth to this JSON file")
     p.add_argument("--vehicle-out", default=None, metavar="TOML",
                    help="also write the simulated wheel's vehicle configuration (for `wheelsoil import "

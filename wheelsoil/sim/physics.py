@@ -66,7 +66,8 @@ def simulate_physics(truth: TruthModel, rng: np.random.Generator, *, added_load_
     largest interpolation error on random points; ``can_move``: :func:`check_can_move`'s dict;
     ``grade``, ``vehicle`` (VehicleParams). ``slip_max``: the highest slip of the driver's sweeps
     (None: about 0.9, see :func:`~.vehicle.simulate_dynamics`). ``procedure``: ``"sweeps"``
-    (accelerate-brake slip sweeps) or ``"tow"`` (steady drawbar-pull passes against a towed load).
+    (accelerate-brake slip sweeps), ``"tow"`` or ``"tow-down"`` (steady drawbar-pull passes against a
+    towed load, the slip levels from the lowest up or from the highest down).
 
     Raises ValueError when the vehicle cannot move (message says why and what to change)
     or the wheel would bury itself.

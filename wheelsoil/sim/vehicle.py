@@ -43,10 +43,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["VehicleParams", "ForceTable", "check_can_move", "simulate_dynamics", "skid_forces", "DT_S"]
+__all__ = ["VehicleParams", "ForceTable", "check_can_move", "simulate_dynamics", "skid_forces", "DT_S", "PROCEDURES"]
 
 DT_S = 0.01
 G = 9.81
+#: Test procedures of :func:`simulate_dynamics`: accelerate-brake slip sweeps; the steady drawbar-pull
+#: test with the slip levels held from the lowest up, or from the highest down.
+PROCEDURES = ("sweeps", "tow", "tow-down")
 #: Largest wheel angular acceleration the driveline gives [rad/s^2] (I_w * 25 = 290 N m).
 OMEGA_RATE_MAX = 25.0
 
@@ -224,7 +227,8 @@ def simulate_dynamics(table: ForceTable, veh: VehicleParams, rng: np.random.Gene
     (per wheel, as used), resistance_n, distance_m, phase (object), cycle (int)``, and
     ``mass_kg``. The distance fraction used for terrain drift is distance /
     ``dist_total_guess_m`` clipped to [0, 1] (the caller iterates to the true total).
-    ``"tow"``: each pass pulls away, then holds 6 to 9 slip levels from about 0.12 up to the
+    ``"tow"`` (``"tow-down"``: the same levels from the top down): each pass pulls away, then
+    holds 6 to 9 slip levels from about 0.12 up to the
     sweeps' highest slip, 3 to 6 s each, joined by 0.8 to 1.5 s transitions, at a test speed of
     1.0 to 1.6 m/s held by the towed vehicle's brake (``F_tow`` >= 0: where the wheels cannot
     pull the resistance the vehicle slows, and below 0.5 m/s the driver ends the pass), then
@@ -233,8 +237,8 @@ def simulate_dynamics(table: ForceTable, veh: VehicleParams, rng: np.random.Gene
     Raises ValueError when the vehicle stalls in a pull-away for 20 s (cannot move), or for an
     unknown ``procedure``.
     """
-    if procedure not in ("sweeps", "tow"):
-        raise ValueError(f"procedure must be 'sweeps' or 'tow', got {procedure!r}")
+    if procedure not in PROCEDURES:
+        raise ValueError(f"procedure must be one of {PROCEDURES}, got {procedure!r}")
     m, wf0, wr0 = veh.loads(added_load_n)
     r = radius_m
     dt = DT_S
@@ -334,8 +338,9 @@ def simulate_dynamics(table: ForceTable, veh: VehicleParams, rng: np.random.Gene
                                      f"its speed is {V:.2f} m/s (summed drawbar pull too small)")
                 ramp = min((t - t0) / 1.5, 1.0) * 0.35
                 step("other", -1, rw_cmd=max(V / (1.0 - s_pa), ramp))
-        if procedure == "tow":
-            _tow_pass(step, rng, cycle, lambda: t, lambda: V, t_end, out, slip_max, wobble)
+        if procedure != "sweeps":
+            _tow_pass(step, rng, cycle, lambda: t, lambda: V, t_end, out, slip_max, wobble,
+                      down=procedure == "tow-down")
             cycle += 1
             cycles_done += 1
             stop_next = can_start
@@ -393,12 +398,15 @@ def _brake(step, rng, now, speed, t_end, stop, v_stop):
         step("brake", -1, s_cmd=-s_br * _smooth(tb / 0.6))
 
 
-def _tow_pass(step, rng, cycle, now, speed, t_end, out, slip_max, wobble):
+def _tow_pass(step, rng, cycle, now, speed, t_end, out, slip_max, wobble, down=False):
     """One steady drawbar-pull pass of the ``"tow"`` procedure (module doc): slip levels held in
-    turn against the towed load at a held test speed; ends early when the vehicle bogs down."""
+    turn against the towed load at a held test speed, from the lowest up (``down``: from the
+    highest down); ends early when the vehicle bogs down."""
     v_test = rng.uniform(1.0, 1.6)
     top = rng.uniform(0.86, 0.93) if slip_max is None else rng.uniform(0.925, 1.0) * slip_max
     levels = np.linspace(rng.uniform(0.10, 0.15), top, int(rng.integers(6, 10)))
+    if down:
+        levels = levels[::-1]
     s_prev = out["slip"][-1] if out["slip"] and np.isfinite(out["slip"][-1]) else 0.05
     for lvl in levels:
         t_tr, t_hold = rng.uniform(0.8, 1.5), rng.uniform(3.0, 6.0)
