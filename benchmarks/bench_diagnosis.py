@@ -147,15 +147,26 @@ def imprint(run, n_max: int = 300) -> dict | None:
     return out
 
 
+def _no_cycles(t_s, phase, **_):
+    """Stand-in for processing's ``accel_cycles`` under ``--no-cycles``: no accelerate cycle found."""
+    return np.full(np.asarray(t_s).shape[0], -1, dtype=np.int64)
+
+
 def run_seed(seed: int, duration_s: float, front_wheels: str, keep_dir: str | None = None,
-             terrains: list[str] | None = None, sim_options: dict | None = None, effects: str = "listed") -> dict:
+             terrains: list[str] | None = None, sim_options: dict | None = None, effects: str = "listed",
+             no_cycles: bool = False) -> dict:
     """Simulate, fit and judge one seed; returns a row dict (never raises: errors are rows).
 
     ``sim_options``: further keywords of ``simulate_run`` (``soil_variability``, ``slip_max``,
     ``procedure``);
     ``effects``: ``listed`` (``EFFECTS[seed % 17]``) or a key of ``HELD_OUT_BATCHES`` (causes
-    added after the rule, :mod:`wheelsoil.sim.effects`).
+    added after the rule, :mod:`wheelsoil.sim.effects`); ``no_cycles``: processing finds no
+    accelerate cycle (the fit's units are then contiguous blocks).
     """
+    if no_cycles:
+        import wheelsoil.processing.pipeline as processing_pipeline
+
+        processing_pipeline.accel_cycles = _no_cycles
     from wheelsoil.pipeline import run_fit
     from wheelsoil.simulate import judge, write_simulation
 
@@ -309,6 +320,10 @@ def main(argv=None) -> int:
                     help="the test procedure: 'sweeps' (default: accelerate-brake slip sweeps, what the rule was "
                     "developed on), 'tow' (steady drawbar-pull passes, slip levels held against a towed load) or "
                     "'tow-down' (the same, the levels from the highest down)")
+    ap.add_argument("--no-cycles", action="store_true",
+                    help="fit as if processing had found no accelerate cycle (a driver who never speeds up "
+                    "hard enough to be told, a testbed at constant speed): the fit's units are then contiguous "
+                    "blocks of about 10 s")
     ap.add_argument("--terrains", default=None, metavar="SLUGS",
                     help="draw each seed's soil from these built-in terrains (comma-separated slugs, or 'library': "
                     "every built-in terrain but the paper's clay and sand, which the rule was developed on); the "
@@ -347,7 +362,8 @@ def main(argv=None) -> int:
           + "".join(f", {k.replace('_', ' ')} {v:g}" if isinstance(v, float) else f", {k} {v}"
                     for k, v in sim_options.items())
           + ("" if terrains is None else f", terrains {', '.join(terrains)}")
-          + ("" if args.effects == "listed" else f", effects {args.effects}"))
+          + ("" if args.effects == "listed" else f", effects {args.effects}")
+          + (", no accelerate cycles found (units: blocks)" if args.no_cycles else ""))
     print("diagnosis thresholds as the code holds them (wheelsoil.model.diagnosis):",
           json.dumps(thresholds(), sort_keys=True))
     sys.stdout.flush()
@@ -355,12 +371,13 @@ def main(argv=None) -> int:
     rows = []
     if args.jobs == 1:
         for s in seeds:
-            rows.append(run_seed(s, args.duration, args.front_wheels, args.keep, terrains, sim_options, args.effects))
+            rows.append(run_seed(s, args.duration, args.front_wheels, args.keep, terrains, sim_options, args.effects,
+                                 args.no_cycles))
             print(f"  seed {s}: {rows[-1]['effect']} -> {rows[-1]['verdict']} ({rows[-1].get('confidence')})", flush=True)
     else:
         with ProcessPoolExecutor(max_workers=args.jobs) as pool:
             futs = {s: pool.submit(run_seed, s, args.duration, args.front_wheels, args.keep, terrains, sim_options,
-                                   args.effects)
+                                   args.effects, args.no_cycles)
                     for s in seeds}
             for s in seeds:
                 rows.append(futs[s].result())

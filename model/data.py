@@ -49,6 +49,11 @@ CHANNELS: dict[str, str] = {
     "sinkage_m": "sinkage_m",
 }
 
+#: Length [s] of a contiguous block, the CV unit of a time series without accelerate cycles: about
+#: one accelerate cycle of a slip sweep (6-9 s of sweep in a 10-15 s cycle), so a run gives as many
+#: units whatever its procedure.
+BLOCK_S = 10.0
+
 #: Phases of a processed recording (``phase`` column) that are driving the steady-state model
 #: describes outside an accelerate cycle (:func:`wheelsoil.processing.slip.classify_phases`).
 DRIVING_PHASES = ("accel", "drive")
@@ -236,7 +241,8 @@ def prepare_data(df, *, slip_min: float = 0.1, source: str = "data", n_blocks: i
     cycle join the previous one), else for a table interleaved folds by slip rank
     (leave-one-out up to 20 rows, else 10 folds, each spanning the slip range, so
     the held-out error measures interpolation, not extrapolation to unseen slips),
-    and for a time series without cycles 5 contiguous blocks per run.
+    and for a time series without cycles contiguous blocks of about ``BLOCK_S`` of data each (at
+    least 5 per run).
     The samples are then aggregated into :class:`Cells` (:func:`make_cells`).
 
     Raises
@@ -399,6 +405,8 @@ def _static_load(w: np.ndarray, ok: np.ndarray, run: np.ndarray) -> float | None
 
 def _cv_groups(df, keep, run, kind, n_blocks):
     """Cross-validation groups for the kept rows: (groups (N,), description)."""
+    import pandas as pd
+
     n = int(keep.sum())
     if "cycle" in df.columns:
         cyc = np.asarray(df["cycle"].to_numpy(), dtype=float)[keep]
@@ -422,11 +430,19 @@ def _cv_groups(df, keep, run, kind, n_blocks):
         return rank % k, "leave-one-out" if k == n else f"{k} interleaved slip-rank folds"
     k = n_blocks or (max(2, min(5, n // 3)) if kind == "table" else 5)
     k = max(1, min(k, n))
+    t = (pd.to_numeric(df["t_s"], errors="coerce").to_numpy(float)[keep]
+         if kind != "table" and n_blocks is None and "t_s" in df.columns else None)
     g = np.zeros(n, int)
     nxt = 0
     for r in np.unique(run):
         idx = np.flatnonzero(run == r)
         kr = k if np.unique(run).size == 1 else max(1, min(k, idx.size // 2))
+        dt = np.diff(t[idx]) if t is not None else np.zeros(0)
+        dt = dt[np.isfinite(dt) & (dt > 0)]
+        if dt.size:
+            # a recording without accelerate cycles (steady holds, gentle ramps): blocks of about
+            # BLOCK_S of data, as many independent units as a sweep test's cycles would give
+            kr = max(kr, min(int(round(idx.size * float(np.median(dt)) / BLOCK_S)), idx.size // 2))
         g[idx] = nxt + (np.arange(idx.size) * kr) // idx.size
         nxt += kr
     return g, "contiguous blocks"

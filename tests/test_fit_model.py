@@ -228,3 +228,19 @@ def test_steady_driving_outside_the_cycles_is_fitted_and_transients_are_not():
     assert any("not driving steadily excluded" in n for n in d.notes)
     # a steady sample belongs to the cycle before it
     assert np.unique(d.groups).size == np.unique(base.groups).size
+
+
+@pytest.mark.parametrize("duration_s", [30.0, 120.0])
+def test_a_recording_without_accelerate_cycles_gets_units_of_about_a_cycle(duration_s):
+    """No accelerate cycle found (steady holds, gentle ramps): contiguous blocks of about BLOCK_S of
+    used data each, at least 5 per run; a table keeps its slip-rank folds."""
+    from wheelsoil.model.data import BLOCK_S
+
+    df = synthetic_data(SAND, DEFAULT_WHEEL, "wong", {}, kind="timeseries", duration_s=duration_s, seed=1)
+    df["cycle"] = -1
+    d = prepare_data(df)
+    used_s = d.n * float(np.median(np.diff(df["t_s"])))
+    assert d.group_kind == "contiguous blocks"
+    assert np.unique(d.groups).size == max(5, round(used_s / BLOCK_S))
+    assert np.all(np.diff(d.groups) >= 0)
+    assert prepare_data(_table(1)).group_kind != "contiguous blocks"
