@@ -17,7 +17,7 @@ Phases (per sample, on the filtered signals):
 * ``drive``: the wheel drives steadily: ``T > torque_min_nm``, neither accelerating
   (as above) nor slowing (``dV/dt >= -accel_min_mps2``): the slip levels held against a
   towed load in the field's steady drawbar-pull test (Wong, *Theory of Ground Vehicles*,
-  §4.1), cruising with traction;
+  4th ed., §4.1), cruising with traction;
 * ``brake``: ``dV/dt < -accel_min_mps2`` and ``T <= torque_min_nm``;
 * ``other``: everything else (coasting, slowing with the torque still on, unknown inputs).
 

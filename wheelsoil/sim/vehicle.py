@@ -24,13 +24,16 @@ explicit Euler at ``DT_S`` (10 ms); V >= 0 (the brakes hold the vehicle).
 If the four wheels' summed drawbar pull cannot overcome the resistance at any
 slip, :func:`check_can_move` refuses the run with a message saying so.
 
-A second procedure, ``"tow"``, is the steady drawbar-pull test of the field
-(Wong, *Theory of Ground Vehicles*, 4th ed., §4.1 and §6.1; ASABE S296 and
-the OECD tractor code's drawbar tests): the vehicle pulls a towed load
-vehicle whose brake holds the speed near a test speed while the driver holds
+A second procedure, ``"tow"`` (or ``"tow-down"``), is the steady drawbar-pull
+test of the field (Wong, *Theory of Ground Vehicles*, 4th ed., §4.1; the OECD
+tractor test code's drawbar test): the vehicle pulls a towed load vehicle
+whose brake holds the speed near a test speed v_test while the driver holds
 the wheels' slip at one level after another, each for a few seconds:
 
-    m dV/dt = 2 Dp_f + 2 Dp_r - resistance - F_tow,   F_tow = max(0, ... ) (speed held)
+    m dV/dt = 2 Dp_f + 2 Dp_r - resistance - F_tow,
+    F_tow = max(0, 2 Dp_f + 2 Dp_r - resistance - m (v_test - V) / 1 s)
+
+(a brake cannot push: where the wheels cannot pull the resistance, the vehicle slows).
 
 There is no acceleration to speak of: the data are steady holds joined by
 short slip transitions, a shape the slip sweeps never give.
@@ -213,7 +216,7 @@ def simulate_dynamics(table: ForceTable, veh: VehicleParams, rng: np.random.Gene
                       slip_noise=None, can_start: bool = True, slip_best: float = 0.5,
                       slip_max: float | None = None, procedure: str = "sweeps"):
     """Integrate the vehicle through accelerate-brake cycles (``procedure="sweeps"``) or through
-    steady drawbar-pull passes against a towed load (``"tow"``; module doc).
+    steady drawbar-pull passes against a towed load (``"tow"``, ``"tow-down"``; module doc).
 
     ``bumps_front/rear``: callables t -> load disturbance [N] (or None); ``slip_noise``:
     array of the slip controller's wobble per step (band-limited, or None); ``can_start``: False
@@ -228,8 +231,7 @@ def simulate_dynamics(table: ForceTable, veh: VehicleParams, rng: np.random.Gene
     ``mass_kg``. The distance fraction used for terrain drift is distance /
     ``dist_total_guess_m`` clipped to [0, 1] (the caller iterates to the true total).
     ``"tow"`` (``"tow-down"``: the same levels from the top down): each pass pulls away, then
-    holds 6 to 9 slip levels from about 0.12 up to the
-    sweeps' highest slip, 3 to 6 s each, joined by 0.8 to 1.5 s transitions, at a test speed of
+    holds 6 to 9 slip levels from about 0.12 up to the sweeps' highest slip, 3 to 6 s each, joined by 0.8 to 1.5 s transitions, at a test speed of
     1.0 to 1.6 m/s held by the towed vehicle's brake (``F_tow`` >= 0: where the wheels cannot
     pull the resistance the vehicle slows, and below 0.5 m/s the driver ends the pass), then
     brakes; ``phase`` is ``"tow"`` in the holds and transitions, ``cycle`` the pass; the arrays
@@ -344,7 +346,7 @@ def simulate_dynamics(table: ForceTable, veh: VehicleParams, rng: np.random.Gene
             cycle += 1
             cycles_done += 1
             stop_next = can_start
-            _brake(step, rng, lambda: t, lambda: V, t_end, stop_next, 0.0 if stop_next else rng.uniform(0.8, 1.4))
+            _brake(step, rng, lambda: t, lambda: V, t_end, stop_next)
             continue
         # slip down to rolling slip before the sweep
         s_roll = rng.uniform(0.03, 0.06)
@@ -373,7 +375,7 @@ def simulate_dynamics(table: ForceTable, veh: VehicleParams, rng: np.random.Gene
         cycles_done += 1
         last = cycles_done >= want
         stop_next = can_start and (last or rng.random() < 0.5)
-        _brake(step, rng, lambda: t, lambda: V, t_end, stop_next, 0.0 if stop_next else rng.uniform(0.8, 1.4))
+        _brake(step, rng, lambda: t, lambda: V, t_end, stop_next)
     if duration_s is None and can_start:
         t0 = t
         while t - t0 < 2.0:
@@ -385,8 +387,9 @@ def simulate_dynamics(table: ForceTable, veh: VehicleParams, rng: np.random.Gene
     return res
 
 
-def _brake(step, rng, now, speed, t_end, stop, v_stop):
-    """Brake with skid slip (-0.08 .. -0.25) to ``v_stop`` (or to a stop when ``stop``)."""
+def _brake(step, rng, now, speed, t_end, stop):
+    """Brake with skid slip (-0.08 .. -0.25) to a stop (``stop``) or to a crawl of 0.8 .. 1.4 m/s."""
+    v_stop = 0.0 if stop else rng.uniform(0.8, 1.4)
     s_br = rng.uniform(0.08, 0.25)
     t0 = now()
     while now() < t_end:
