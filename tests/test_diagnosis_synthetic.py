@@ -361,7 +361,6 @@ def test_the_catch_alls_are_the_five_value_refit_and_its_drifts():
     assert caught == {"terrain", "drift_linear", "drift_step"}  # slip sinkage + terrain names its slip part
 
 
-
 def test_a_none_that_cannot_exclude_a_relevant_error_says_so():
     """Three short cycles of a Wong soil under a noise far above the effects' sizes: no structure,
     and the cycles cannot bound Wong's mean error below 3 %: the summary says Wong is kept for want of

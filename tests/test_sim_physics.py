@@ -96,8 +96,13 @@ def test_tow_procedure_holds_slip_levels_at_a_held_speed_by_newton():
     # slip levels from ~0.1 to ~0.9, each held: most steps change the slip by little
     assert s.min() < 0.2 and s.max() > 0.7
     assert np.median(np.abs(np.diff(s))) < 0.002
-    late = held & (np.abs(d["accel_mps2"]) < 0.05)
-    assert late.mean() > 0.5 * held.mean(), "the holds should be steady"
+    steady = held & (np.abs(d["accel_mps2"]) < 0.05)
+    assert steady.mean() > 0.5 * held.mean(), "the holds should be steady"
     assert r.info["procedure"] == "tow"
+    # from the top down: the same passes, the first level the highest
+    down = simulate_run("sand", effect="none", seed=8, duration_s=90.0, added_load_n=5000.0, procedure="tow-down")
+    dd = down.dynamics
+    first = dd["slip"][(dd["phase"] == "tow") & (dd["cycle"] == 0)]
+    assert np.median(first[: first.size // 4]) > 0.6 > np.median(first[-first.size // 4:])
     with pytest.raises(ValueError, match="procedure"):
         simulate_run("sand", duration_s=60.0, procedure="coast")
