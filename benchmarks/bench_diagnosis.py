@@ -20,6 +20,7 @@ with ``--terrains``, the next soil of the list).
     python benchmarks/bench_diagnosis.py --first 128 --seeds 128   # seeds 128..255
     python benchmarks/bench_diagnosis.py --front-wheels driven      # the 4x4's front wheels on FL/FR
     python benchmarks/bench_diagnosis.py --terrains library         # soils the rule was not developed on
+    python benchmarks/bench_diagnosis.py --wft-noise 3 --wft-noise-hz 2   # 3x the sensor noise, below 2 Hz
     python benchmarks/bench_diagnosis.py --effects held-out         # causes added after the rule (batch 1)
     python benchmarks/bench_diagnosis.py --effects held-out-2       # ... and a second batch
     python benchmarks/bench_diagnosis.py --effects held-out-3       # ... a third
@@ -158,7 +159,7 @@ def run_seed(seed: int, duration_s: float, front_wheels: str, keep_dir: str | No
     """Simulate, fit and judge one seed; returns a row dict (never raises: errors are rows).
 
     ``sim_options``: further keywords of ``simulate_run`` (``soil_variability``, ``slip_max``,
-    ``procedure``);
+    ``procedure``, ``wft_noise``, ``wft_noise_hz``);
     ``effects``: ``listed`` (``EFFECTS[seed % 17]``) or a key of ``HELD_OUT_BATCHES`` (causes
     added after the rule, :mod:`wheelsoil.sim.effects`); ``no_cycles``: processing finds no
     accelerate cycle (the fit's units are then contiguous blocks).
@@ -316,6 +317,12 @@ def main(argv=None) -> int:
     ap.add_argument("--slip-max", type=float, default=None, metavar="S",
                     help="the highest slip of the driver's sweeps, 0.2 .. 0.95 (default: the simulator's, about "
                     "0.9, as in the paper): a narrower slip range than the rule was developed on")
+    ap.add_argument("--wft-noise", type=float, default=None, metavar="F",
+                    help="scale of the transducer's sensor noise (default: the simulator's 1, what the rule was "
+                    "developed on)")
+    ap.add_argument("--wft-noise-hz", type=float, default=None, metavar="HZ",
+                    help="the same noise below HZ instead of white (slow wobbles that the fit's within-cell "
+                    "noise estimate does not see in full, e.g. 2)")
     ap.add_argument("--procedure", choices=("sweeps", "tow", "tow-down"), default=None,
                     help="the test procedure: 'sweeps' (default: accelerate-brake slip sweeps, what the rule was "
                     "developed on), 'tow' (steady drawbar-pull passes, slip levels held against a towed load) or "
@@ -355,7 +362,8 @@ def main(argv=None) -> int:
         if unknown or not terrains:
             ap.error(f"--terrains: unknown {unknown} (built-in: {', '.join(TERRAINS)})")
     sim_options = {k: v for k, v in (("soil_variability", args.soil_variability), ("slip_max", args.slip_max),
-                                     ("procedure", args.procedure)) if v is not None}
+                                     ("procedure", args.procedure), ("wft_noise", args.wft_noise),
+                                     ("wft_noise_hz", args.wft_noise_hz)) if v is not None}
     seeds = args.seed if args.seed else list(range(args.first, args.first + (6 if args.quick else args.seeds)))
     print(f"bench_diagnosis: {len(seeds)} seeds, {args.duration:.0f} s runs, {args.jobs} process(es), "
           f"front wheels {args.front_wheels}"

@@ -247,3 +247,32 @@ def test_slip_max_caps_the_drivers_sweeps_and_is_checked():
     assert r.info["slip_max"] == 0.5
     with pytest.raises(ValueError, match="slip_max"):
         simulate_run(load_terrain("sand"), slip_max=0.1)
+
+
+def _fz_noise(r):
+    """Measured hub Fz minus the true load [N] of every WFT sample (decoded with cantools)."""
+    _, fdat, fdlc = _frames_of(r, "can0", 0x120)
+    _, adat, adlc = _frames_of(r, "can0", 0x122)
+    force, angle = _decode(WFT, 0x120, fdat, fdlc), _decode(WFT, 0x122, adat, adlc)
+    a = np.radians([d["WheelAngle"] for d in angle])
+    fz = -np.array([d["Fx_w"] for d in force]) * np.sin(a) + np.array([d["Fz_w"] for d in force]) * np.cos(a)
+    cnt = np.array([d["Counter"] for d in force])
+    k = np.concatenate([[0], np.cumsum(np.diff(cnt) % 256)])  # truth sample of each frame (no drops here)
+    return fz - r.truth.load_n.to_numpy()[k]
+
+
+def test_wft_noise_scale_and_colour():
+    kw = dict(seed=3, duration_s=30.0, front_wheels="reference")
+    white = _fz_noise(simulate_run(load_terrain("sand"), **kw))
+    loud = simulate_run(load_terrain("sand"), wft_noise=3.0, wft_noise_hz=2.0, **kw)
+    slow = _fz_noise(loud)
+    assert loud.info["wft_noise"] == 3.0 and loud.info["wft_noise_hz"] == 2.0
+    # scale: 3x the sd; colour: white noise is independent sample to sample, the low-passed one
+    # (2 Hz at 500 Hz) barely changes over one sample
+    assert 2.7 < slow.std() / white.std() < 3.3
+    assert abs(np.corrcoef(white[:-1], white[1:])[0, 1]) < 0.1
+    assert np.corrcoef(slow[:-1], slow[1:])[0, 1] > 0.99
+    with pytest.raises(ValueError, match="wft_noise"):
+        simulate_run(load_terrain("sand"), wft_noise=-1.0)
+    with pytest.raises(ValueError, match="wft_noise_hz"):
+        simulate_run(load_terrain("sand"), wft_noise_hz=0.0)

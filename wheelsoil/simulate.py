@@ -258,6 +258,8 @@ def simulate_run(
     front_wheels: str = "driven",
     slip_max: float | None = None,
     procedure: str = "sweeps",
+    wft_noise: float = 1.0,
+    wft_noise_hz: float | None = None,
 ) -> SimulatedRun:
     """Simulate one physical field run of the instrumented left-rear wheel (paper section 2.2).
 
@@ -285,6 +287,12 @@ def simulate_run(
         field's steady drawbar-pull test: slip levels held in turn against a towed load vehicle
         that holds the speed; :mod:`wheelsoil.sim.vehicle`) or ``"tow-down"`` (the levels from the
         highest down).
+    wft_noise : scale of the transducer's sensor noise (0 .. 10; 1: Fx, Fz sd
+        :data:`WFT_FORCE_NOISE_N`, moments sd :data:`WFT_MOMENT_NOISE_NM`, white).
+    wft_noise_hz : None (white noise) or the corner [Hz] (0.05 .. 50) below which the same
+        noise lies instead (2nd-order Butterworth low-pass of the same draws, rescaled to the
+        same sd): slow wobbles, like vibration and drift a real transducer picks up, which
+        the fit's within-cell noise estimate does not see in full.
 
     Returns
     -------
@@ -322,6 +330,10 @@ def simulate_run(
         raise ValueError(f"slip_max={slip_max} outside 0.2..0.95")
     if procedure not in PROCEDURES:
         raise ValueError(f"procedure must be one of {PROCEDURES}, got {procedure!r}")
+    if not 0.0 <= wft_noise <= 10.0:
+        raise ValueError(f"wft_noise={wft_noise} outside 0..10")
+    if wft_noise_hz is not None and not 0.05 <= wft_noise_hz <= 50.0:
+        raise ValueError(f"wft_noise_hz={wft_noise_hz} outside 0.05..50 Hz")
     r, b = _wheel_dims(wheel)
     if not (0.05 <= r <= 2.0 and 0.02 <= b <= 2.0):
         raise ValueError(f"wheel {r} x {b} m: radius must be in 0.05..2 m and width in 0.02..2 m")
@@ -380,7 +392,7 @@ def simulate_run(
     gps_drift = float(rng.uniform(-30e-6, 30e-6))      # host clock rate error
     dbs = _dbc_databases()
     frames_wft = _wft_frames(dbs["wft"], rng, t_rel, w_meas, fx, my, angle_rad, angle_deg, drop_rate,
-                             angle_err_deg=angle_err_deg)
+                             angle_err_deg=angle_err_deg, noise=(wft_noise, wft_noise_hz))
     frames_veh = _vehicle_bus_frames(dbs, rng, t_rel, speed, omega, slip, r, gnss_latency_s,
                                      start_s, gps_offset_s, gps_drift, front_wheels=front_wheels,
                                      gnss_gain=gnss_gain, rl_gain=rl_gain, rl_delay_s=rl_delay_s)
@@ -460,6 +472,8 @@ def simulate_run(
         "front_wheels": front_wheels,
         "slip_max": None if slip_max is None else float(slip_max),
         "procedure": procedure,
+        "wft_noise": float(wft_noise),
+        "wft_noise_hz": None if wft_noise_hz is None else float(wft_noise_hz),
         "lost_wft_samples": lost,
         "duration_s": float(n * dt),
         "n_cycles": int(w["cycle"].max() + 1) if n else 0,
@@ -531,14 +545,30 @@ def _jitter(rng, n, mean_s=150e-6):
     return rng.exponential(mean_s, n)
 
 
-def _wft_frames(db, rng, t_rel, load, fx, my_true, angle_rad, angle_deg, drop_rate, *, angle_err_deg=0.0):
+def _sensor_noise(draws, sd, dt, noise):
+    """The transducer's noise from white ``draws`` (n,) of sd ``sd``: scaled by ``noise[0]`` and,
+    with a corner ``noise[1]`` [Hz], low-passed (Butterworth, 2nd order, zero phase) and rescaled
+    to the same sd. See :func:`simulate_run` (``wft_noise``, ``wft_noise_hz``)."""
+    scale, hz = noise
+    if hz is None or draws.size < 32:
+        return scale * draws
+    from scipy import signal
+
+    sos = signal.butter(2, min(hz * 2.0 * dt, 0.99), output="sos")
+    x = signal.sosfiltfilt(sos, draws)
+    return x * (scale * sd / max(float(np.std(x)), 1e-12))
+
+
+def _wft_frames(db, rng, t_rel, load, fx, my_true, angle_rad, angle_deg, drop_rate, *, angle_err_deg=0.0,
+                noise=(1.0, None)):
     """The WFT's 500 Hz Force/Moment/Angle frames plus 1 Hz Diag mux frames on can0.
 
     Hub forces (Fx = Dp - m_w dV/dt, Fz = W) are rotated into the wheel-fixed
     frame by inverting hardware.md's hub-from-wheel formula: Fx_w = Fx cos a -
     Fz sin a, Fz_w = Fx sin a + Fz cos a; ``my_true`` is the hub My (T + I_w
     domega/dt). ``angle_err_deg``: an encoder zero error added to the reported
-    WheelAngle only. Returns a list of parts (t [s], id, ext, dlc, data), the
+    WheelAngle only; ``noise``: (scale, low-pass corner [Hz] or None) of the sensor noise
+    (:func:`_sensor_noise`). Returns a list of parts (t [s], id, ext, dlc, data), the
     first one carrying the number of lost samples as a 6th item.
     """
     n = len(t_rel)
@@ -547,12 +577,17 @@ def _wft_frames(db, rng, t_rel, load, fx, my_true, angle_rad, angle_deg, drop_ra
     m_angle = db.get_message_by_name("WFT_RL_Angle")
     m_diag = db.get_message_by_name("WFT_RL_Diag")
     ca, sa = np.cos(angle_rad), np.sin(angle_rad)
-    fx_w = fx * ca - load * sa + rng.normal(0, WFT_FORCE_NOISE_N, n)
-    fz_w = fx * sa + load * ca + rng.normal(0, WFT_FORCE_NOISE_N, n)
-    fy_w = 150.0 * _bandlimited(rng, n, t_rel[1] - t_rel[0], 0.2, 5.0, 1.0) + rng.normal(0, WFT_FORCE_NOISE_N, n)
-    my = my_true + rng.normal(0, WFT_MOMENT_NOISE_NM, n)
-    mx_w = -0.05 * fy_w + rng.normal(0, WFT_MOMENT_NOISE_NM, n)
-    mz_w = rng.normal(0, WFT_MOMENT_NOISE_NM, n) + 0.02 * fx
+    dt = t_rel[1] - t_rel[0] if n > 1 else 0.002
+
+    def nf(sd):  # the same draws in the same order whatever the noise options
+        return _sensor_noise(rng.normal(0, sd, n), sd, dt, noise)
+
+    fx_w = fx * ca - load * sa + nf(WFT_FORCE_NOISE_N)
+    fz_w = fx * sa + load * ca + nf(WFT_FORCE_NOISE_N)
+    fy_w = 150.0 * _bandlimited(rng, n, dt, 0.2, 5.0, 1.0) + nf(WFT_FORCE_NOISE_N)
+    my = my_true + nf(WFT_MOMENT_NOISE_NM)
+    mx_w = -0.05 * fy_w + nf(WFT_MOMENT_NOISE_NM)
+    mz_w = nf(WFT_MOMENT_NOISE_NM) + 0.02 * fx
     counter = (np.arange(n) + int(rng.integers(256))) % 256
     f_data, sat_f = pack_signals(m_force, {"Fx_w": fx_w, "Fy_w": fy_w, "Fz_w": fz_w, "Counter": counter}, n)
     m_data, sat_m = pack_signals(m_moment, {"Mx_w": mx_w, "My": my, "Mz_w": mz_w, "Counter": counter}, n)
@@ -1025,6 +1060,12 @@ def register(subparsers) -> None:
                    "field's steady drawbar-pull test: slip levels held a few seconds each against a towed load "
                    "vehicle that holds the speed; --cycles then counts the passes) or 'tow-down' (the same, the "
                    "levels from the highest down)")
+    p.add_argument("--wft-noise", type=float, default=1.0, metavar="F",
+                   help="scale of the transducer's sensor noise (default 1: Fx, Fz sd %g N, moments %g N m)"
+                   % (WFT_FORCE_NOISE_N, WFT_MOMENT_NOISE_NM))
+    p.add_argument("--wft-noise-hz", type=float, default=None, metavar="HZ",
+                   help="put that noise below HZ instead of white (same sd; slow wobbles such as vibration "
+                   "and drift, e.g. 2)")
     p.add_argument("--truth", default=None, metavar="FILE", help="also write the hidden truth to this JSON file")
     p.add_argument("--vehicle-out", default=None, metavar="TOML",
                    help="also write the simulated wheel's vehicle configuration (for `wheelsoil import "
@@ -1088,7 +1129,7 @@ def _cmd_simulate(args) -> int:
         wheel=wheel, added_load_n=added, gnss_latency_s=args.gnss_latency, drop_rate=args.drop_rate,
         seed=args.seed, duration_s=args.duration, n_cycles=args.cycles, soil_variability=args.soil_variability,
         usb_batching_s=args.usb_batching, front_wheels=args.front_wheels, slip_max=args.slip_max,
-        procedure=args.procedure,
+        procedure=args.procedure, wft_noise=args.wft_noise, wft_noise_hz=args.wft_noise_hz,
     )
     out = write_simulation(run, args.output)
     per_bus = ", ".join(f"{b}: {len(f['timestamp_ns'])}" for b, f in sorted(run.frames.items()))
