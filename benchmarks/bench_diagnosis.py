@@ -297,6 +297,8 @@ def report(rows: list[dict], wall_s: float, args) -> str:
 
 
 def main(argv=None) -> int:
+    from wheelsoil.sim.vehicle import PROCEDURES
+
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
                                  formatter_class=argparse.RawDescriptionHelpFormatter, epilog=__doc__)
     ap.add_argument("--seeds", type=int, default=68, help="N seeds from --first on (default 68: each of the 17 effects "
@@ -323,7 +325,7 @@ def main(argv=None) -> int:
     ap.add_argument("--wft-noise-hz", type=float, default=None, metavar="HZ",
                     help="the same noise below HZ instead of white (slow wobbles that the fit's within-cell "
                     "noise estimate does not see in full, e.g. 2)")
-    ap.add_argument("--procedure", choices=("sweeps", "tow", "tow-down"), default=None,
+    ap.add_argument("--procedure", choices=PROCEDURES, default=None,
                     help="the test procedure: 'sweeps' (default: accelerate-brake slip sweeps, what the rule was "
                     "developed on), 'tow' (steady drawbar-pull passes, slip levels held against a towed load) or "
                     "'tow-down' (the same, the levels from the highest down)")

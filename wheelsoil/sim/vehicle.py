@@ -231,11 +231,11 @@ def simulate_dynamics(table: ForceTable, veh: VehicleParams, rng: np.random.Gene
     ``mass_kg``. The distance fraction used for terrain drift is distance /
     ``dist_total_guess_m`` clipped to [0, 1] (the caller iterates to the true total).
     ``"tow"`` (``"tow-down"``: the same levels from the top down): each pass pulls away, then
-    holds 6 to 9 slip levels from about 0.12 up to the sweeps' highest slip, 3 to 6 s each, joined by 0.8 to 1.5 s transitions, at a test speed of
-    1.0 to 1.6 m/s held by the towed vehicle's brake (``F_tow`` >= 0: where the wheels cannot
-    pull the resistance the vehicle slows, and below 0.5 m/s the driver ends the pass), then
-    brakes; ``phase`` is ``"tow"`` in the holds and transitions, ``cycle`` the pass; the arrays
-    add ``tow_n``.
+    holds 6 to 9 slip levels from about 0.12 up to the sweeps' highest slip, 3 to 6 s each,
+    joined by 0.8 to 1.5 s transitions, at a test speed of 1.0 to 1.6 m/s held by the towed
+    vehicle's brake (``F_tow`` >= 0: where the wheels cannot pull the resistance the vehicle
+    slows, and below 0.5 m/s the driver ends the pass), then brakes; ``phase`` is ``"tow"`` in
+    the holds and transitions, ``cycle`` the pass; the arrays add ``tow_n``.
     Raises ValueError when the vehicle stalls in a pull-away for 20 s (cannot move), or for an
     unknown ``procedure``.
     """
