@@ -249,8 +249,8 @@ class Hypothesis:
     of them out of sample: what it adds must pay off on data it was not fitted to); the first is
     the one it reduces to when its own effect parameters are null (``nulls``).
     ``singles``: for the catch-alls (the five-value re-fit and its drifting forms), their
-    one-value forms; a catch-all, like any hypothesis for its ``nested`` ones, must lower the
-    held-out error each leaves by a relevant amount, else the data do not show what it adds.
+    one-value forms; the diagnosis counts a catch-all as them when it does not lower the held-out
+    error they leave by a relevant amount (it then shows no more than they do).
     """
 
     name: ClassVar[str] = ""
