@@ -54,17 +54,6 @@ decides with this rule (constants below; none was tuned on a benchmark):
    ``Hypothesis.nested``) lowers the drawbar pull error below it out of
    sample by the same paired test and worsens no channel (what the extra part
    adds must pay off on data it was not fitted to, in the target channels).
-   What it adds must also be relevant: it lowers the held-out error of each
-   smaller model it contains (its nested ones and, for a catch-all, the
-   five-value re-fit and its drifts, each one-value form:
-   ``Hypothesis.singles``) in some channel by a relevant amount, as step 1
-   judges a structure (:func:`_not_relevantly_better`); else the data do not
-   show what it adds, however significant (a phi step of 0.04 deg along a
-   run, a five-value re-fit a little closer than phi alone: a more flexible
-   form absorbs a sub-relevant share of the discrepancy between the data's
-   physics and the model's).  It is then not supported and still stands for
-   its own effect: when it has more evidence than the candidate, the causes
-   cannot be told apart.
    The step drift is tried only when step 1's change-point test finds a step
    along the run; the change point is then fixed where it was found.
 4. **Probabilities.**  Posterior probabilities of all hypotheses tried:
@@ -1073,8 +1062,6 @@ def diagnose(
     # not pay off out of sample: the smaller model's effect)
     paired = {k: _paired(data, wong, f) for k, f in fits.items() if k != "wong"}
     not_beaten = {k: _not_better_than_nested(data, fits, f, target) for k, f in fits.items()}
-    no_more = {k: [n for n in _not_relevantly_better(data, fits, f, f.hypothesis.nested + f.hypothesis.singles)
-                   if n not in not_beaten[k]] for k, f in fits.items()}
     eff_of = {k: _effect_of(f, fits, not_beaten[k]) for k, f in fits.items()}
     eprobs: dict[str, float] = {}
     for k, p in probs.items():
@@ -1099,9 +1086,6 @@ def diagnose(
         elif not_beaten[k]:
             why_not[k] = ("does not predict better out of sample than "
                           + " or ".join(TITLES[n] for n in not_beaten[k]) + ", which it contains")
-        elif no_more[k]:
-            why_not[k] = ("lowers the held-out error of " + " or ".join(TITLES[n] for n in no_more[k])
-                          + ", which it contains, by less than a relevant error (what it adds is not shown)")
         elif _prior_conflict(f):
             why_not[k] = (f"needs the terrain far beyond the lab values' uncertainty (prior chi-square "
                           f"{f.chi2_prior:.3g} on {len(f.prior)} parameters; changed: "
@@ -1345,38 +1329,6 @@ def _not_better_than_nested(data, fits, f: HypFit, target) -> list:
             continue
         pr = _paired(data, g, f)
         if not all(pr[c]["improves"] for c in target) or any(r["worsens"] for r in pr.values()):
-            out.append(n)
-    return out
-
-
-def _not_relevantly_better(data, fits, f: HypFit, names) -> list:
-    """The hypotheses of ``names`` that ``f`` contains (its ``Hypothesis.nested`` and, for a
-    catch-all, its one-value forms ``Hypothesis.singles``) whose held-out error it does not lower
-    by a relevant amount in any measured channel (module doc, step 3); [] if none.
-
-    A channel counts when ``f`` improves on the smaller model there by the paired test of step 2
-    and the held-out error it removes, sqrt(mean(e_small^2 - e_f^2)) over the cells, is relevant
-    as a structure of step 1 is (>= ``MIN_EFFECT`` cell-noise sigma and ``MIN_REL`` of the
-    channel's RMS).  Otherwise what ``f`` adds is an error the rule lets a named cause leave (step
-    5's remaining structure): the data do not show it, however significant, and a more flexible
-    form can absorb that much of the discrepancy between the data's physics and the model's."""
-    out = []
-    cells = data.cells
-    for n in names:
-        g = fits.get(n)
-        if g is None or not g.success or g.cv is None:
-            continue
-        pr = _paired(data, g, f)
-        shown = False
-        for c, y in cells.channels.items():
-            eg, ef = y - g.cv["held_cells"][c], y - f.cv["held_cells"][c]
-            ok = np.isfinite(eg) & np.isfinite(ef) & np.isfinite(y)
-            if not pr[c]["improves"] or not ok.any():
-                continue
-            removed = math.sqrt(max(0.0, float(np.mean(eg[ok] ** 2 - ef[ok] ** 2))))
-            size = float(np.sqrt(np.mean(y[ok] ** 2)))
-            shown |= removed >= MIN_EFFECT * cells.sigma[c] and removed >= MIN_REL * size
-        if not shown:
             out.append(n)
     return out
 

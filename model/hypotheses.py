@@ -248,9 +248,6 @@ class Hypothesis:
     ``nested``: the registered hypotheses this one contains (the diagnosis asks it to beat each
     of them out of sample: what it adds must pay off on data it was not fitted to); the first is
     the one it reduces to when its own effect parameters are null (``nulls``).
-    ``singles``: for the catch-alls (the five-value re-fit and its drifting forms), their
-    one-value forms; the diagnosis counts a catch-all as them when it does not lower the held-out
-    error they leave by a relevant amount (it then shows no more than they do).
     """
 
     name: ClassVar[str] = ""
@@ -261,7 +258,6 @@ class Hypothesis:
     terrain_block: ClassVar[bool] = False
     needs_x: ClassVar[bool] = False
     nested: ClassVar[tuple[str, ...]] = ()
-    singles: ClassVar[tuple[str, ...]] = ()
 
     def own_params(self, ctx: Context) -> tuple[HParam, ...]:
         """The hypothesis' own parameters (besides the terrain block)."""
@@ -367,7 +363,6 @@ class TerrainMismatch(Wong):
     name, effect, title = "terrain", "terrain_mismatch", "terrain mismatch (k_eq, n, c, phi, K re-fitted)"
     source = "Wong (2008) ch. 2; lab values as Gaussian priors (penalised least squares)"
     terrain_block = True
-    singles = tuple(f"terrain_{n}" for n in TERRAIN_NAMES)
 
 
 class TerrainOne(Wong):
@@ -459,7 +454,6 @@ class DriftLinear(Hypothesis):
     terrain_block = True
     needs_x = True
     nested = ("terrain",)
-    singles = tuple(f"drift_{n}" for n in TERRAIN_NAMES)
     C_FLOOR_PA = 50.0  #: width of the smooth floor that keeps the start/end cohesion >= 0 [Pa]
 
     def own_params(self, ctx):
@@ -529,7 +523,6 @@ class DriftStep(DriftLinear):
     name, title = "drift_step", "another patch of ground from a point along the run"
     source = "a change of soil along the track (Wong 2008 ch. 2); change point located by maximal F (Hawkins 1977)"
     WIDTH = 1e-3  #: width of the logistic step in x (a hard step between neighbouring cells)
-    singles = tuple(f"drift_step_{n}" for n in TERRAIN_NAMES)
 
     def own_params(self, ctx):
         return tuple(dataclasses.replace(p, doc=p.doc.replace("over the run (end - start)", "at the change point"))
@@ -556,7 +549,6 @@ class DriftOne(DriftLinear):
 
     param: ClassVar[str] = ""
     terrain_block = False
-    singles = ()
 
     def own_params(self, ctx):
         slope = next(q for q in super().own_params(ctx) if q.name == _SLOPE[self.param])
