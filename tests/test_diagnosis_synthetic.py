@@ -371,3 +371,26 @@ def test_a_none_that_cannot_exclude_a_relevant_error_says_so():
     _invariants(d)
     assert d.effect == "none", d.summary
     assert "cannot exclude one either" in d.summary and d.confidence != "high"
+
+
+def test_the_evidence_route_needs_no_more_parameters_than_the_rival():
+    """Two fits that predict the held-out cells alike: the candidate holds against the rival by
+    evidence only when it has no more fitted parameters (a more flexible form's in-sample edge may
+    be absorbed model discrepancy; seed 5869 of the benchmark)."""
+    from types import SimpleNamespace
+
+    from wheelsoil.model.diagnosis import _holds_against
+
+    rng = np.random.default_rng(0)
+    y = rng.normal(1000.0, 50.0, 40)
+    pred = y + rng.normal(0.0, 5.0, 40)
+    cells = SimpleNamespace(channels={"drawbar_pull_n": y}, var={"drawbar_pull_n": np.full(40, 25.0)})
+    data = SimpleNamespace(cells=cells)
+    cv = {"fold": np.repeat(np.arange(10), 4), "held_cells": {"drawbar_pull_n": pred}, "cv_R0": {}}
+
+    def fit(k):
+        return SimpleNamespace(k=k, cv=cv)
+
+    assert _holds_against(data, fit(1), fit(1), ["drawbar_pull_n"]) == "evidence"
+    assert _holds_against(data, fit(1), fit(2), ["drawbar_pull_n"]) == "evidence"
+    assert _holds_against(data, fit(2), fit(1), ["drawbar_pull_n"]) is None
