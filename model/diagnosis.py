@@ -113,7 +113,7 @@ decides with this rule (constants below; none was tuned on a benchmark):
    ``P_HIGH``, ``medium`` >= ``P_NAME``), capped at ``medium`` when the
    named model is physically inconsistent, when one of the generic
    alternatives for causes on no list (effect ``unexplained``: ``dp_resistance``, ``dp_drift``, ``radius``,
-   ``speed_gain``, ``tyre``, ``width``, ``sensor_gain``, ``angle_offset``, ``zero_drift``, ``load_k``, ``rebound``, ``shear_slip``, ``balance``) is also supported out of sample (with less
+   ``speed_gain``, ``tyre``, ``width``, ``sensor_gain``, ``angle_offset``, ``zero_drift``, ``load_k``, ``rebound``, ``shear_slip``, ``envelope``, ``k_stress``, ``balance``) is also supported out of sample (with less
    evidence: the data do not exclude an off-list cause), (model W / measured W outside
    ``LOAD_RATIO_TOL`` in a slip bin, Eq. 7, or static sinkage above D/6, the
    limit of Eq. 10's small-angle form), when there are fewer than
@@ -862,6 +862,10 @@ def _separating(effects: set, channels: set, names=()) -> str | None:
     if "shear_slip" in names and e:
         parts.append("shear-box or bevameter tests of this soil at several shear rates (a strength that changes "
                      "with the rate of shear) and the normal stress under the wheel (pressure sensors in the rim)")
+    if {"envelope", "k_stress"} & set(names) and e:
+        parts.append("shear-box tests of this soil over the whole range of normal stress under the wheel, from a few "
+                     "kPa to the peak (a curved failure envelope or a K that changes with the normal stress shows "
+                     "there; a wrong lab value is wrong at every stress)")
     if "load_k" in names and e & {"terrain_mismatch", "terrain_drift", "slip_sinkage"}:
         parts.append("the same slip sweep at a second static load (only a load-dependent soil changes its "
                      "pressure-sinkage modulus with it)")

@@ -61,6 +61,11 @@ The hypotheses (paper numbering for Eqs.; Wong = *Theory of Ground Vehicles*, 4t
 * ``shear_slip``: not a listed cause: a shear strength that changes with slip,
   (c + sigma tan phi)(1 + b s) (rate effects, remoulding, a weak tyre-soil interface;
   kernel ``tau_scale``): effect ``unexplained``.
+* ``envelope``, ``k_stress``: not listed causes: a curved failure envelope (the strength a
+  power of the normal stress) and a shear modulus K that depends on the normal stress, each
+  with one exponent and the lab's Eq. (4) holding at the peak static stress: a cohesion,
+  friction or K mismatch mimics them, so such a name needs the data to tell them apart:
+  effect ``unexplained``.
 * ``balance``: not a listed cause: the static sinkage from the vertical balance
   Eq. (7) instead of Eq. (10) (no parameters): effect ``unexplained``.
 * ``drift_linear``: terrain drift.  The terrain changes along the run:
@@ -98,7 +103,7 @@ from typing import ClassVar, Mapping
 import numpy as np
 
 from .slip_sinkage import Param, get_model
-from .wong import WheelForces, wong_forces
+from .wong import WheelForces, sinkage_eq10, wong_forces
 
 __all__ = [
     "HParam",
@@ -935,6 +940,66 @@ class ShearSlip(Hypothesis):
                            tau_scale=1.0 + p["b"] * np.asarray(slip, float))
 
 
+def _peak_stress(ctx: Context) -> float:
+    """sigma0 [Pa]: the lab terrain's peak normal stress under the wheel at the run's static load
+    (else the reference load ``w_ref``): Eq. (2) at the Eq. (10) sinkage z0, k_eq z0^n.  The reference
+    stress of the stress-dependent stand-ins (the lab's Eq. 4 holds there).  Raises ValueError
+    without a load."""
+    t, wheel = ctx.terrain, ctx.wheel
+    w = ctx.w_static if ctx.w_static and ctx.w_static > 0 else ctx.w_ref
+    if not (w and w > 0):
+        raise ValueError("the stress-dependent stand-ins need the run's static or reference load (Context)")
+    z0 = float(np.atleast_1d(sinkage_eq10(t, wheel, np.array([float(w)]), np.array([t.n])))[0])
+    return float(t.k_eq(wheel.width) * z0 ** t.n)
+
+
+class CurvedEnvelope(Hypothesis):
+    """A curved failure envelope: Eq. (4)'s strength c + tan phi sigma0 (sigma/sigma0)^beta, beta in
+    [0.3, 1.7] (1: the paper's straight line), meeting the lab's line at sigma0, the peak normal
+    stress at the static load (:func:`_peak_stress`; kernel ``wong_forces(shear_power=)``).
+
+    Not a cause on our list: the lab's Mohr-Coulomb c and phi are a straight fit over the shear
+    box's stress range, and a soil whose envelope curves is stronger (beta < 1) or weaker than that
+    line at the lower stresses near the ends of the contact.  A cohesion or friction mismatch
+    mimics it, which is why it is tried: a terrain mismatch it explains as well is not named.
+    Effect ``unexplained``.  Source: paper Eq. (4) with a power-law envelope (a modelling
+    alternative).
+    """
+
+    name, effect, title = "envelope", "unexplained", "a curved failure envelope (no listed cause)"
+    source = "generic alternative: Eq. (4) with the strength a power of the normal stress; kernel shear_power"
+
+    def own_params(self, ctx):
+        return (HParam("beta", 1.0, 0.3, 1.7, "-", "exponent of the normal stress in the shear strength"),)
+
+    def forces(self, ctx, terrain, load_n, slip, x, p):
+        power = None if p["beta"] == 1.0 else (_peak_stress(ctx), p["beta"], 0.0)
+        return wong_forces(terrain, ctx.wheel, load_n, slip, sinkage=ctx.sinkage, shear_power=power)
+
+
+class StressK(Hypothesis):
+    """A shear deformation modulus that depends on the normal stress: K (sigma/sigma0)^gamma,
+    gamma in [-1, 1.5] (0: the paper's constant K), the lab's K at sigma0, the peak normal stress
+    at the static load (:func:`_peak_stress`; kernel ``wong_forces(shear_power=)``).
+
+    Not a cause on our list: K comes from a shear box test at a few normal stresses, and the soil
+    under the wheel sees stresses from zero at the ends of the contact to the peak.  A K mismatch
+    mimics it, which is why it is tried: a terrain mismatch it explains as well is not named.
+    Effect ``unexplained``.  Source: paper Eqs. (4)-(5) with K a power of the normal stress (a
+    modelling alternative).
+    """
+
+    name, effect, title = "k_stress", "unexplained", "a shear modulus K that depends on the normal stress (no listed cause)"
+    source = "generic alternative: Eq. (4) with K a power of the normal stress; kernel shear_power"
+
+    def own_params(self, ctx):
+        return (HParam("gamma", 0.0, -1.0, 1.5, "-", "exponent of the normal stress in K"),)
+
+    def forces(self, ctx, terrain, load_n, slip, x, p):
+        power = None if p["gamma"] == 0.0 else (_peak_stress(ctx), 1.0, p["gamma"])
+        return wong_forces(terrain, ctx.wheel, load_n, slip, sinkage=ctx.sinkage, shear_power=power)
+
+
 class VerticalBalance(Hypothesis):
     """Wong's model with the static sinkage from the vertical balance Eq. (7) = W instead of
     Eq. (10)'s small-angle formula (kernel ``sinkage="balance"``); no parameters.
@@ -963,7 +1028,7 @@ HYPOTHESES: dict[str, Hypothesis] = {
               WongReece(), DriftLinear(), DriftStep(), *(_drift_one(n) for n in TERRAIN_NAMES),
               *(_drift_one(n, step=True) for n in TERRAIN_NAMES), DrawbarResistance(), DrawbarDrift(), ZeroDrift(),
               WheelRadius(), SpeedGain(), TyreRadius(), WheelWidth(), SensorGain(), AngleOffset(), LoadStiffness(),
-              Rebound(), ShearSlip(), VerticalBalance())
+              Rebound(), ShearSlip(), CurvedEnvelope(), StressK(), VerticalBalance())
 }
 
 

@@ -176,7 +176,7 @@ def sinkage_eq10(terrain: Terrain, wheel: Wheel, load_n, n=None) -> np.ndarray:
 
 
 def _integrals(terrain: Terrain, wheel: Wheel, z, s, n, load_only: bool = False, ratio=None, exit_ratio=None,
-               tau_scale=None):
+               tau_scale=None, shear_power=None):
     """Eqs. (1)-(9) by substituted Gauss-Legendre quadrature; z, s, n of shape (N,).
 
     ``ratio`` None: the paper's distribution (Eqs. 2-3 over [0, theta1]).
@@ -185,6 +185,7 @@ def _integrals(terrain: Terrain, wheel: Wheel, z, s, n, load_only: bool = False,
     ``wong_forces``). ``exit_ratio`` (N,) theta2/theta1 >= 0: the rear region
     runs on to -theta2 (a rebounding soil; ``ratio`` None then means theta_m = 0).
     ``tau_scale`` (N,) multiplies the shear strength c + sigma tan phi of Eq. (4) per sample.
+    ``shear_power`` (sigma0, beta, gamma) makes Eq. (4) stress-dependent (``wong_forces``).
     Returns theta1 and W (Eq. 7), and unless ``load_only`` also Dp, T; all (N,).
     """
     r, b = wheel.radius, wheel.width
@@ -222,10 +223,17 @@ def _integrals(terrain: Terrain, wheel: Wheel, z, s, n, load_only: bool = False,
             sigma = k * np.exp(nn * np.log(ztheta))  # Eq. (2)
         # Eq. (5): j = r [(theta1 - theta) - (1 - s)(sin theta1 - sin theta)]
         j = r * (2.0 * half - (1.0 - ss) * (2.0 * cos_m * sh))
-        strength = c + sigma * tanphi
+        inv_kk = inv_k
+        if shear_power is None:
+            strength = c + sigma * tanphi
+        else:  # Eq. (4) with a curved envelope and a stress-dependent K (wong_forces)
+            s0, beta, gamma = shear_power
+            rel = np.maximum(sigma / s0, 1e-12)
+            strength = c + (tanphi * s0) * rel ** beta
+            inv_kk = inv_k * rel ** (-gamma)
         if tau_scale is not None:
             strength = strength * tau_scale[sl, None]
-        tau = strength * -np.expm1(-j * inv_k)  # Eq. (4)
+        tau = strength * -np.expm1(-j * inv_kk)  # Eq. (4)
         # theta = theta1 - d with sin d = 2 sh ch, cos d = 1 - 2 sh^2
         sin_d = 2.0 * sh * ch
         cos_d = 1.0 - 2.0 * sh * sh
@@ -246,7 +254,7 @@ def _integrals(terrain: Terrain, wheel: Wheel, z, s, n, load_only: bool = False,
             cos_r = np.cos(th)
             # Eq. (5) over the same contact; theta1 - theta = span + (theta_m + theta2) (1 - u^3)
             j_r = r * ((span + rear * _1MUQ) - (1.0 - ss) * (s1 - sin_r))
-            tau_r = strength * -np.expm1(-j_r * inv_k)  # Eq. (4)
+            tau_r = strength * -np.expm1(-j_r * inv_kk)  # Eq. (4)
             scale_r = np.broadcast_to(rear, t1.shape)[:, 0]
             w_blk = w_blk + (r * b) * scale_r * ((sigma * cos_r + tau_r * sin_r) @ _G)
             if not load_only:
@@ -259,7 +267,8 @@ def _integrals(terrain: Terrain, wheel: Wheel, z, s, n, load_only: bool = False,
     return theta1, w_out, dp_out, t_out
 
 
-def _balance_sinkage(terrain, wheel, w, s, n, z_start, ratio=None, exit_ratio=None, tau_scale=None) -> np.ndarray:
+def _balance_sinkage(terrain, wheel, w, s, n, z_start, ratio=None, exit_ratio=None, tau_scale=None,
+                     shear_power=None) -> np.ndarray:
     """z0 with Eq. (7)(z0, s) = W, per sample; safeguarded secant in log z vs log W.
 
     Raises ValueError naming the first sample whose load exceeds what the
@@ -284,7 +293,8 @@ def _balance_sinkage(terrain, wheel, w, s, n, z_start, ratio=None, exit_ratio=No
         _, wm, _, _ = _integrals(terrain, wheel, np.exp(x), s[active], n[active], load_only=True,
                                  ratio=None if ratio is None else ratio[active],
                                  exit_ratio=None if exit_ratio is None else exit_ratio[active],
-                                 tau_scale=None if tau_scale is None else tau_scale[active])
+                                 tau_scale=None if tau_scale is None else tau_scale[active],
+                                 shear_power=shear_power)
         g = np.log(wm) - log_w[active]
         done = np.abs(g) < 1e-13
         if x_prev is not None:
@@ -379,6 +389,7 @@ def wong_forces(
     stress=None,
     exit_ratio=None,
     tau_scale=None,
+    shear_power=None,
 ) -> WheelForces:
     """Wong's rigid-wheel forces for each sample (paper Eqs. 1-10).
 
@@ -427,6 +438,14 @@ def wong_forces(
     c + sigma tan phi of Eq. (4) per sample (a shear strength that changes with slip, e.g.
     rate effects or remoulding: 1 + b s).
 
+    ``shear_power`` (``(sigma0, beta, gamma)``, floats, sigma0 > 0 [Pa]; None: the paper's
+    Eq. 4, same as ``(sigma0, 1, 0)``): shear parameters that depend on the normal stress,
+    strength c + tan phi sigma0 (sigma/sigma0)^beta (a curved failure envelope, a power law
+    that meets the straight Mohr-Coulomb line at sigma0) and modulus K (sigma/sigma0)^gamma.
+    Source: paper Eq. (4) with power laws in the normal stress (a modelling alternative, not a
+    law from the paper: the Mohr-Coulomb line of Eq. (4) is a straight fit over the lab's
+    stress range).
+
     Quadrature: each region by the substituted 24-point Gauss-Legendre rule
     (u^3 substitution at the end where the stress vanishes like a power n);
     the kink at theta_m is a region boundary, so both integrands are smooth.
@@ -440,7 +459,8 @@ def wong_forces(
     an unknown ``sinkage`` mode, a malformed ``stress`` or a non-finite
     coefficient, theta_m/theta1 = a1 + a2 s outside [0, 1) (``stress_ratio[i]``),
     an exit ratio that is not finite or outside [0, 1) (``exit_ratio[i]``), a shear-strength
-    factor that is not finite and positive (``tau_scale[i]``).
+    factor that is not finite and positive (``tau_scale[i]``), a ``shear_power`` that is not three
+    finite numbers with sigma0 > 0 (``shear_power``).
     """
     if sinkage not in SINKAGE_MODES:
         raise ValueError(f"sinkage mode must be one of {', '.join(SINKAGE_MODES)}, got {sinkage!r}")
@@ -451,6 +471,15 @@ def wong_forces(
                              "exit angle theta2/theta1 must be in [0, 1)", neutral=0.0)
     tau_scale = _per_sample(tau_scale, "tau_scale", s, lambda v: v <= 0,
                             "the shear-strength factor must be finite and > 0", neutral=1.0)
+    if shear_power is not None:
+        try:
+            shear_power = tuple(float(v) for v in shear_power)
+        except (TypeError, ValueError):
+            shear_power = ()
+        if len(shear_power) != 3 or not all(map(math.isfinite, shear_power)) or shear_power[0] <= 0:
+            raise ValueError(f"shear_power must be (sigma0 > 0 [Pa], beta, gamma), finite numbers; got {shear_power!r}")
+        if shear_power[1:] == (1.0, 0.0):
+            shear_power = None
     r, b = wheel.radius, wheel.width
     if terrain.kc / b + terrain.kphi <= 0:
         raise ValueError(
@@ -466,14 +495,14 @@ def wong_forces(
     z0 = sinkage_eq10(terrain, wheel, w, n)
     if sinkage == "balance":
         z_start = z0 if ratio is None else z0 * _small_angle_load_factor(ratio, n) ** (-1.0 / (n + 0.5))
-        z0 = _balance_sinkage(terrain, wheel, w, s, n, z_start, ratio, exit_ratio, tau_scale)
+        z0 = _balance_sinkage(terrain, wheel, w, s, n, z_start, ratio, exit_ratio, tau_scale, shear_power)
     z = z0 if z_fn is None else np.broadcast_to(np.asarray(z_fn(z0, s), dtype=float), w.shape).copy()
     _check(~np.isfinite(z), "sinkage_m", z, "sinkage is not finite")
     _check(z < 0, "sinkage_m", z, "sinkage must be >= 0 m")
     _check(z >= r, "sinkage_m", z, f"sinkage must be < wheel radius r = {r} m "
            "(theta1 >= 90 deg is outside the model)")
     theta1, w_model, dp, t = _integrals(terrain, wheel, z, s, n, ratio=ratio, exit_ratio=exit_ratio,
-                                        tau_scale=tau_scale)
+                                        tau_scale=tau_scale, shear_power=shear_power)
     return WheelForces(
         sinkage_m=z, theta1_rad=theta1, load_model_n=w_model, drawbar_pull_n=dp, torque_nm=t
     )

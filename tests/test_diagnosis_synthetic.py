@@ -323,7 +323,8 @@ def test_the_separating_measurement_names_what_tells_each_stand_in_from_a_listed
     from wheelsoil.model.diagnosis import _separating
 
     for name, words in (("speed_gain", "vehicle speed"), ("rebound", "rut depth"), ("shear_slip", "shear rates"),
-                        ("angle_offset", "calibration"), ("load_k", "second static load")):
+                        ("angle_offset", "calibration"), ("load_k", "second static load"),
+                        ("envelope", "range of normal stress"), ("k_stress", "range of normal stress")):
         text = _separating({"terrain_mismatch", "unexplained"}, {"drawbar_pull_n", "torque_nm"}, [name])
         assert text and words in text, (name, text)
     assert _separating({"none"}, {"drawbar_pull_n"}, []) is None

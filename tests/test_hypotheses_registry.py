@@ -218,3 +218,23 @@ def test_a_rebounding_soil_a_speed_gain_and_a_slip_dependent_shear_strength_are_
     s_true = 1.0 - (1.0 - np.asarray(S)) / 1.03
     np.testing.assert_allclose(g.drawbar_pull_n, wong_forces(SAND, DEFAULT_WHEEL, W, s_true).drawbar_pull_n)
     np.testing.assert_array_equal(spd.predict(CTX, W, S, X, spd.nulls(CTX)).torque_nm, base.torque_nm)
+
+
+def test_a_curved_envelope_and_a_stress_dependent_K_are_stand_ins_that_meet_the_lab_at_the_peak_static_stress():
+    """``envelope``: strength c + tan phi sigma0 (sigma/sigma0)^beta; ``k_stress``: K (sigma/sigma0)^gamma;
+    sigma0 the lab soil's peak normal stress k_eq z0^n at the Eq. (10) sinkage of the static load."""
+    from wheelsoil.model.wong import sinkage_eq10
+
+    env, ks = get_hypothesis("envelope"), get_hypothesis("k_stress")
+    assert env.effect == ks.effect == "unexplained"
+    ctx = dataclasses.replace(CTX, w_ref=9000.0, w_static=13000.0)
+    sigma0 = SAND.k_eq(DEFAULT_WHEEL.width) * float(sinkage_eq10(SAND, DEFAULT_WHEEL, 13000.0)) ** SAND.n
+    for h, p, power in ((env, {"beta": 0.8}, (sigma0, 0.8, 0.0)), (ks, {"gamma": 0.5}, (sigma0, 1.0, 0.5))):
+        f = h.predict(ctx, W, S, X, p)
+        np.testing.assert_allclose(f.torque_nm, wong_forces(SAND, DEFAULT_WHEEL, W, S, shear_power=power).torque_nm,
+                                   rtol=1e-12)
+        assert not np.allclose(f.torque_nm, wong_forces(SAND, DEFAULT_WHEEL, W, S).torque_nm, rtol=1e-4)
+        np.testing.assert_array_equal(h.predict(CTX, W, S, X, h.nulls(CTX)).torque_nm,
+                                      wong_forces(SAND, DEFAULT_WHEEL, W, S).torque_nm)
+    with pytest.raises(ValueError, match="reference load"):
+        env.predict(CTX, W, S, X, {"beta": 0.8})

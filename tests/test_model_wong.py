@@ -466,3 +466,34 @@ def test_exit_ratio_zero_and_tau_scale_one_are_the_paper_model_and_bad_values_ar
     for bad in (0.0, -1.0, float("inf")):
         with pytest.raises(ValueError, match="tau_scale"):
             wong_forces(terrain, DEFAULT_WHEEL, w, s, tau_scale=bad)
+
+
+def test_stress_dependent_shear_matches_the_simulators_independent_quadrature():
+    # a curved failure envelope c + tan phi sigma0 (sigma/sigma0)^beta and K (sigma/sigma0)^gamma
+    # (kernel shear_power, the stand-ins ``envelope`` and ``k_stress``) against wheelsoil.sim.terra's
+    # envelope / k_pressure (scipy quad_vec, written without the kernel) over every built-in terrain;
+    # the balance sinkage carries the load with them; (sigma0, 1, 0) is the paper's model bit for bit
+    from wheelsoil.sim.terra import soil_dict, wheel_forces
+
+    rng = np.random.default_rng(31)
+    for terrain, wheel, load, slip in _random_cases(40, seed=37):
+        power = (rng.uniform(10e3, 200e3), rng.uniform(0.4, 1.6), rng.uniform(-0.8, 1.2))
+        ours = wong_forces(terrain, wheel, [load], [slip], shear_power=power)
+        ref = wheel_forces(soil_dict(terrain), wheel.radius, wheel.width, [load], [slip],
+                           envelope=power[:2], k_pressure=power[::2])
+        for field in FIELDS:
+            a, b = getattr(ours, field)[0], ref[field][0]
+            assert abs(a - b) <= max(1e-6 * abs(b), 1e-3), (terrain.name, field, power, a, b)
+    terrain = load_terrain("clay")
+    w, s = np.linspace(4000.0, 9000.0, 20), np.linspace(0.0, 0.9, 20)
+    bal = wong_forces(terrain, DEFAULT_WHEEL, w, s, sinkage="balance", shear_power=(5e4, 0.6, 0.5))
+    np.testing.assert_allclose(bal.load_model_n, w, rtol=1e-10)
+    paper = wong_forces(terrain, DEFAULT_WHEEL, w, s)
+    same = wong_forces(terrain, DEFAULT_WHEEL, w, s, shear_power=(5e4, 1.0, 0.0))
+    np.testing.assert_array_equal(same.torque_nm, paper.torque_nm)
+    # a concave envelope (beta < 1) is stronger below sigma0: more drawbar pull at the same slip
+    strong = wong_forces(terrain, DEFAULT_WHEEL, w, s, shear_power=(1e9, 0.7, 0.0))
+    assert np.all(strong.drawbar_pull_n > paper.drawbar_pull_n)
+    for bad in ((0.0, 1.0, 0.0), (1e4, float("nan"), 0.0), (1e4, 1.0)):
+        with pytest.raises(ValueError, match="shear_power"):
+            wong_forces(terrain, DEFAULT_WHEEL, w, s, shear_power=bad)
