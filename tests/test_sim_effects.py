@@ -171,6 +171,19 @@ def test_held_out_effects_exit_angle_and_hump_shaped_shear(wong):
     np.testing.assert_allclose(rs["torque_nm"], ref["torque_nm"], rtol=1e-9)
     gain = rs["torque_nm"] / wong["torque_nm"] - 1.0
     assert np.all(gain > 0) and np.all(np.diff(gain) > 0) and np.all(rs["drawbar_pull_n"] > wong["drawbar_pull_n"])
+    # eighth batch: a loose top (a = 0 is the lab's soil; weaker near the surface, so less pull), an
+    # interface weaker than the soil at high stress (f = 1 is the soil's own line)
+    np.testing.assert_allclose(_tm("loose_top", a=0.0).drive_forces(LOAD, SLIP)["torque_nm"], wong["torque_nm"],
+                               rtol=1e-9)
+    lt = _tm("loose_top", a=0.3).drive_forces(LOAD, SLIP)
+    assert np.all(lt["torque_nm"] < wong["torque_nm"]) and np.all(lt["drawbar_pull_n"] < wong["drawbar_pull_n"])
+    np.testing.assert_allclose(_tm("interface", f=1.0).drive_forces(LOAD, SLIP)["torque_nm"], wong["torque_nm"],
+                               rtol=0.021)  # the same line: only the 2 % smoothing of the minimum
+    it = _tm("interface", f=0.6).drive_forces(LOAD, SLIP)
+    assert np.all(it["torque_nm"] < wong["torque_nm"])
+    # the interface caps the strength only where it is the weaker: far above, the soil's own line holds
+    low = wheel_forces(SOIL, R, B, LOAD, SLIP, interface=(SOIL["c"] + 1e9, 0.1))
+    np.testing.assert_allclose(low["torque_nm"], wong["torque_nm"], rtol=1e-6)
     # neither changes anything at zero size: the paper's wheel
     for kw in ({"slip_angle": 0.0}, {"grouser": 0.0}):
         np.testing.assert_allclose(wheel_forces(SOIL, R, B, LOAD, SLIP, **kw)["torque_nm"], wong["torque_nm"],
@@ -357,3 +370,12 @@ def test_the_benchmark_measures_an_effects_imprint_on_the_true_forces(monkeypatc
 
     monkeypatch.setattr(TruthModel, "drive_forces", buries)
     assert imprint(run) == {"drawbar_pull_n": math.inf, "torque_nm": math.inf}  # no finite measure, no crash
+
+
+def test_a_bouncing_vehicle_oscillates_the_measured_load_and_nothing_else():
+    quiet = simulate_run("sand", seed=7, duration_s=30.0, added_load_n=5000.0, soil_variability=0.0)
+    loud = simulate_run("sand", seed=7, duration_s=30.0, added_load_n=5000.0, soil_variability=0.0,
+                        effect="bouncing", params={"amplitude": 0.25})
+    assert loud.info["effect"] == "bouncing" and loud.info["acceptable"] == ["none", "unexplained"]
+    w_q, w_l = quiet.truth["load_n"].to_numpy(), loud.truth["load_n"].to_numpy()
+    assert np.std(w_l) > 2.0 * np.std(w_q)  # a 25 % oscillation over the pitch mode's few per cent

@@ -12,6 +12,7 @@ wheel's position. The transducer signals carry the wheel's inertia
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
@@ -88,6 +89,10 @@ def simulate_physics(truth: TruthModel, rng: np.random.Generator, *, added_load_
     slip_noise = bandlimited(rng, n_max, DT_S, 0.2, 3.0, 0.008)
     bf = bandlimited(rng, n_max, DT_S, 0.5, 8.0, 0.025 * wf0)
     br = bandlimited(rng, n_max, DT_S, 0.5, 8.0, 0.025 * wr0)
+    if truth.effect == "bouncing":  # rough ground: every wheel's load oscillates (held-out batch 8)
+        hz, ph = float(rng.uniform(1.5, 3.0)), float(rng.uniform(0.0, 2.0 * math.pi))
+        wave = np.sin(2.0 * math.pi * hz * np.arange(n_max) * DT_S + ph) * truth.params["amplitude"]
+        bf, br = bf + wave * wf0, br - wave * wr0  # the body pitches: front and rear in opposite phase
 
     def bump(arr):
         return lambda t: float(arr[min(int(round(t / DT_S)), len(arr) - 1)])

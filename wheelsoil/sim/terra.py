@@ -39,7 +39,13 @@ the wheel's own travel, the shear stress acting at r_g in Eqs. 7-9), the normal 
 ``envelope``: a curved failure envelope, the strength c + tan phi sigma0 (sigma/sigma0)^beta (a power
 law, beta < 1: it meets the lab's straight Mohr-Coulomb line at sigma0; real envelopes curve at higher
 normal stress). ``k_pressure``: a shear deformation modulus growing with the normal stress,
-K (sigma/sigma0)^gamma (measured for many soils; Wong, ch. 2), the lab's K at sigma0.
+K (sigma/sigma0)^gamma (measured for many soils; Wong, ch. 2), the lab's K at sigma0. ``depth_power``: a
+loose top layer, the strength (c + sigma tan phi) (d/d0)^a growing with the depth d = r (cos theta - cos
+theta1) below the original surface (the lab's at d0). ``interface``: the tyre-soil interface, adhesion ca
+and friction tan delta, fails where it is weaker than the soil: the strength min(c + sigma tan phi, ca +
+sigma tan delta) (a smooth tread on a frictional soil; Wong, ch. 2, on the tyre-soil interface), smoothed as
+m - sqrt(d^2 + (0.02 min)^2), m and d the two strengths' mean and half difference (2 % below both where
+they cross).
 
 Quadrature. ``scipy.integrate.quad_vec`` (adaptive Gauss-Kronrod 21, all
 samples and the five integrals of one call in one vector) over a normalised
@@ -111,14 +117,14 @@ def _shear_factor(j, K, hump):
 
 
 def _integrals(soil, r, b, z, s, n, theta_m_frac, epsrel, exit_frac=0.0, hump=None, tau_scale=1.0,
-               slip_angle=0.0, grouser=0.0, envelope=None, k_pressure=None):
+               slip_angle=0.0, grouser=0.0, envelope=None, k_pressure=None, depth_power=None, interface=None):
     """The five integrals of Eqs. (7)-(9) for each sample: returns W, Dp, T, theta1 (all (N,)).
 
     ``exit_frac``: the soil's rebound behind the wheel, exit angle theta2 = exit_frac theta1 (the
     rear region runs from theta_m to -theta2); ``hump``: see :func:`_shear_factor`; ``tau_scale``
     (N,) or scalar multiplies the shear strength; ``slip_angle`` [rad], ``grouser`` (lug height h
-    [m]), ``envelope`` ``(sigma0 [Pa], beta)`` and ``k_pressure`` ``(sigma0 [Pa], gamma)``: see the
-    module doc."""
+    [m]), ``envelope`` ``(sigma0 [Pa], beta)``, ``k_pressure`` ``(sigma0 [Pa], gamma)``,
+    ``depth_power`` ``(d0 [m], a)`` and ``interface`` ``(ca [Pa], tan delta)``: see the module doc."""
     from scipy.integrate import quad_vec
 
     size = len(z)
@@ -168,13 +174,20 @@ def _integrals(soil, r, b, z, s, n, theta_m_frac, epsrel, exit_frac=0.0, hump=No
         k_j = K  # Eq. (4)'s K, or growing with the normal stress
         if k_pressure is not None:
             k_j = K * (np.maximum(sigma, 1e-9 * k_pressure[0]) / k_pressure[0]) ** k_pressure[1]
+        strength = c + sigma_f * tanphi  # Eq. (4)'s Mohr-Coulomb strength
+        if interface is not None:  # the tyre-soil interface fails first where it is the weaker (smooth min)
+            other = interface[0] + sigma_f * interface[1]
+            mid, half = 0.5 * (strength + other), 0.5 * (strength - other)
+            strength = mid - np.sqrt(half * half + (0.02 * np.minimum(strength, other)) ** 2)
+        if depth_power is not None:  # a loose top: the strength grows with the depth below the surface
+            strength = strength * (np.maximum(zt, 1e-12 * depth_power[0]) / depth_power[0]) ** depth_power[1]
         if tan_a:  # sheared sideways too: the strength mobilised by |j|, its longitudinal part drives
             jy = r * (1.0 - s) * d * tan_a
             jr = np.hypot(j, jy)
             with np.errstate(invalid="ignore", divide="ignore"):
-                tau = (c + sigma_f * tanphi) * _shear_factor(jr, k_j, hump) * np.where(jr > 0, j / jr, 0.0)
+                tau = strength * _shear_factor(jr, k_j, hump) * np.where(jr > 0, j / jr, 0.0)
         else:
-            tau = (c + sigma_f * tanphi) * _shear_factor(j, k_j, hump)  # Eq. (4)
+            tau = strength * _shear_factor(j, k_j, hump)  # Eq. (4)
         ct, st = np.cos(theta), np.sin(theta)
         return np.concatenate([
             jac * sigma * ct / s_sig, jac * tau * st / s_tau, jac * tau * ct / s_tau,
@@ -255,7 +268,8 @@ def balance_sinkage(soil, radius_m, width_m, load_n, slip, *, n=None, theta_m_fr
 def wheel_forces(soil: Mapping[str, Any], radius_m: float, width_m: float, load_n, slip, *,
                  sinkage: str = "eq10", H=None, m1=None, m2=None, n1=None, stress=None,
                  exit_frac: float = 0.0, hump=None, tau_scale=1.0, z_cap=None, slip_angle: float = 0.0,
-                 grouser: float = 0.0, envelope=None, k_pressure=None, epsrel: float = EPSREL) -> dict[str, np.ndarray]:
+                 grouser: float = 0.0, envelope=None, k_pressure=None, depth_power=None, interface=None,
+                 epsrel: float = EPSREL) -> dict[str, np.ndarray]:
     """Reference forces of a rigid wheel on soil per sample (paper Eqs. 1-13, Wong-Reece stress).
 
     Parameters
@@ -279,6 +293,8 @@ def wheel_forces(soil: Mapping[str, Any], radius_m: float, width_m: float, load_
     grouser : lug height h [m]: the soil sheared at r + h (module doc); 0 in the paper.
     envelope : ``(sigma0, beta)``: a curved failure envelope (module doc), or None (paper).
     k_pressure : ``(sigma0, gamma)``: K growing with the normal stress (module doc), or None (paper).
+    depth_power : ``(d0, a)``: the strength x (d/d0)^a, d the depth below the surface (module doc), or None.
+    interface : ``(ca, tan_delta)``: the strength capped by the tyre-soil interface's (module doc), or None.
     epsrel : quadrature tolerance.
 
     Returns
@@ -335,6 +351,6 @@ def wheel_forces(soil: Mapping[str, Any], radius_m: float, width_m: float, load_
         i = int(np.flatnonzero(~np.isfinite(z) | (z <= 0) | (z >= r))[0])
         raise ValueError(f"sinkage[{i}] = {z[i]:.4g} m outside (0, r = {r[i]:.4g} m): the wheel buries itself")
     w_m, dp, t, th1 = _integrals(soil_n, r, b, z, s, n, tm, epsrel, exit_frac, hump, tau_scale, slip_angle, grouser,
-                                 envelope, k_pressure)
+                                 envelope, k_pressure, depth_power, interface)
     return {"sinkage_m": z, "static_sinkage_m": z0, "theta1_rad": th1, "load_model_n": w_m,
             "drawbar_pull_n": dp, "torque_nm": t}
