@@ -124,9 +124,13 @@ decides with this rule (constants below; none was tuned on a benchmark):
    may favour an effect below the relevance threshold), no
    structure test comes near significance (p >= 0.05), the measured sinkage does
    not grow with slip, and the run is precise enough to exclude a relevant
-   error: in every channel the 95 % confidence bound of Wong's mean error over
-   the accelerate cycles is below ``MIN_REL`` of the channel (equivalence
-   testing, Schuirmann 1987; rough ground or few cycles cannot prove "none").
+   error: in every channel the 95 % confidence bounds of Wong's mean error over
+   the accelerate cycles and of the RMS of an error of each structure test's
+   form (a quadratic against slip, against load, along the run: the relevance
+   of step 1 is an RMS, and an error that drifts or follows the load can have
+   no mean) are below ``MIN_REL`` of the channel (equivalence testing,
+   Schuirmann 1987; the RMS bound by inverting the noncentral F-test, Wellek
+   2010; rough ground or few cycles cannot prove "none").
 
 Per channel (``channels``): ``none`` when Wong shows no relevant structure
 in that channel, else the effect of the most probable hypothesis that
@@ -402,8 +406,30 @@ def _structure_1d(s_u: np.ndarray, e_u: np.ndarray, degree: int = 2, step: bool 
     ps_all = [q for q in (p, p_bins, p_step) if np.isfinite(q)]
     p_comb = min(1.0, len(ps_all) * min(ps_all)) if ps_all else p
     out.update(p=p_comb, p_poly=p, p_bins=p_bins, p_step=p_step, F=float(F), degree=d,
-               effect=float(np.sqrt(np.mean(fitted**2))), shape_p=ps, coef=[float(c) for c in coef])
+               effect=float(np.sqrt(np.mean(fitted**2))), shape_p=ps, coef=[float(c) for c in coef],
+               rms_upper=_rms_upper(float(F), df1, df2, s2, U))
     return out
+
+
+def _rms_upper(F: float, df1: int, df2: int, s2: float, U: int, level: float = 0.95) -> float:
+    """Upper ``level`` confidence bound on the RMS over the ``U`` units of a systematic error of the
+    polynomial's form (in the units' sigma), from its F-test: the F statistic is noncentral F with
+    noncentrality lambda = sum(mu^2)/sigma_u^2, and the bound is sqrt(lambda_U s2 / U), lambda_U the
+    largest lambda with P(F <= F_obs) >= 1 - ``level`` (test inversion; equivalence testing,
+    Wellek, Testing Statistical Hypotheses of Equivalence, 2nd ed. 2010, ch. 7).  NaN when the
+    test could not be made; inf for a perfect fit (s2 = 0)."""
+    if not (df1 > 0 and df2 > 0 and np.isfinite(F) and np.isfinite(s2) and U > 0):
+        return float("inf") if F == float("inf") else float("nan")
+    alpha = 1.0 - level
+    if stats.f.cdf(F, df1, df2) <= alpha:  # smaller than the null expects: no error is the bound
+        return 0.0
+    from scipy.optimize import brentq
+
+    hi = max(1.0, F * df1)
+    while stats.ncf.cdf(F, df1, df2, hi) > alpha:
+        hi *= 2.0
+    lam = brentq(lambda nc: stats.ncf.cdf(F, df1, df2, nc) - alpha, 0.0, hi, xtol=1e-6, rtol=1e-6)
+    return float(math.sqrt(lam * s2 / U))
 
 
 def _step_test(s_u: np.ndarray, e_u: np.ndarray) -> tuple[float, np.ndarray, tuple]:
@@ -577,6 +603,8 @@ def _structure_cells(data: FitData, pred: dict) -> dict:
             if "level_upper_sigma" in t:
                 t["level_upper_abs"] = t["level_upper_sigma"] * cells.sigma[c]
                 t["level_upper_rel"] = t["level_upper_abs"] / size if size > 0 else float("inf")
+            t["rms_upper_abs"] = t["rms_upper"] * cells.sigma[c]
+            t["rms_upper_rel"] = t["rms_upper_abs"] / size if size > 0 else float("inf")
             t["channel"] = c
             out[k] = t
     return out
@@ -1355,15 +1383,31 @@ def _changed_terrain(f: HypFit) -> list:
 
 
 def _loose(tests_w: dict) -> list:
-    """The structure tests whose 95 % bound on Wong's mean error (over the cycles) reaches
-    ``MIN_REL`` of the channel: the run cannot exclude a relevant error there."""
-    return [t for t in tests_w.values() if t.get("level_upper_rel", 0.0) >= MIN_REL]
+    """The structure tests whose 95 % bound on Wong's error reaches ``MIN_REL`` of the channel:
+    the mean error over the cycles, or the RMS of an error of the test's form (against slip, load
+    or along the run; :func:`_rms_upper`): the run cannot exclude a relevant error there.
+    Returns ``(test, kind, bound_abs, bound_rel)`` tuples, kind ``mean`` or ``rms``."""
+    out = []
+    for k, t in tests_w.items():
+        if t.get("level_upper_rel", 0.0) >= MIN_REL:
+            out.append((k, "mean", t["level_upper_abs"], t["level_upper_rel"], t["channel"]))
+        elif not t.get("rms_upper_rel", 0.0) < MIN_REL:  # NaN (no test possible) proves nothing either
+            out.append((k, "rms", t.get("rms_upper_abs", float("nan")), t.get("rms_upper_rel", float("nan")),
+                        t["channel"]))
+    return out
+
+
+_AGAINST = {"": "against slip", "@load": "against load", "@x": "along the run"}
 
 
 def _loose_text(loose: list) -> str:
-    return ("Wong's mean error may be as large as " + ", ".join(
-        f"{_fmt(t['level_upper_abs'], _UNITS[t['channel']])} ({t['level_upper_rel']:.1%} of the "
-        f"{CHANNEL_TITLES[t['channel']]})" for t in loose) + " (95 % confidence bound)")
+    parts = []
+    for key, kind, b_abs, b_rel, c in loose:
+        what = f"{'mean' if kind == 'mean' else 'RMS'} error in the {CHANNEL_TITLES[c]}" + (
+            "" if kind == "mean" else " " + _AGAINST.get(key[len(c):], ""))
+        size = f"{_fmt(b_abs, _UNITS[c])} ({b_rel:.1%})" if np.isfinite(b_rel) else "(too few units to bound it)"
+        parts.append(f"{what} up to {size}")
+    return "Wong's " + "; ".join(parts) + " (95 % confidence bounds)"
 
 
 def _confidence(effect, model, fits, eprobs, consistency, data, tests_w, sink_ev, reasons, supported, probs, paired,

@@ -345,8 +345,9 @@ def test_a_width_error_is_exactly_a_terrain_mismatch_so_both_verdicts_are_accept
 
 
 def test_the_benchmark_measures_an_effects_imprint_on_the_true_forces(monkeypatch):
-    """bench_diagnosis' imprint: the RMS change of the true Dp and T against Wong on the lab soil, from the
-    simulator's truth alone (zero without an effect, None for a sensor effect, growing with the size)."""
+    """bench_diagnosis' imprint: the RMS change of the reported Dp and T against Wong on the lab soil at the
+    reported load and slip, from the simulator's truth alone (zero without an effect; a sensor gain's is
+    its gain error; a slip from a wrong speed shows; growing with the size; None for an angle offset)."""
     import sys
     from pathlib import Path
 
@@ -356,7 +357,12 @@ def test_the_benchmark_measures_an_effects_imprint_on_the_true_forces(monkeypatc
     kw = dict(seed=31, duration_s=30.0, added_load_n=5000.0)
     run = simulate_run("sand", **kw)
     assert imprint(run) == pytest.approx({"drawbar_pull_n": 0.0, "torque_nm": 0.0}, abs=1e-9)
-    assert imprint(simulate_run("sand", effect="fx_gain", params={"gain": 1.1}, **kw)) is None
+    fx = imprint(simulate_run("sand", effect="fx_gain", params={"gain": 1.1}, **kw))
+    # 1.1 (Dp - m a) + m a: the gain scales the reading, inertia included, which processing adds back
+    assert fx["drawbar_pull_n"] == pytest.approx(0.1, rel=0.15) and fx["torque_nm"] == pytest.approx(0.0, abs=1e-9)
+    gnss = imprint(simulate_run("sand", effect="gnss_gain", params={"gain": 1.05}, **kw))
+    assert gnss["drawbar_pull_n"] > 0.01 and gnss["torque_nm"] > 0.001
+    assert imprint(simulate_run("sand", effect="angle_offset", params={"offset_deg": 1.0}, **kw)) is None
 
     def phi_off(deg):
         changes = {"phi": {"kind": "delta_deg", "value": deg}}
