@@ -1007,7 +1007,7 @@ effects (--effect; parameters with --param NAME=VALUE, the others drawn at --siz
     my_crosstalk         the transducer's torque channel reads My + k r Fx
     rate_shear           shear strength x (1 + beta ln(1 + s/0.02)): a rate-dependent soil
     loose_top            shear strength x (d/z0)^a, d the depth below the surface: a loose top layer
-    interface            strength min(c + sigma tan phi, ca + sigma f tan phi): a weaker tyre-soil interface
+    interface            friction f tan phi above sigma0/2: a tyre-soil interface weaker than the soil
     bouncing             every wheel's load oscillates at 1.5-3 Hz by amplitude x its static load
 
 The recording holds only what a logger would record plus a provenance record

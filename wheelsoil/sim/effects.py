@@ -137,10 +137,9 @@ the fifth and sixth led to, scored once)
   ``loose_top``        a loose top layer: the shear strength grows with the depth d below the original
                        surface, (c + sigma tan phi)(d/z0)^a, a 0.05-0.5, the lab's at the static
                        sinkage z0 (softer near the surface: the front of the contact and the rut's rim).
-  ``interface``        the tyre-soil interface is weaker than the soil at the higher stresses: the strength
-                       min(c + sigma tan phi, ca + sigma tan delta) (smoothed), tan delta = f tan phi, f
-                       0.9-0.5, the lines crossing at half the static peak stress (ca = c + sigma0/2 tan
-                       phi (1 - f)).
+  ``interface``        the tyre-soil interface is weaker than the soil at the higher stresses: friction
+                       f tan phi, f 0.9-0.5, above half the static peak stress sigma0/2 (the soil's
+                       line below it, the two joined smoothly; ``wheelsoil.sim.terra``).
   ``bouncing``         the vehicle bounces on rough ground: each wheel's load oscillates at 1.5-3 Hz by
                        5-30 % of its static load (measured by the transducer as it is: the soil model's
                        input is right, the soil sees a rapidly changing load).
@@ -499,9 +498,7 @@ class TruthModel:
         elif e == "loose_top":
             kw["depth_power"] = (float(self.static_sinkage(self.static_load_n)), p["a"])
         elif e == "interface":
-            tp = np.tan(np.asarray(soil["phi"], float))  # the soil's, per sample (its variability)
-            kw["interface"] = (np.asarray(soil["c"], float) + 0.5 * self.static_peak_stress() * tp * (1.0 - p["f"]),
-                               p["f"] * tp)
+            kw["interface"] = (0.5 * self.static_peak_stress(), p["f"])
         elif e in ("mud_buildup", "radius_error"):  # another wheel; slip is computed with the configured r
             g = 1.0 + p["e"] * (np.asarray(frac, float) if e == "mud_buildup" else 1.0)
             r = self.radius_m * g

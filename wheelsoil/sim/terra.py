@@ -41,11 +41,12 @@ law, beta < 1: it meets the lab's straight Mohr-Coulomb line at sigma0; real env
 normal stress). ``k_pressure``: a shear deformation modulus growing with the normal stress,
 K (sigma/sigma0)^gamma (measured for many soils; Wong, ch. 2), the lab's K at sigma0. ``depth_power``: a
 loose top layer, the strength (c + sigma tan phi) (d/d0)^a growing with the depth d = r (cos theta - cos
-theta1) below the original surface (the lab's at d0). ``interface``: the tyre-soil interface, adhesion ca
-and friction tan delta, fails where it is weaker than the soil: the strength min(c + sigma tan phi, ca +
-sigma tan delta) (a smooth tread on a frictional soil; Wong, ch. 2, on the tyre-soil interface), smoothed as
-m - sqrt(d^2 + (0.02 min)^2), m and d the two strengths' mean and half difference (2 % below both where
-they cross).
+theta1) below the original surface (the lab's at d0). ``interface`` ``(sigma_x, f)``: the tyre-soil
+interface, friction f tan phi, is weaker than the soil above the normal stress sigma_x: the strength
+c + sigma tan phi - (1 - f) tan phi [softplus(sigma - sigma_x) - softplus(-sigma_x)] (a smooth tread on a frictional soil; Wong,
+ch. 2, on the tyre-soil interface): the soil's line below sigma_x, the interface's line c + (1 - f)
+tan phi sigma_x + f tan phi sigma above it, joined smoothly over about sigma_x / 4 (softplus(x) = k ln(1 +
+e^(x/k)), k = sigma_x / 4).
 
 Quadrature. ``scipy.integrate.quad_vec`` (adaptive Gauss-Kronrod 21, all
 samples and the five integrals of one call in one vector) over a normalised
@@ -124,7 +125,7 @@ def _integrals(soil, r, b, z, s, n, theta_m_frac, epsrel, exit_frac=0.0, hump=No
     rear region runs from theta_m to -theta2); ``hump``: see :func:`_shear_factor`; ``tau_scale``
     (N,) or scalar multiplies the shear strength; ``slip_angle`` [rad], ``grouser`` (lug height h
     [m]), ``envelope`` ``(sigma0 [Pa], beta)``, ``k_pressure`` ``(sigma0 [Pa], gamma)``,
-    ``depth_power`` ``(d0 [m], a)`` and ``interface`` ``(ca [Pa], tan delta)``: see the module doc."""
+    ``depth_power`` ``(d0 [m], a)`` and ``interface`` ``(sigma_x [Pa], f)``: see the module doc."""
     from scipy.integrate import quad_vec
 
     size = len(z)
@@ -175,10 +176,11 @@ def _integrals(soil, r, b, z, s, n, theta_m_frac, epsrel, exit_frac=0.0, hump=No
         if k_pressure is not None:
             k_j = K * (np.maximum(sigma, 1e-9 * k_pressure[0]) / k_pressure[0]) ** k_pressure[1]
         strength = c + sigma_f * tanphi  # Eq. (4)'s Mohr-Coulomb strength
-        if interface is not None:  # the tyre-soil interface fails first where it is the weaker (smooth min)
-            other = interface[0] + sigma_f * interface[1]
-            mid, half = 0.5 * (strength + other), 0.5 * (strength - other)
-            strength = mid - np.sqrt(half * half + (0.02 * np.minimum(strength, other)) ** 2)
+        if interface is not None:  # the tyre-soil interface: friction f tan phi above sigma_x, joined smoothly
+            sx, f = interface
+            kx = 0.25 * sx  # softplus(sigma - sigma_x) - softplus(-sigma_x): 0 at sigma = 0, sigma - sigma_x far above
+            ramp = kx * (np.logaddexp(0.0, (sigma_f - sx) / kx) - np.logaddexp(0.0, -sx / kx))
+            strength = strength - (1.0 - f) * tanphi * ramp
         if depth_power is not None:  # a loose top: the strength grows with the depth below the surface
             strength = strength * (np.maximum(zt, 1e-12 * depth_power[0]) / depth_power[0]) ** depth_power[1]
         if tan_a:  # sheared sideways too: the strength mobilised by |j|, its longitudinal part drives
@@ -294,7 +296,7 @@ def wheel_forces(soil: Mapping[str, Any], radius_m: float, width_m: float, load_
     envelope : ``(sigma0, beta)``: a curved failure envelope (module doc), or None (paper).
     k_pressure : ``(sigma0, gamma)``: K growing with the normal stress (module doc), or None (paper).
     depth_power : ``(d0, a)``: the strength x (d/d0)^a, d the depth below the surface (module doc), or None.
-    interface : ``(ca, tan_delta)``: the strength capped by the tyre-soil interface's (module doc), or None.
+    interface : ``(sigma_x, f)``: above sigma_x the tyre-soil interface's friction f tan phi (module doc), or None.
     epsrel : quadrature tolerance.
 
     Returns
