@@ -426,9 +426,12 @@ def _rms_upper(F: float, df1: int, df2: int, s2: float, U: int, level: float = 0
     from scipy.optimize import brentq
 
     hi = max(1.0, F * df1)
-    while stats.ncf.cdf(F, df1, df2, hi) > alpha:
+    while stats.ncf.cdf(F, df1, df2, hi) > alpha and hi < 1e12:
         hi *= 2.0
-    lam = brentq(lambda nc: stats.ncf.cdf(F, df1, df2, nc) - alpha, 0.0, hi, xtol=1e-6, rtol=1e-6)
+    try:
+        lam = brentq(lambda nc: stats.ncf.cdf(F, df1, df2, nc) - alpha, 0.0, hi, xtol=1e-6, rtol=1e-6)
+    except ValueError:  # the noncentral F's cdf did not bracket the level: no bound
+        return float("nan")
     return float(math.sqrt(lam * s2 / U))
 
 
@@ -1386,7 +1389,7 @@ def _loose(tests_w: dict) -> list:
     """The structure tests whose 95 % bound on Wong's error reaches ``MIN_REL`` of the channel:
     the mean error over the cycles, or the RMS of an error of the test's form (against slip, load
     or along the run; :func:`_rms_upper`): the run cannot exclude a relevant error there.
-    Returns ``(test, kind, bound_abs, bound_rel)`` tuples, kind ``mean`` or ``rms``."""
+    Returns ``(test, kind, bound_abs, bound_rel, channel)`` tuples, kind ``mean`` or ``rms``."""
     out = []
     for k, t in tests_w.items():
         if t.get("level_upper_rel", 0.0) >= MIN_REL:

@@ -42,11 +42,11 @@ normal stress). ``k_pressure``: a shear deformation modulus growing with the nor
 K (sigma/sigma0)^gamma (measured for many soils; Wong, ch. 2), the lab's K at sigma0. ``depth_power``: a
 loose top layer, the strength (c + sigma tan phi) (d/d0)^a growing with the depth d = r (cos theta - cos
 theta1) below the original surface (the lab's at d0). ``interface`` ``(sigma_x, f)``: the tyre-soil
-interface, friction f tan phi, is weaker than the soil above the normal stress sigma_x: the strength
-c + sigma tan phi - (1 - f) tan phi [softplus(sigma - sigma_x) - softplus(-sigma_x)] (a smooth tread on a frictional soil; Wong,
-ch. 2, on the tyre-soil interface): the soil's line below sigma_x, the interface's line c + (1 - f)
-tan phi sigma_x + f tan phi sigma above it, joined smoothly over about sigma_x / 4 (softplus(x) = k ln(1 +
-e^(x/k)), k = sigma_x / 4).
+interface, friction f tan phi, is weaker than the soil above the normal stress sigma_x (a smooth tread
+on a frictional soil; Wong, ch. 2, on the tyre-soil interface): the strength c + sigma tan phi -
+(1 - f) tan phi [softplus(sigma - sigma_x) - softplus(-sigma_x)], softplus(x) = k ln(1 + e^(x/k)),
+k = sigma_x / 4: the soil's line below sigma_x, the interface's c + (1 - f) tan phi sigma_x + f tan phi
+sigma above it, joined smoothly over about sigma_x / 4.
 
 Quadrature. ``scipy.integrate.quad_vec`` (adaptive Gauss-Kronrod 21, all
 samples and the five integrals of one call in one vector) over a normalised
