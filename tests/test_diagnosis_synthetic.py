@@ -364,6 +364,7 @@ def test_a_named_cause_says_which_causes_on_no_list_it_does_not_exclude():
     from wheelsoil.model.diagnosis import _not_excluded
 
     assert "firm layer" in _not_excluded("terrain_mismatch", None)  # measured: held-out batches 3 and 4
+    assert "interface" in _not_excluded("terrain_mismatch", None)  # measured: held-out batch 8
     assert "falls with slip" in _not_excluded("stress_distribution", None)
     assert "sinkage against slip" in _not_excluded("slip_sinkage", {"significant": False})
     assert _not_excluded("slip_sinkage", {"significant": True}) is None  # the sinkage channel rules them out
