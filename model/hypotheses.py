@@ -949,7 +949,7 @@ def _peak_stress(ctx: Context) -> float:
     w = ctx.w_static if ctx.w_static and ctx.w_static > 0 else ctx.w_ref
     if not (w and w > 0):
         raise ValueError("the stress-dependent stand-ins need the run's static or reference load (Context)")
-    z0 = float(np.atleast_1d(sinkage_eq10(t, wheel, np.array([float(w)]), np.array([t.n])))[0])
+    z0 = float(sinkage_eq10(t, wheel, float(w)))
     return float(t.k_eq(wheel.width) * z0 ** t.n)
 
 
