@@ -28,7 +28,8 @@ with ``--terrains``, the next soil of the list).
     python benchmarks/bench_diagnosis.py --effects held-out-5       # ... a fifth
     python benchmarks/bench_diagnosis.py --effects held-out-6       # ... a sixth
     python benchmarks/bench_diagnosis.py --effects held-out-7       # ... a seventh
-    python benchmarks/bench_diagnosis.py --effects held-out-8       # ... and an eighth
+    python benchmarks/bench_diagnosis.py --effects held-out-8       # ... an eighth
+    python benchmarks/bench_diagnosis.py --effects held-out-9       # ... and a ninth
 
 A held-out batch is scored once with the rule as it stands when the batch is added: that first
 score measures how the rule meets causes it was not developed on; anything changed because of it
@@ -324,6 +325,7 @@ def report(rows: list[dict], wall_s: float, args) -> str:
 
 def main(argv=None) -> int:
     from wheelsoil.sim.vehicle import PROCEDURES
+    from wheelsoil.simulate import HELD_OUT_BATCHES
 
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
                                  formatter_class=argparse.RawDescriptionHelpFormatter, epilog=__doc__)
@@ -363,8 +365,7 @@ def main(argv=None) -> int:
                     help="draw each seed's soil from these built-in terrains (comma-separated slugs, or 'library': "
                     "every built-in terrain but the paper's clay and sand, which the rule was developed on); the "
                     "scenario's wheel and load stay; a soil the vehicle cannot drive moves to the next one")
-    ap.add_argument("--effects", choices=("listed", "held-out", "held-out-2", "held-out-3", "held-out-4",
-                                          "held-out-5", "held-out-6", "held-out-7", "held-out-8"),
+    ap.add_argument("--effects", choices=("listed", *HELD_OUT_BATCHES),
                     default="listed",
                     help="'listed' (default): EFFECTS[seed %% 17], in and out of family; 'held-out': "
                     "HELD_OUT[seed %% 3], out-of-family causes added after the rule (a rebounding soil, a "
@@ -376,7 +377,8 @@ def main(argv=None) -> int:
                     "envelope); 'held-out-6' a sixth (a lagging load channel, K growing with the pressure, a "
                     "rolling-radius error); 'held-out-7' a seventh (a drifting load zero, torque-channel crosstalk "
                     "from Fx, a shear strength growing with the shear rate); 'held-out-8' an eighth (a loose top "
-                    "layer, a tyre-soil interface weaker than the soil, a bouncing vehicle)")
+                    "layer, a tyre-soil interface weaker than the soil, a bouncing vehicle); 'held-out-9' a ninth (a "
+                    "saturating Fx channel, a compliant tyre tread, slip sinkage lagging the slip)")
     ap.add_argument("--json", default=None, metavar="FILE", help="also write the rows as JSON")
     ap.add_argument("--keep", default=None, metavar="DIR", help="keep recordings, truths and reports here")
     args = ap.parse_args(argv)

@@ -188,6 +188,21 @@ def test_held_out_effects_exit_angle_and_hump_shaped_shear(wong):
     weak = wheel_forces(SOIL, R, B, LOAD, SLIP, interface=(1.0, 0.6))
     soil = {**SOIL, "phi": math.atan(0.6 * math.tan(SOIL["phi"]))}
     np.testing.assert_allclose(weak["torque_nm"], wheel_forces(soil, R, B, LOAD, SLIP)["torque_nm"], rtol=1e-3)
+    # ninth batch: a compliant tread (e = 0 is the rigid wheel; the soil sees the slip less e T/(r W0)), slip
+    # sinkage lagging the slip (a lag equal to the slip is Vasil'ev, a zero lag Wong)
+    np.testing.assert_allclose(_tm("tyre_compliance", e=0.0).drive_forces(LOAD, SLIP)["torque_nm"],
+                               wong["torque_nm"], rtol=1e-12)
+    tc = _tm("tyre_compliance", e=0.1).drive_forces(LOAD, SLIP)
+    ref = wheel_forces(SOIL, R, B, LOAD, np.maximum(SLIP - 0.1 * wong["torque_nm"] / (R * W0), 0.0))
+    np.testing.assert_allclose(tc["torque_nm"], ref["torque_nm"], rtol=1e-9)
+    assert np.all(tc["torque_nm"] < wong["torque_nm"])
+    lagged = _tm("slip_sinkage_lag", H=0.05, tau_s=1.0)
+    vas = _tm("vasilev", H=0.05).drive_forces(LOAD, SLIP)
+    np.testing.assert_allclose(lagged.drive_forces(LOAD, SLIP)["sinkage_m"], vas["sinkage_m"], rtol=1e-9)
+    np.testing.assert_allclose(lagged.drive_forces(LOAD, SLIP, slip_lag=np.zeros_like(SLIP))["drawbar_pull_n"],
+                               wong["drawbar_pull_n"], rtol=1e-6)
+    half = lagged.drive_forces(LOAD, SLIP, slip_lag=0.5 * SLIP)["sinkage_m"]
+    np.testing.assert_allclose(half - wong["sinkage_m"], 0.05 * 0.5 * SLIP, rtol=1e-9)
     # neither changes anything at zero size: the paper's wheel
     for kw in ({"slip_angle": 0.0}, {"grouser": 0.0}):
         np.testing.assert_allclose(wheel_forces(SOIL, R, B, LOAD, SLIP, **kw)["torque_nm"], wong["torque_nm"],
@@ -205,7 +220,8 @@ def base_run():
                                            ("inertia_error", {"e": 0.3}), ("fz_crosstalk", {"k": 0.03}),
                                            ("load_radius", {"e": 0.5}), ("wheel_latency", {"delay_s": 0.1}),
                                            ("fx_gain_drift", {"g": 0.1}), ("load_lag", {"tau_s": 0.5}),
-                                           ("fz_zero_drift", {"drift_ratio": -0.05}), ("my_crosstalk", {"k": 0.03})])
+                                           ("fz_zero_drift", {"drift_ratio": -0.05}), ("my_crosstalk", {"k": 0.03}),
+                                           ("fx_saturation", {"compression": 0.1})])
 def test_sensor_effects_change_only_what_the_transducer_reports(base_run, effect, params):
     from wheelsoil.processing.decode import decode_batches
     from wheelsoil.daq import load_vehicle_config
@@ -248,6 +264,13 @@ def test_sensor_effects_change_only_what_the_transducer_reports(base_run, effect
         lagged, _ = lfilter([a_], [1.0, a_ - 1.0], w, zi=[(1.0 - a_) * w[0]])
         np.testing.assert_allclose(a.load_measured_n, lagged, rtol=1e-9)
         assert np.abs(a.load_measured_n - w).max() > 100.0  # the load transfer arrives late
+    elif effect == "fx_saturation":  # F_s tanh(Fx/F_s): the largest |Fx| reads 10 % low, small ones as they are
+        fx0, fx1 = b.fx_n.to_numpy(), a.fx_n.to_numpy()
+        i = int(np.argmax(np.abs(fx0)))
+        assert fx1[i] == pytest.approx(0.9 * fx0[i], rel=1e-9)
+        assert np.all(np.abs(fx1) <= np.abs(fx0) + 1e-9) and np.all(np.sign(fx1) == np.sign(fx0))
+        small = np.abs(fx0) < 0.1 * np.abs(fx0[i])
+        np.testing.assert_allclose(fx1[small], fx0[small], rtol=0.01)
     elif effect == "fz_crosstalk":  # the load channel reads W + 0.03 Fx
         np.testing.assert_allclose(a.load_measured_n - a.load_n, 0.03 * b.fx_n, atol=1e-6)
     elif effect == "fz_zero_drift":  # the load channel's zero runs linearly from +2.5 % to -2.5 % of W0

@@ -46,7 +46,8 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 
 from wheelsoil.sim.effects import (ACCEPTABLE, ALL_HELD_OUT, EFFECTS, HELD_OUT, HELD_OUT_2, HELD_OUT_3,
-                                   HELD_OUT_4, HELD_OUT_5, HELD_OUT_6, HELD_OUT_7, HELD_OUT_8, HELD_OUT_BATCHES,
+                                   HELD_OUT_4, HELD_OUT_5, HELD_OUT_6, HELD_OUT_7, HELD_OUT_8, HELD_OUT_9,
+                                   HELD_OUT_BATCHES,
                                    IN_FAMILY,
                                    OUT_OF_FAMILY, PARAM_NAMES, SENSOR_EFFECTS, VERDICTS, TruthModel, draw_effect, family_of)
 from wheelsoil.sim.physics import bandlimited as _bandlimited
@@ -54,7 +55,7 @@ from wheelsoil.sim.terra import soil_dict
 from wheelsoil.sim.vehicle import PROCEDURES
 
 __all__ = ["EFFECTS", "IN_FAMILY", "OUT_OF_FAMILY", "HELD_OUT", "HELD_OUT_2", "HELD_OUT_3", "HELD_OUT_4",
-           "HELD_OUT_5", "HELD_OUT_6", "HELD_OUT_7", "HELD_OUT_8", "HELD_OUT_BATCHES",
+           "HELD_OUT_5", "HELD_OUT_6", "HELD_OUT_7", "HELD_OUT_8", "HELD_OUT_9", "HELD_OUT_BATCHES",
            "ALL_HELD_OUT", "ACCEPTABLE", "VERDICTS",
            "SimulatedRun", "simulate_run", "write_simulation", "write_truth", "write_vehicle_config", "judge",
            "draw_case", "pack_signals", "vehicle_config_for", "SIMULATOR"]
@@ -378,6 +379,12 @@ def simulate_run(
         w_meas += params["drift_ratio"] * static * ramp
     elif effect == "my_crosstalk":  # the torque channel picks up k x r x the hub Fx
         my += params["k"] * r * fx
+    elif effect == "fx_saturation":  # F_s tanh(Fx/F_s): the run's largest |Fx| reads compression low
+        from scipy.optimize import brentq
+
+        u = brentq(lambda x: math.tanh(x) / x - (1.0 - float(params["compression"])), 1e-6, 1e3)
+        f_s = float(np.max(np.abs(fx))) / u
+        fx = f_s * np.tanh(fx / f_s)
     elif effect == "load_lag":  # a first-order filter of time constant tau_s on the load channel
         from scipy.signal import lfilter
 
@@ -1009,6 +1016,9 @@ effects (--effect; parameters with --param NAME=VALUE, the others drawn at --siz
     loose_top            shear strength x (d/z0)^a, d the depth below the surface: a loose top layer
     interface            friction f tan phi above sigma0/2: a tyre-soil interface weaker than the soil
     bouncing             every wheel's load oscillates at 1.5-3 Hz by amplitude x its static load
+    fx_saturation        the transducer's Fx saturates: F_s tanh(Fx/F_s), the largest |Fx| compression low
+    tyre_compliance      the tread's deformation slip e T/(r W0) is part of the computed slip
+    slip_sinkage_lag     Vasil'ev slip sinkage H s_lag, the slip through a first-order lag tau_s
 
 The recording holds only what a logger would record plus a provenance record
 (kind "simulated", the seed): the effect and its parameters go to --truth FILE

@@ -138,7 +138,14 @@ def simulate_physics(truth: TruthModel, rng: np.random.Generator, *, added_load_
     z = np.full(n, np.nan)
     drive = ~standstill & np.isfinite(slip) & (slip >= 0)
     s_drive = np.clip(slip[drive], 0.0, 0.97)
-    f = truth.drive_forces(load[drive], s_drive, frac=frac[drive], variability=var[drive])
+    lag = None
+    if truth.effect == "slip_sinkage_lag":  # the excavation's slip memory: a first-order lag of the slip
+        from scipy.signal import lfilter
+
+        a = dt / (float(truth.params["tau_s"]) + dt)
+        s_in = np.clip(np.nan_to_num(slip, nan=0.0), 0.0, 0.97)
+        lag = lfilter([a], [1.0, a - 1.0], s_in, zi=[(1.0 - a) * s_in[0]])[0][drive]
+    f = truth.drive_forces(load[drive], s_drive, frac=frac[drive], variability=var[drive], slip_lag=lag)
     dp[drive], tq[drive], z[drive] = f["drawbar_pull_n"], f["torque_nm"], f["sinkage_m"]
     skid = ~standstill & np.isfinite(slip) & (slip < 0)
     if skid.any():
