@@ -475,7 +475,8 @@ class DriftLinear(Hypothesis):
         out = []
         if x is None:
             x = np.zeros(np.size(load_n))
-        for xe in (-0.5, 0.5):
+        nodes, weights = self._nodes(ctx, np.asarray(x, float))
+        for xe in nodes:
             q = dict(base)
             q["k_eq"] = base["k_eq"] * math.exp(xe * base["g_lnk"])
             q["n"] = base["n"] + xe * base["g_n"]
@@ -486,12 +487,15 @@ class DriftLinear(Hypothesis):
             q["K"] = base["K"] * math.exp(xe * base["g_lnK"])
             terrain = apply_terrain(ctx.terrain, q)
             out.append(wong_forces(terrain, ctx.wheel, load_n, slip, sinkage=ctx.sinkage))
-        wb = self._weight_end(ctx, np.asarray(x, float))
-        return _weighted_sum((1.0 - wb, wb), out)
+        return _weighted_sum(weights, out)
 
-    def _weight_end(self, ctx, x):
-        """Weight (N,) of the end terrain at x: linear interpolation between start and end."""
-        return 0.5 + x
+    def _nodes(self, ctx, x):
+        """Distances at which the kernel is evaluated and each sample's weights on them, for ``x`` (N,)
+        in [-1/2, 1/2]: the start, middle and end terrains, interpolated quadratically in x (Lagrange),
+        so that the soil values, not the forces, are linear in x (the forces are far from linear in
+        ln K or n over a large drift; third-order error in the drift)."""
+        q = 2.0 * x
+        return (-0.5, 0.0, 0.5), (0.5 * q * (q - 1.0), 1.0 - q * q, 0.5 * q * (q + 1.0))
 
 
 def _interpolated(u: np.ndarray, forces_at) -> WheelForces:
@@ -538,8 +542,10 @@ class DriftStep(DriftLinear):
             return "no change point along the run in Wong's residuals"
         return super().available(ctx, has_x)
 
-    def _weight_end(self, ctx, x):
-        return 0.5 * (1.0 + np.tanh((x - float(ctx.x_step)) / (2.0 * self.WIDTH)))
+    def _nodes(self, ctx, x):
+        """The two patches' terrains, weighted by a logistic step at ``ctx.x_step``."""
+        wb = 0.5 * (1.0 + np.tanh((x - float(ctx.x_step)) / (2.0 * self.WIDTH)))
+        return (-0.5, 0.5), (1.0 - wb, wb)
 
 
 class DriftOne(DriftLinear):

@@ -61,6 +61,25 @@ def test_drift_changes_the_forces_along_the_run_only_with_a_slope():
     assert h.available(CTX, False) and not h.available(CTX, True)
 
 
+def test_a_drift_moves_the_soil_values_linearly_along_the_run_not_the_forces():
+    """K falling by a factor of 3.3 over the run (ln K linear in x): at each place the drift's forces
+    are Wong's with that place's K, to 6 % of their change along the run (the forces interpolated
+    linearly between the two end terrains erred by 30 % of it mid-run, where the drift is the lab's
+    value: a drift fitted so lost to Wong on the middle cycles of a run)."""
+    h = HYPOTHESES["drift_K"]
+    x = np.linspace(-0.5, 0.5, 9)
+    w, s = np.full(9, 13000.0), np.full(9, 0.3)
+    p = {"K": SAND.K, "g_lnK": -1.2}
+    f = h.predict(CTX, w, s, x, p)
+    exact = np.array([wong_forces(SAND.replace(K=SAND.K * math.exp(-1.2 * xi)), DEFAULT_WHEEL, 13000.0, 0.3)
+                      .drawbar_pull_n[0] for xi in x])
+    change = exact.max() - exact.min()
+    assert change > 0
+    np.testing.assert_allclose(f.drawbar_pull_n, exact, atol=0.06 * change)
+    assert f.drawbar_pull_n[4] == pytest.approx(wong_forces(SAND, DEFAULT_WHEEL, 13000.0, 0.3).drawbar_pull_n[0],
+                                                rel=1e-9)  # mid-run: the lab's own K
+
+
 def test_the_load_dependent_modulus_matches_the_kernel_at_each_load():
     """load_k interpolates the kernel's forces in ln W; against Wong's forces with k_eq taken at each
     sample's own load (W over +-6 % of the static load, beta = 3: k_eq over +-18 %)."""
