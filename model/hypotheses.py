@@ -494,8 +494,7 @@ class DriftLinear(Hypothesis):
         in [-1/2, 1/2]: the start, middle and end terrains, interpolated quadratically in x (Lagrange),
         so that the soil values, not the forces, are linear in x (the forces are far from linear in
         ln K or n over a large drift; third-order error in the drift)."""
-        q = 2.0 * x
-        return (-0.5, 0.0, 0.5), (0.5 * q * (q - 1.0), 1.0 - q * q, 0.5 * q * (q + 1.0))
+        return (-0.5, 0.0, 0.5), _lagrange3(2.0 * x)
 
 
 def _interpolated(u: np.ndarray, forces_at) -> WheelForces:
@@ -508,8 +507,12 @@ def _interpolated(u: np.ndarray, forces_at) -> WheelForces:
     h = 0.5 * (nodes[2] - nodes[0])
     if h <= 0:
         return out[0]
-    q = (u - nodes[1]) / h  # Lagrange weights on -1, 0, 1
-    return _weighted_sum((0.5 * q * (q - 1.0), 1.0 - q * q, 0.5 * q * (q + 1.0)), out)
+    return _weighted_sum(_lagrange3((u - nodes[1]) / h), out)
+
+
+def _lagrange3(q: np.ndarray) -> tuple:
+    """Quadratic Lagrange weights of the nodes -1, 0, 1 at ``q`` (N,): three (N,) arrays summing to 1."""
+    return 0.5 * q * (q - 1.0), 1.0 - q * q, 0.5 * q * (q + 1.0)
 
 
 def _weighted_sum(weights, forces) -> WheelForces:
