@@ -128,7 +128,7 @@ def imprint(run, n_max: int = 300) -> dict | None:
     to the frames only).  Computed from the simulator's truth alone, never from the diagnosis: it
     says how large an effect is against the rule's relevance floor (``MIN_REL``)."""
     from wheelsoil.sim.effects import TruthModel
-    from wheelsoil.simulate import STATIC_LOAD_N, WHEEL_INERTIA_KGM2, WHEEL_MASS_KG
+    from wheelsoil.simulate import STATIC_LOAD_N, WHEEL_INERTIA_KGM2, WHEEL_MASS_KG, speed_channel_errors
 
     e, p = run.info["effect"], run.info["params"]
     if e == "angle_offset":
@@ -137,12 +137,12 @@ def imprint(run, n_max: int = 300) -> dict | None:
     r = run.wheel[0]
     speed, omega, load = (tr[k].to_numpy() for k in ("speed_mps", "omega_radps", "load_n"))
     t = tr["t_s"].to_numpy()
-    if e == "gnss_gain":
-        speed = speed * p["gain"]
-    elif e == "load_radius":
-        omega = omega * (1.0 - p["e"] * (load / (STATIC_LOAD_N + run.info["added_load_n"]) - 1.0))
-    elif e == "wheel_latency":
-        omega = np.interp(t - p["delay_s"], t, omega)
+    gnss_gain, rl_gain, rl_delay_s = speed_channel_errors(e, p, load, STATIC_LOAD_N + run.info["added_load_n"])
+    speed = speed * gnss_gain
+    if rl_gain is not None:
+        omega = omega * rl_gain
+    if rl_delay_s:
+        omega = np.interp(t - rl_delay_s, t, omega)
     with np.errstate(divide="ignore", invalid="ignore"):
         slip = np.where(omega * r > 1e-6, 1.0 - speed / (omega * r), np.nan)
     moving = np.maximum(tr["speed_mps"].to_numpy(), tr["omega_radps"].to_numpy() * r) >= 0.05
@@ -154,7 +154,7 @@ def imprint(run, n_max: int = 300) -> dict | None:
     reported = {"drawbar_pull_n": (tr["fx_n"] + WHEEL_MASS_KG * tr["accel_mps2"]).to_numpy()[idx],
                 "torque_nm": (tr["my_nm"] - WHEEL_INERTIA_KGM2 * tr["omega_dot_radps2"]).to_numpy()[idx]}
     dist = tr["distance_m"].to_numpy()
-    lab = TruthModel(run.terrain_lab, run.wheel[0], run.wheel[1], "none", {})
+    lab = TruthModel(run.terrain_lab, r, run.wheel[1], "none", {})
     try:
         wong = lab.drive_forces(tr["load_measured_n"].to_numpy()[idx], slip[idx], frac=dist[idx] / max(dist[-1], 1.0),
                                 variability=tr["soil_factor"].to_numpy()[idx])

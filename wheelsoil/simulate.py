@@ -47,9 +47,7 @@ import numpy as np
 
 from wheelsoil.sim.effects import (ACCEPTABLE, ALL_HELD_OUT, EFFECTS, HELD_OUT, HELD_OUT_2, HELD_OUT_3,
                                    HELD_OUT_4, HELD_OUT_5, HELD_OUT_6, HELD_OUT_7, HELD_OUT_8, HELD_OUT_9,
-                                   HELD_OUT_BATCHES,
-                                   IN_FAMILY,
-                                   OUT_OF_FAMILY, PARAM_NAMES, SENSOR_EFFECTS, VERDICTS, TruthModel, draw_effect, family_of)
+                                   HELD_OUT_BATCHES, IN_FAMILY, OUT_OF_FAMILY, PARAM_NAMES, SENSOR_EFFECTS, VERDICTS, TruthModel, draw_effect, family_of)
 from wheelsoil.sim.physics import bandlimited as _bandlimited
 from wheelsoil.sim.terra import soil_dict
 from wheelsoil.sim.vehicle import PROCEDURES
@@ -242,6 +240,19 @@ def pack_signals(message, values: Mapping[str, Any], n: int) -> tuple[np.ndarray
 
 
 # ------------------------------------------------------------------- simulation
+def speed_channel_errors(effect: str, params: Mapping[str, Any], load_n: np.ndarray, static_load_n: float):
+    """What a sensor effect does to the speed channels slip is computed from: ``(gnss_gain,
+    rl_gain, rl_delay_s)``, the GNSS speed's gain (1: none), the left-rear wheel-speed reading's gain
+    per sample (``(N,)`` like ``load_n`` [N], a rolling radius shrinking with the load,
+    1 - e (W/W0 - 1); None: none) and its delay [s] (0: none).  ``static_load_n`` W0 [N].  Used by
+    :func:`simulate_run` for the frames and by the benchmark's imprint for the slip the fit sees.
+    Raises KeyError when ``params`` lacks the effect's parameter."""
+    gnss_gain = float(params["gain"]) if effect == "gnss_gain" else 1.0
+    rl_gain = 1.0 - params["e"] * (np.asarray(load_n, float) / static_load_n - 1.0) if effect == "load_radius" else None
+    rl_delay_s = float(params["delay_s"]) if effect == "wheel_latency" else 0.0
+    return gnss_gain, rl_gain, rl_delay_s
+
+
 def simulate_run(
     terrain,
     *,
@@ -390,10 +401,7 @@ def simulate_run(
 
         a = dt / (float(params["tau_s"]) + dt)
         w_meas, _ = lfilter([a], [1.0, a - 1.0], w_meas, zi=[(1.0 - a) * w_meas[0]])
-    gnss_gain = float(params["gain"]) if effect == "gnss_gain" else 1.0
-    # the left-rear wheel-speed channel reads omega r_roll / r (a rolling radius shrinking with the load)
-    rl_gain = 1.0 - params["e"] * (load / static - 1.0) if effect == "load_radius" else None
-    rl_delay_s = float(params["delay_s"]) if effect == "wheel_latency" else 0.0
+    gnss_gain, rl_gain, rl_delay_s = speed_channel_errors(effect, params, load, static)
 
     start_s = 1765416600 + int(seed % 5000) * 3607 + rng.uniform(0, 1)  # a December morning, seeded
     gps_offset_s = float(rng.uniform(-2.0, 2.0))       # GPS - (host UTC + leap) at the start
@@ -990,7 +998,7 @@ effects (--effect; parameters with --param NAME=VALUE, the others drawn at --siz
                          kphi and c x factor, so terrain_mismatch is acceptable too
     zero_drift           the transducer's My zero drifts over the run (drift_nm, end - start)
   held out (out of family, added after the diagnosis' rule to score it on causes it was
-  not developed on; bench_diagnosis.py --effects held-out / held-out-2 / ... / -8):
+  not developed on; bench_diagnosis.py --effects held-out / held-out-2 / ... / -9):
     exit_angle           a rebounding soil: contact on to theta2 = exit_frac theta1 behind the
                          bottom (a stress distribution: stress_distribution acceptable too)
     shear_hump           Wong's hump-shaped shear curve, residual Kr x the strength
