@@ -4,7 +4,10 @@
 to the :class:`~wheelsoil.model.data.Cells` of the data by penalised least
 squares: the residuals are ``(model - cell mean) / sd_cell`` for every
 measured channel, each channel weighted by its own model-free noise
-(:func:`wheelsoil.model.data.cell_noise`), plus one residual
+(:func:`wheelsoil.model.data.cell_noise`), the model of a cell being its mean over
+the cell's spread of slips (:func:`cell_forces`, not the model at the mean slip; the spread's
+term is taken at a first optimum, held fixed, and one Gauss-Newton step moves the optimum by
+what it changes), plus one residual
 ``(theta - prior mean) / prior sd`` per parameter with a lab prior (the
 MAP estimate under Gaussian priors; Bishop, *PRML* §3.3).  The solver is
 :func:`wheelsoil.model.solver.gauss_newton`.
@@ -44,8 +47,9 @@ import numpy as np
 from .data import CHANNELS, Cells, FitData
 from .hypotheses import Context, Hypothesis
 from .solver import FitResult, gauss_newton
+from .wong import WheelForces
 
-__all__ = ["HypFit", "fit_hypothesis", "cross_validate", "predict_cells", "inv_psd", "FIT_FTOL"]
+__all__ = ["HypFit", "fit_hypothesis", "cross_validate", "cell_forces", "predict_cells", "inv_psd", "FIT_FTOL"]
 
 FIT_FTOL = 1e-8  #: relative cost change that ends a fit (statistically negligible)
 FIT_MAX_ITER = 500  #: Gauss-Newton iteration limit of a fit (the ten-parameter drifts need ~200-250;
@@ -126,6 +130,7 @@ class HypFit:
     hparams: tuple = field(default=(), repr=False)
     cov: np.ndarray | None = field(default=None, repr=False)
     ctx: Context | None = field(default=None, repr=False)
+    spread: dict | None = field(default=None, repr=False)  #: the cells' slip-spread terms (:func:`_spread_terms`)
 
     def curve(self, load_n, slip, x=None):
         """WheelForces of the fitted hypothesis at (N,) loads and slips (drift: at mid-run, x = 0)."""
@@ -149,7 +154,7 @@ class _Problem:
     """Penalised least squares of one hypothesis on one set of cells, in solver variables
     (ln for ``log`` parameters)."""
 
-    def __init__(self, hyp: Hypothesis, ctx: Context, cells: Cells):
+    def __init__(self, hyp: Hypothesis, ctx: Context, cells: Cells, spread: dict | None = None):
         self.hyp, self.ctx, self.cells = hyp, ctx, cells
         self.params = hyp.parameters(ctx)
         self.names = [q.name for q in self.params]
@@ -182,6 +187,8 @@ class _Problem:
         self.ok = np.isfinite(y)
         self.y, self.sd = y[self.ok], sd[self.ok]
         self.m_data = int(self.ok.sum())
+        # ``spread``: channel -> (C,) the cells' slip-spread terms, held fixed (:func:`_spread_terms`)
+        self.spread = 0.0 if spread is None else np.concatenate([spread[c] for c in self.chans])[self.ok]
 
     def values(self, u) -> dict:
         """Solver vector -> name -> value (SI)."""
@@ -190,6 +197,7 @@ class _Problem:
         return dict(zip(self.names, map(float, x)))
 
     def forces(self, u, cells: Cells | None = None):
+        """The model at the cells' mean slips (the spread terms are added by :meth:`fun`)."""
         c = self.cells if cells is None else cells
         return self.hyp.predict(self.ctx, c.load_n, c.slip, c.x, self.values(u), inertia=c.inertia)
 
@@ -200,7 +208,7 @@ class _Problem:
         try:
             with np.errstate(all="ignore"):
                 f = self.forces(u)
-            r = (self.stack(f) - self.y) / self.sd
+            r = (self.stack(f) + self.spread - self.y) / self.sd
         except (ValueError, FloatingPointError, ZeroDivisionError):
             return np.full(self.m_data + len(self.prior_idx), np.inf)
         if self.prior_idx:
@@ -219,9 +227,44 @@ class _Problem:
         return np.tile(np.asarray(keep, bool), len(self.chans))[self.ok]
 
 
+def cell_forces(hyp: Hypothesis, ctx: Context, cells: Cells, params: dict) -> WheelForces:
+    """WheelForces of ``hyp`` with ``params`` on the cells: each field (C,) the model's mean over the
+    cell's slips, not the model at the cell's mean slip.  A cell's measured mean is the mean of the
+    forces over its samples; the model at the mean slip differs from it by f''(s) Var(s) / 2 (Jensen),
+    about one cell-noise sigma per cell on a benchmark clay run whose Dp rises steeply with slip,
+    which a five-value terrain re-fit absorbed and a one-value re-fit could not.  The mean is taken at the two
+    points s_mean -+ sd_s (exact for a quadratic in s; ``cells.slip_sd``); tables (one test point per
+    cell, ``slip_sd`` None) are evaluated at their slip."""
+    sd = cells.slip_sd
+    if sd is None or not np.any(sd > 0):
+        return hyp.predict(ctx, cells.load_n, cells.slip, cells.x, params, inertia=cells.inertia)
+    n = cells.n
+    sd = np.minimum(sd, 0.999 * np.minimum(np.abs(cells.slip), np.abs(1.0 - cells.slip)))  # both points in (0, 1)
+    two = np.concatenate
+    f = hyp.predict(ctx, two([cells.load_n, cells.load_n]), two([cells.slip - sd, cells.slip + sd]),
+                    None if cells.x is None else two([cells.x, cells.x]), params,
+                    inertia={c: two([v, v]) for c, v in cells.inertia.items()})
+    return WheelForces(**{fl.name: 0.5 * (getattr(f, fl.name)[:n] + getattr(f, fl.name)[n:])
+                          for fl in dataclasses.fields(WheelForces)})
+
+
+def _spread_terms(hyp: Hypothesis, ctx: Context, cells: Cells, params: dict) -> dict | None:
+    """channel -> (C,) what the cells' slip spread adds to the model at their mean slips
+    (:func:`cell_forces` minus the model there) with ``params``; None for a table.  A fit holds
+    them fixed at its first optimum and is refitted with them (:func:`fit_hypothesis`), and so do
+    its fold refits (:func:`cross_validate`): they change with the parameters by a fraction of
+    themselves (a few hundredths of a noise sigma), and every evaluation then costs one kernel
+    call at the mean slips instead of two."""
+    if cells.slip_sd is None or not np.any(cells.slip_sd > 0):
+        return None
+    mean = hyp.predict(ctx, cells.load_n, cells.slip, cells.x, params, inertia=cells.inertia)
+    spread = cell_forces(hyp, ctx, cells, params)
+    return {c: np.asarray(getattr(spread, a), float) - np.asarray(getattr(mean, a), float) for c, a in CHANNELS.items()}
+
+
 def predict_cells(fit: HypFit, ctx: Context, cells: Cells):
-    """WheelForces of a fitted hypothesis on (other) cells."""
-    return fit.hypothesis.predict(ctx, cells.load_n, cells.slip, cells.x, fit.params, inertia=cells.inertia)
+    """WheelForces of a fitted hypothesis on (other) cells, their slip spread included (:func:`cell_forces`)."""
+    return cell_forces(fit.hypothesis, ctx, cells, fit.params)
 
 
 def _equilibrate(A):
@@ -261,9 +304,12 @@ def fit_hypothesis(hyp: Hypothesis, ctx: Context, cells: Cells, *, max_iter: int
     prob = _Problem(hyp, ctx, cells)
     k = len(prob.names)
     notes: list[str] = []
+    spread = None
     if k == 0:
+        spread = _spread_terms(hyp, ctx, cells, {})
+        prob = _Problem(hyp, ctx, cells, spread)
         f = prob.forces(np.zeros(0))
-        r = (prob.stack(f) - prob.y) / prob.sd
+        r = (prob.stack(f) + prob.spread - prob.y) / prob.sd
         if not np.all(np.isfinite(r)):
             raise ValueError(f"{hyp.title}: the model cannot be evaluated on these data")
         res, u = None, np.zeros(0)
@@ -275,6 +321,20 @@ def fit_hypothesis(hyp: Hypothesis, ctx: Context, cells: Cells, *, max_iter: int
         if not np.all(np.isfinite(r0)):
             raise ValueError(f"{hyp.title}: the model cannot be evaluated at its start values")
         res = prob.solve(max_iter=max_iter, eps=eps)
+        if np.all(np.isfinite(res.x)) and np.all(np.isfinite(res.jac)):
+            try:
+                spread = _spread_terms(hyp, ctx, cells, prob.values(res.x))
+            except ValueError:
+                spread = None
+            if spread is not None:
+                # the slip-spread terms of this optimum move it by a fraction of a standard error:
+                # one Gauss-Newton step with its Jacobian (second order in that move) finds the new
+                # optimum; the Jacobian, covariance and bounds stay those of the first
+                prob = _Problem(hyp, ctx, cells, spread)
+                step = prob.solve(x0=res.x, max_iter=1, eps=eps, jac0=res.jac, covariance=False)
+                res = dataclasses.replace(res, x=step.x, params=step.params, residuals=step.residuals,
+                                          weighted_residuals=step.weighted_residuals, cost=step.cost,
+                                          nfev=res.nfev + step.nfev)
         u = res.x
         r = res.weighted_residuals
         chi2_d = float(r[: prob.m_data] @ r[: prob.m_data])
@@ -322,7 +382,7 @@ def fit_hypothesis(hyp: Hypothesis, ctx: Context, cells: Cells, *, max_iter: int
     bic = chi2_d / c_hat + chi2_p + k * math.log(max(m, 1))
     chans = {c: np.full(cells.n, np.nan) for c in prob.chans}
     for c in prob.chans:
-        chans[c] = np.asarray(getattr(f, CHANNELS[c]), float)
+        chans[c] = np.asarray(getattr(f, CHANNELS[c]), float) + (0.0 if spread is None else spread[c])
     terrain = ctx.terrain
     if hyp.terrain_block or ctx.fit_terrain:
         from .hypotheses import apply_terrain
@@ -341,7 +401,7 @@ def fit_hypothesis(hyp: Hypothesis, ctx: Context, cells: Cells, *, max_iter: int
         cell_pred=chans, cell_load_model=np.asarray(f.load_model_n, float), cell_sinkage=np.asarray(f.sinkage_m, float),
         chi2_data=chi2_d, chi2_prior=chi2_p, n_data=m, k=k, dof=dof, log_evidence=float(log_ev), bic=float(bic),
         success=bool(success), message=message, notes=tuple(notes), n_eff=float(cells.n), condition_number=cond,
-        u=np.asarray(u, float), info=info, hparams=tuple(prob.params), cov=cov_si, ctx=ctx,
+        u=np.asarray(u, float), info=info, hparams=tuple(prob.params), cov=cov_si, ctx=ctx, spread=spread,
     )
 
 
@@ -433,10 +493,11 @@ def cross_validate(fit: HypFit, ctx: Context, cells: Cells, group_kind: str = ""
     failed = 0
     full, J_full = None, None
     if fit.k and fit.result is not None:  # the full fit's Jacobian, if the fit is of these cells and ctx
-        full = _Problem(fit.hypothesis, ctx, cells)
+        full = _Problem(fit.hypothesis, ctx, cells, fit.spread)
         r = full.fun(fit.u)
         if fit.result.jac.shape == (r.size, fit.k) and np.allclose(r, fit.result.weighted_residuals, atol=1e-9):
             J_full = fit.result.jac
+    spread = fit.spread
     for g in groups:
         test = fold == g
         if fit.k == 0 or groups.size < 2:
@@ -444,7 +505,7 @@ def cross_validate(fit: HypFit, ctx: Context, cells: Cells, group_kind: str = ""
                 held[c][test] = fit.cell_pred[c][test]
             continue
         train = cells.subset(~test)
-        prob = _Problem(fit.hypothesis, ctx, train)
+        prob = _Problem(fit.hypothesis, ctx, train, None if spread is None else {c: v[~test] for c, v in spread.items()})
         # the refit starts at the full-data optimum, where the Jacobian is the full fit's, on the
         # training cells' rows (and the prior rows)
         jac0 = None if J_full is None else np.vstack([J_full[:full.m_data][full.data_rows(~test)],
@@ -455,9 +516,7 @@ def cross_validate(fit: HypFit, ctx: Context, cells: Cells, group_kind: str = ""
             if u is fit.u:
                 failed += 1
             vals = prob.values(u)
-            f = fit.hypothesis.predict(ctx, cells.load_n[test], cells.slip[test],
-                                       None if cells.x is None else cells.x[test], vals,
-                                       inertia={c: v[test] for c, v in cells.inertia.items()})
+            f = prob.forces(u, cells.subset(test))
         except (ValueError, FloatingPointError, np.linalg.LinAlgError):
             failed += 1
             vals = dict(fit.params)
@@ -467,7 +526,7 @@ def cross_validate(fit: HypFit, ctx: Context, cells: Cells, group_kind: str = ""
             continue
         fold_params.append(vals)
         for c in held:
-            held[c][test] = np.asarray(getattr(f, CHANNELS[c]), float)
+            held[c][test] = np.asarray(getattr(f, CHANNELS[c]), float) + (0.0 if spread is None else spread[c][test])
     cv_r0 = {}
     for c, y in cells.channels.items():
         e = y - held[c]

@@ -7,7 +7,9 @@
   time series, one row per cell for a table.  The models are fitted to the
   cell means: 100 Hz samples filtered at 5 Hz are strongly autocorrelated,
   so a cycle x slip-bin mean is the independent unit of information, and the
-  fit is ~80x cheaper than on the raw samples.
+  fit is ~80x cheaper than on the raw samples.  A cell spans a slip bin, and
+  its mean is the forces averaged over that spread (``Cells.slip_sd``), which
+  the fit models as such (:func:`wheelsoil.model.crossval.cell_forces`).
 * :func:`cell_noise` estimates each channel's noise of one cell mean from
   what no smooth function of slip, load and time explains: second differences
   between *consecutive accelerate cycles in the same slip bin* (a linear drift
@@ -463,7 +465,8 @@ class Cells:
     mean, :func:`cell_noise`), ``sigma_within`` (the within-cycle view),
     ``index`` (N,) the cell of each sample, ``x_kind`` ("distance", "time" or None),
     ``bin`` (C,) slip-bin index (time series) or the row's slip rank, ``inertia`` (column ->
-    (C,) cell means of :attr:`FitData.inertia`).
+    (C,) cell means of :attr:`FitData.inertia`), ``slip_sd`` (C,) the standard deviation of
+    the slip within each cell (None for a table: one test point per cell).
     """
 
     slip: np.ndarray
@@ -482,6 +485,7 @@ class Cells:
     noise_method: str = ""
     x_ref: tuple = (0.0, 1.0)
     inertia: dict = field(default_factory=dict)
+    slip_sd: np.ndarray | None = None
 
     def x_of(self, raw) -> np.ndarray | None:
         """The normalised drift coordinate of raw distance/time values (N,), as for the cells."""
@@ -502,7 +506,8 @@ class Cells:
             x=None if self.x is None else self.x[mask], group=self.group[mask], count=self.count[mask],
             channels={k: v[mask] for k, v in self.channels.items()},
             var={k: v[mask] for k, v in self.var.items()}, index=np.zeros(0, int), bin=self.bin[mask],
-            inertia={k: v[mask] for k, v in self.inertia.items()})
+            inertia={k: v[mask] for k, v in self.inertia.items()},
+            slip_sd=None if self.slip_sd is None else self.slip_sd[mask])
 
 
 def make_cells(data: "FitData") -> Cells:
@@ -569,6 +574,7 @@ def make_cells(data: "FitData") -> Cells:
     index[sel] = np.arange(int(sel.sum()))
     cells_idx = index[inv]
     slip_c, load_c, t_c = mean(data.slip)[sel], mean(data.load_n)[sel], mean(t)[sel]
+    slip_sd = None if data.kind == "table" else np.sqrt(np.maximum(mean(data.slip**2)[sel] - slip_c**2, 0.0))
     chans = {c: v[sel] for c, v in chans.items()}
     cntc = {c: v[sel] for c, v in ch_cnt.items()}
     group, sb = group[sel], sb[sel]
@@ -581,7 +587,7 @@ def make_cells(data: "FitData") -> Cells:
     return Cells(slip=slip_c, load_n=load_c, t_s=t_c, x=x, group=group, count=cnt[sel], channels=chans,
                  var=var, sigma=sigma, sigma_within=within, index=cells_idx, x_kind=x_kind, bin=sb,
                  noise_method=method, x_ref=x_ref,
-                 inertia={c: np.nan_to_num(mean(v)[sel]) for c, v in data.inertia.items()})
+                 inertia={c: np.nan_to_num(mean(v)[sel]) for c, v in data.inertia.items()}, slip_sd=slip_sd)
 
 
 #: Median of a chi-square variable with one degree of freedom: a robust variance from squares.

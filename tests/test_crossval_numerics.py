@@ -55,3 +55,64 @@ def test_null_directions_are_left_out_not_inflated():
     Z[:5, :5] = A
     assert abs(_logdet_psd(Z) - _logdet_psd(A)) < 1e-9
     assert inv_psd(Z)[5, 5] == 0.0
+
+
+def test_cells_are_predicted_as_the_mean_over_their_slips_not_at_the_mean_slip():
+    """A cell's measured mean is the forces averaged over its samples' slips; Wong's Dp is concave
+    in slip, so the model at the mean slip errs by f'' Var(s) / 2 (Jensen).  On noise-free data of
+    the model itself, ``cell_forces`` (two points mean -+ sd) must come far closer to the cell means
+    than the model at the mean slip does."""
+    from wheelsoil.model import DEFAULT_WHEEL, load_terrain
+    from wheelsoil.model.crossval import cell_forces
+    from wheelsoil.model.data import make_cells, prepare_data, synthetic_data
+    from wheelsoil.model.hypotheses import HYPOTHESES, Context
+
+    sand = load_terrain("sand")
+    df = synthetic_data(sand, DEFAULT_WHEEL, kind="timeseries", duration_s=60.0, noise_dp_n=1e-9, noise_t_nm=1e-9)
+    cells = make_cells(prepare_data(df))
+    assert cells.slip_sd is not None and np.median(cells.slip_sd) > 0.005  # cells span a slip bin
+    ctx = Context(sand, DEFAULT_WHEEL)
+    wong = HYPOTHESES["wong"]
+    y = cells.channels["drawbar_pull_n"]
+    at_mean = wong.predict(ctx, cells.load_n, cells.slip, cells.x, {}).drawbar_pull_n
+    averaged = cell_forces(wong, ctx, cells, {}).drawbar_pull_n
+    err_at_mean = np.sqrt(np.mean((y - at_mean) ** 2))
+    err_averaged = np.sqrt(np.mean((y - averaged) ** 2))
+    assert err_at_mean > 0.2  # N: the Jensen error is there to be removed
+    assert err_averaged < 0.3 * err_at_mean
+    # a table row is one test point: evaluated at its slip
+    table = make_cells(prepare_data(synthetic_data(sand, DEFAULT_WHEEL, kind="table", n_rows=30)))
+    assert table.slip_sd is None
+    np.testing.assert_array_equal(cell_forces(wong, ctx, table, {}).drawbar_pull_n,
+                                  wong.predict(ctx, table.load_n, table.slip, table.x, {}).drawbar_pull_n)
+
+
+def test_a_fit_and_its_fold_refits_model_the_cells_slip_spread():
+    """The fit holds the slip-spread terms of its first optimum fixed and steps once; its cell
+    predictions must still equal the two-point cell means at its parameters (to a small fraction
+    of the noise), and a fold's held-out prediction must include the spread term."""
+    from wheelsoil.model import DEFAULT_WHEEL, load_terrain
+    from wheelsoil.model.crossval import cross_validate, fit_hypothesis, predict_cells
+    from wheelsoil.model.data import make_cells, prepare_data, synthetic_data
+    from wheelsoil.model.hypotheses import HYPOTHESES, Context, lab_prior
+
+    clay = load_terrain("clay")
+    truth = clay.replace(phi=clay.phi + 0.05)
+    df = synthetic_data(clay, DEFAULT_WHEEL, kind="timeseries", duration_s=60.0, noise_dp_n=20.0, noise_t_nm=10.0,
+                        terrain_truth=truth, load_n=13000.0, seed=3)
+    cells = make_cells(prepare_data(df))
+    ctx = Context(clay, DEFAULT_WHEEL, prior=lab_prior(clay, DEFAULT_WHEEL))
+    fit = fit_hypothesis(HYPOTHESES["terrain_phi"], ctx, cells)
+    assert fit.success and fit.spread is not None
+    exact = predict_cells(fit, ctx, cells)
+    for c in ("drawbar_pull_n", "torque_nm"):
+        gap = np.abs(fit.cell_pred[c] - getattr(exact, c)) / cells.sigma[c]
+        assert np.max(gap) < 0.05, (c, np.max(gap))
+        assert np.max(np.abs(fit.spread[c])) > 0.0
+    cross_validate(fit, ctx, cells)
+    held = fit.cv["held_cells"]["drawbar_pull_n"]
+    assert np.all(np.isfinite(held))
+    # one cycle moves phi little: where the spread term is largest, the held-out prediction stays
+    # far closer to the full fit's (spread included) than the spread term itself
+    i = int(np.argmax(np.abs(fit.spread["drawbar_pull_n"])))
+    assert abs(held[i] - fit.cell_pred["drawbar_pull_n"][i]) < 0.5 * abs(fit.spread["drawbar_pull_n"][i])
