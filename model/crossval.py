@@ -327,14 +327,20 @@ def fit_hypothesis(hyp: Hypothesis, ctx: Context, cells: Cells, *, max_iter: int
             except ValueError:
                 spread = None
             if spread is not None:
-                # the slip-spread terms of this optimum move it by a fraction of a standard error:
-                # one Gauss-Newton step with its Jacobian (second order in that move) finds the new
-                # optimum; the Jacobian, covariance and bounds stay those of the first
+                # the slip-spread terms move the optimum by a fraction of a standard error: one
+                # Gauss-Newton step for what they change, with the first optimum's Jacobian (exact to
+                # second order in that move), kept when it lowers the cost; the Jacobian, covariance
+                # and bounds stay those of the first optimum
                 prob = _Problem(hyp, ctx, cells, spread)
-                step = prob.solve(x0=res.x, max_iter=1, eps=eps, jac0=res.jac, covariance=False)
-                res = dataclasses.replace(res, x=step.x, params=step.params, residuals=step.residuals,
-                                          weighted_residuals=step.weighted_residuals, cost=step.cost,
-                                          nfev=res.nfev + step.nfev)
+                x, r = res.x, prob.fun(res.x)
+                if np.all(np.isfinite(r)):
+                    change = r - res.weighted_residuals  # what the spread terms change in the residuals
+                    x1 = np.clip(x - np.linalg.lstsq(res.jac, change, rcond=None)[0], prob.lo, prob.hi)
+                    r1 = prob.fun(x1)
+                    if np.all(np.isfinite(r1)) and float(r1 @ r1) < float(r @ r):
+                        x, r = x1, r1
+                    res = dataclasses.replace(res, x=x, params=dict(zip(res.names, map(float, x))), residuals=r,
+                                              weighted_residuals=r, cost=0.5 * float(r @ r), nfev=res.nfev + 2)
         u = res.x
         r = res.weighted_residuals
         chi2_d = float(r[: prob.m_data] @ r[: prob.m_data])
