@@ -250,11 +250,11 @@ def cell_forces(hyp: Hypothesis, ctx: Context, cells: Cells, params: dict) -> Wh
 
 def _spread_terms(hyp: Hypothesis, ctx: Context, cells: Cells, params: dict) -> dict | None:
     """channel -> (C,) what the cells' slip spread adds to the model at their mean slips
-    (:func:`cell_forces` minus the model there) with ``params``; None for a table.  A fit holds
-    them fixed at its first optimum and is refitted with them (:func:`fit_hypothesis`), and so do
-    its fold refits (:func:`cross_validate`): they change with the parameters by a fraction of
-    themselves (a few hundredths of a noise sigma), and every evaluation then costs one kernel
-    call at the mean slips instead of two."""
+    (:func:`cell_forces` minus the model there) with ``params``; None for a table.  A fit takes
+    them at its first optimum and moves it by one Gauss-Newton step for them
+    (:func:`fit_hypothesis`); its fold refits hold them fixed (:func:`cross_validate`).  They
+    change with the parameters by a fraction of themselves (a few hundredths of a noise sigma),
+    and every evaluation then costs one kernel call at the mean slips instead of two."""
     if cells.slip_sd is None or not np.any(cells.slip_sd > 0):
         return None
     mean = hyp.predict(ctx, cells.load_n, cells.slip, cells.x, params, inertia=cells.inertia)
