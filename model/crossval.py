@@ -233,8 +233,12 @@ def cell_forces(hyp: Hypothesis, ctx: Context, cells: Cells, params: dict) -> Wh
     forces over its samples; the model at the mean slip differs from it by f''(s) Var(s) / 2 (Jensen),
     about one cell-noise sigma per cell on a benchmark clay run whose Dp rises steeply with slip,
     which a five-value terrain re-fit absorbed and a one-value re-fit could not.  The mean is taken at the two
-    points s_mean -+ sd_s (exact for a quadratic in s; ``cells.slip_sd``); tables (one test point per
-    cell, ``slip_sd`` None) are evaluated at their slip."""
+    points s_mean -+ sd_s (they match the cell's mean and variance of slip, so the rule is exact for a
+    quadratic in s; ``cells.slip_sd``, clipped so both points stay in (0, 1)); tables (one test point
+    per cell, ``slip_sd`` None) are evaluated at their slip.  Units as the kernel's (N, N m, m, rad).
+    Source: paper Eqs. (1)-(10) through ``hyp.predict``; Jensen's inequality for the error of the
+    model at the mean.  Raises ValueError where the hypothesis' kernel does (a slip or load outside
+    the model, naming the element)."""
     sd = cells.slip_sd
     if sd is None or not np.any(sd > 0):
         return hyp.predict(ctx, cells.load_n, cells.slip, cells.x, params, inertia=cells.inertia)
