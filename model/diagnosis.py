@@ -107,7 +107,15 @@ decides with this rule (constants below; none was tuned on a benchmark):
    them is the candidate, Wong with the lab's terrain is shown to err, not
    that a soil value is what is wrong: ``unexplained``, with it as the
    candidate.  A terrain mismatch or drift is named by the re-fit of a
-   single lab value (a lab error the data point at).
+   single lab value (a lab error the data point at), and only when that
+   claim holds on new data: its whole (``Hypothesis.whole``, the same re-fit
+   or drift of all five values) must not predict any measured channel better
+   out of sample (step 2's paired test: improves it, worsens none;
+   :func:`_whole_better`).  When it does, the soil differs (or changes) in
+   more than one value or in a way no single value describes (a tyre-soil interface weaker
+   than the soil at the higher stresses acts on Dp like a lower phi, and the
+   five-value re-fit then predicts the torque better): ``unexplained``, with
+   the one-value re-fit as the candidate.
    No supported hypothesis -> ``unexplained``.
 6. **Confidence** follows the effect's posterior probability (``high`` >=
    ``P_HIGH``, ``medium`` >= ``P_NAME``), capped at ``medium`` when the
@@ -1182,6 +1190,14 @@ def diagnose(
             effect = "unexplained"
             reasons.append(f"{TITLES[best]} lowers the drawbar pull error but leaves significant structure ("
                            + ", ".join(remain) + ")")
+        elif better := _whole_better(data, fits, fits[best]):
+            effect = "unexplained"
+            w = fits[best].hypothesis.whole
+            reasons.append(f"{TITLES[w]} predicts the " + " and ".join(CHANNEL_TITLES[c] for c in better)
+                           + f" better out of sample than {TITLES[best]}: the soil differs from the lab (or changes "
+                           "along the run) in more than one value or in a way no single value describes, so the data "
+                           "do not show which value is wrong "
+                           "(" + _LOOK_ALIKES[fits[best].effect][0] + ")")
         elif _catch_all(fits[best]):
             effect = "unexplained"
             reasons.append(f"only {TITLES[best]} explains the data, no re-fit of a single lab value does: Wong "
@@ -1368,6 +1384,21 @@ def _not_better_than_nested(data, fits, f: HypFit, target) -> list:
         if not all(pr[c]["improves"] for c in target) or any(r["worsens"] for r in pr.values()):
             out.append(n)
     return out
+
+
+def _whole_better(data, fits, f: HypFit) -> list:
+    """The measured channels that ``f``'s whole (``Hypothesis.whole``: the five-value form of a
+    one-value terrain re-fit or drift) predicts better out of sample by step 2's paired test, when it
+    worsens none; [] when ``f`` has no whole, the whole was not fitted or did not converge, or it
+    predicts no channel better.  Source: a nested-model lack-of-fit test, out of sample (module
+    doc, step 5)."""
+    g = fits.get(f.hypothesis.whole) if f.hypothesis.whole else None
+    if g is None or not g.success or g.cv is None or f.cv is None:
+        return []
+    pr = _paired(data, f, g)
+    if any(r["worsens"] for r in pr.values()):
+        return []
+    return [c for c, r in pr.items() if r["improves"]]
 
 
 def _prior_conflict(f: HypFit) -> bool:

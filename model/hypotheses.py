@@ -253,6 +253,10 @@ class Hypothesis:
     ``nested``: the registered hypotheses this one contains (the diagnosis asks it to beat each
     of them out of sample: what it adds must pay off on data it was not fitted to); the first is
     the one it reduces to when its own effect parameters are null (``nulls``).
+    ``whole``: for a one-value form (one soil value wrong or drifting, the other four as in the
+    lab), the registered hypothesis that frees all five values the same way; the diagnosis names
+    the one-value form only when its whole does not predict a measured channel better out of
+    sample (the claim "only this value" must hold on new data).  "" for all others.
     """
 
     name: ClassVar[str] = ""
@@ -263,6 +267,7 @@ class Hypothesis:
     terrain_block: ClassVar[bool] = False
     needs_x: ClassVar[bool] = False
     nested: ClassVar[tuple[str, ...]] = ()
+    whole: ClassVar[str] = ""
 
     def own_params(self, ctx: Context) -> tuple[HParam, ...]:
         """The hypothesis' own parameters (besides the terrain block)."""
@@ -381,6 +386,7 @@ class TerrainOne(Wong):
 
     effect = "terrain_mismatch"
     param: ClassVar[str] = ""
+    whole = "terrain"
 
     def own_params(self, ctx):
         return tuple(q for q in terrain_params(ctx) if q.name == self.param)
@@ -563,6 +569,7 @@ class DriftOne(DriftLinear):
 
     param: ClassVar[str] = ""
     terrain_block = False
+    whole = "drift_linear"
 
     def own_params(self, ctx):
         slope = next(q for q in super().own_params(ctx) if q.name == _SLOPE[self.param])
@@ -589,6 +596,8 @@ _SLOPE = {"k_eq": "g_lnk", "n": "g_n", "c": "g_c", "phi": "g_phi", "K": "g_lnK"}
 class DriftStepOne(DriftOne, DriftStep):
     """Another patch of ground that differs in one soil value: ``param`` steps at the change point
     (:class:`DriftStep`) around its own level; the other four stay at the lab values."""
+
+    whole = "drift_step"
 
 
 def _drift_one(name: str, step: bool = False) -> DriftOne:

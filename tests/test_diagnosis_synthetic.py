@@ -426,3 +426,40 @@ def test_the_evidence_route_needs_no_more_parameters_than_the_rival():
     assert _holds_against(data, fit(1), fit(1), ["drawbar_pull_n"]) == "evidence"
     assert _holds_against(data, fit(1), fit(2), ["drawbar_pull_n"]) == "evidence"
     assert _holds_against(data, fit(2), fit(1), ["drawbar_pull_n"]) is None
+
+
+def test_a_one_value_refit_falls_short_when_its_whole_predicts_a_channel_better():
+    """A one-value terrain re-fit is named only when the five-value re-fit (its whole) predicts no
+    measured channel better out of sample and worsens none (batch 8 of the benchmark: a tyre-soil
+    interface weaker than the soil named a phi mismatch while the five values predicted the torque
+    better on every held-out cycle)."""
+    from types import SimpleNamespace
+
+    from wheelsoil.model.diagnosis import _whole_better
+    from wheelsoil.model.hypotheses import HYPOTHESES
+
+    rng = np.random.default_rng(1)
+    n, chans = 40, ("drawbar_pull_n", "torque_nm")
+    y = {c: rng.normal(1000.0, 50.0, n) for c in chans}
+    cells = SimpleNamespace(channels=y, var={c: np.full(n, 25.0) for c in chans})
+    data = SimpleNamespace(cells=cells)
+    fold = np.repeat(np.arange(10), 4)
+
+    def fit(name, off):  # held-out predictions off the data by `off` noise sigmas (+ a little scatter)
+        held = {c: y[c] + 5.0 * (off[c] + 0.1 * rng.standard_normal(n)) for c in chans}
+        return SimpleNamespace(name=name, hypothesis=HYPOTHESES[name], success=True,
+                               cv={"fold": fold, "held_cells": held, "cv_R0": {}})
+
+    one = fit("terrain_phi", {"drawbar_pull_n": 0.3, "torque_nm": 1.0})
+    wholes = {k: h.whole for k, h in HYPOTHESES.items() if h.whole}
+    assert wholes == {**{f"terrain_{p}": "terrain" for p in ("k_eq", "n", "c", "phi", "K")},
+                      **{f"drift_{p}": "drift_linear" for p in ("k_eq", "n", "c", "phi", "K")},
+                      **{f"drift_step_{p}": "drift_step" for p in ("k_eq", "n", "c", "phi", "K")}}
+    better = fit("terrain", {"drawbar_pull_n": 0.3, "torque_nm": 0.2})
+    assert _whole_better(data, {"terrain_phi": one, "terrain": better}, one) == ["torque_nm"]
+    same = fit("terrain", {"drawbar_pull_n": 0.3, "torque_nm": 1.0})
+    assert _whole_better(data, {"terrain_phi": one, "terrain": same}, one) == []
+    trade = fit("terrain", {"drawbar_pull_n": 1.5, "torque_nm": 0.2})  # better torque, worse Dp: no verdict on it
+    assert _whole_better(data, {"terrain_phi": one, "terrain": trade}, one) == []
+    assert _whole_better(data, {"terrain_phi": one}, one) == []  # the whole not fitted
+    assert _whole_better(data, {"terrain": better}, better) == []  # no whole
