@@ -1196,8 +1196,7 @@ def diagnose(
             reasons.append(f"{TITLES[w]} predicts the " + " and ".join(CHANNEL_TITLES[c] for c in better)
                            + f" better out of sample than {TITLES[best]}: the soil differs from the lab (or changes "
                            "along the run) in more than one value or in a way no single value describes, so the data "
-                           "do not show which value is wrong "
-                           "(" + _LOOK_ALIKES[fits[best].effect][0] + ")")
+                           "do not show which value is wrong (" + _LOOK_ALIKES[fits[best].effect][0] + ")")
         elif _catch_all(fits[best]):
             effect = "unexplained"
             reasons.append(f"only {TITLES[best]} explains the data, no re-fit of a single lab value does: Wong "
