@@ -29,7 +29,8 @@ with ``--terrains``, the next soil of the list).
     python benchmarks/bench_diagnosis.py --effects held-out-6       # ... a sixth
     python benchmarks/bench_diagnosis.py --effects held-out-7       # ... a seventh
     python benchmarks/bench_diagnosis.py --effects held-out-8       # ... an eighth
-    python benchmarks/bench_diagnosis.py --effects held-out-9       # ... and a ninth
+    python benchmarks/bench_diagnosis.py --effects held-out-9       # ... a ninth
+    python benchmarks/bench_diagnosis.py --effects held-out-10      # ... and a tenth
 
 A held-out batch is scored once with the rule as it stands when the batch is added: that first
 score measures how the rule meets causes it was not developed on; anything changed because of it
@@ -378,7 +379,9 @@ def main(argv=None) -> int:
                     "rolling-radius error); 'held-out-7' a seventh (a drifting load zero, torque-channel crosstalk "
                     "from Fx, a shear strength growing with the shear rate); 'held-out-8' an eighth (a loose top "
                     "layer, a tyre-soil interface weaker than the soil, a bouncing vehicle); 'held-out-9' a ninth (a "
-                    "saturating Fx channel, a compliant tyre tread, slip sinkage lagging the slip)")
+                    "saturating Fx channel, a compliant tyre tread, slip sinkage lagging the slip); 'held-out-10' a tenth "
+                    "(a resistance growing with the forward speed, a soil stiffer at the loading rate, a lagging "
+                    "torque channel)")
     ap.add_argument("--json", default=None, metavar="FILE", help="also write the rows as JSON")
     ap.add_argument("--keep", default=None, metavar="DIR", help="keep recordings, truths and reports here")
     args = ap.parse_args(argv)

@@ -203,6 +203,23 @@ def test_held_out_effects_exit_angle_and_hump_shaped_shear(wong):
                                wong["drawbar_pull_n"], rtol=1e-6)
     half = lagged.drive_forces(LOAD, SLIP, slip_lag=0.5 * SLIP)["sinkage_m"]
     np.testing.assert_allclose(half - wong["sinkage_m"], 0.05 * 0.5 * SLIP, rtol=1e-9)
+    # tenth batch: the speed effects are absent without a speed and at standstill; at a speed, a resistance
+    # e W (V/5)^2 on Dp alone, a stiffer soil (less sinkage) by (1 + e ln(1 + V/0.025 m/s)) on kc and kphi
+    v = np.full_like(SLIP, 3.0)
+    for eff in ("speed_resistance", "rate_sinkage"):
+        tm = _tm(eff, e=0.05)
+        np.testing.assert_allclose(tm.drive_forces(LOAD, SLIP)["drawbar_pull_n"], wong["drawbar_pull_n"], rtol=1e-12)
+        np.testing.assert_allclose(tm.drive_forces(LOAD, SLIP, speed_mps=0.0 * v)["drawbar_pull_n"],
+                                   wong["drawbar_pull_n"], rtol=1e-12)
+    fast = _tm("speed_resistance", e=0.05).drive_forces(LOAD, SLIP, speed_mps=v)
+    np.testing.assert_allclose(wong["drawbar_pull_n"] - fast["drawbar_pull_n"], 0.05 * LOAD * (3.0 / 5.0) ** 2,
+                               rtol=1e-9)
+    np.testing.assert_allclose(fast["torque_nm"], wong["torque_nm"], rtol=1e-12)
+    stiff = _tm("rate_sinkage", e=0.05).drive_forces(LOAD, SLIP, speed_mps=v)
+    k = 1.0 + 0.05 * math.log1p(3.0 / 0.025)
+    ref = wheel_forces({**SOIL, "kc": SOIL["kc"] * k, "kphi": SOIL["kphi"] * k}, R, B, LOAD, SLIP)
+    np.testing.assert_allclose(stiff["sinkage_m"], ref["sinkage_m"], rtol=1e-9)
+    assert np.all(stiff["sinkage_m"] < wong["sinkage_m"])
     # neither changes anything at zero size: the paper's wheel
     for kw in ({"slip_angle": 0.0}, {"grouser": 0.0}):
         np.testing.assert_allclose(wheel_forces(SOIL, R, B, LOAD, SLIP, **kw)["torque_nm"], wong["torque_nm"],
@@ -221,7 +238,7 @@ def base_run():
                                            ("load_radius", {"e": 0.5}), ("wheel_latency", {"delay_s": 0.1}),
                                            ("fx_gain_drift", {"g": 0.1}), ("load_lag", {"tau_s": 0.5}),
                                            ("fz_zero_drift", {"drift_ratio": -0.05}), ("my_crosstalk", {"k": 0.03}),
-                                           ("fx_saturation", {"compression": 0.1})])
+                                           ("fx_saturation", {"compression": 0.1}), ("my_lag", {"tau_s": 0.2})])
 def test_sensor_effects_change_only_what_the_transducer_reports(base_run, effect, params):
     from wheelsoil.processing.decode import decode_batches
     from wheelsoil.daq import load_vehicle_config
@@ -264,6 +281,15 @@ def test_sensor_effects_change_only_what_the_transducer_reports(base_run, effect
         lagged, _ = lfilter([a_], [1.0, a_ - 1.0], w, zi=[(1.0 - a_) * w[0]])
         np.testing.assert_allclose(a.load_measured_n, lagged, rtol=1e-9)
         assert np.abs(a.load_measured_n - w).max() > 100.0  # the load transfer arrives late
+    elif effect == "my_lag":  # the torque channel is My through a first-order lag of 0.2 s; Fx as it is
+        from scipy.signal import lfilter
+
+        my = b.my_nm.to_numpy()
+        a_ = (1.0 / 500.0) / (0.2 + 1.0 / 500.0)
+        lagged, _ = lfilter([a_], [1.0, a_ - 1.0], my, zi=[(1.0 - a_) * my[0]])
+        np.testing.assert_allclose(a.my_nm, lagged, rtol=1e-9)
+        np.testing.assert_allclose(a.fx_n, b.fx_n)
+        assert np.abs(a.my_nm - my).max() > 50.0  # the spin-up's torque arrives late
     elif effect == "fx_saturation":  # F_s tanh(Fx/F_s): the largest |Fx| reads 10 % low, small ones as they are
         fx0, fx1 = b.fx_n.to_numpy(), a.fx_n.to_numpy()
         i = int(np.argmax(np.abs(fx0)))

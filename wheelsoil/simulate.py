@@ -47,13 +47,13 @@ import numpy as np
 
 from wheelsoil.sim.effects import (ACCEPTABLE, ALL_HELD_OUT, EFFECTS, HELD_OUT, HELD_OUT_2, HELD_OUT_3,
                                    HELD_OUT_4, HELD_OUT_5, HELD_OUT_6, HELD_OUT_7, HELD_OUT_8, HELD_OUT_9,
-                                   HELD_OUT_BATCHES, IN_FAMILY, OUT_OF_FAMILY, PARAM_NAMES, SENSOR_EFFECTS, VERDICTS, TruthModel, draw_effect, family_of)
+                                   HELD_OUT_10, HELD_OUT_BATCHES, IN_FAMILY, OUT_OF_FAMILY, PARAM_NAMES, SENSOR_EFFECTS, VERDICTS, TruthModel, draw_effect, family_of)
 from wheelsoil.sim.physics import bandlimited as _bandlimited
 from wheelsoil.sim.terra import soil_dict
 from wheelsoil.sim.vehicle import PROCEDURES
 
 __all__ = ["EFFECTS", "IN_FAMILY", "OUT_OF_FAMILY", "HELD_OUT", "HELD_OUT_2", "HELD_OUT_3", "HELD_OUT_4",
-           "HELD_OUT_5", "HELD_OUT_6", "HELD_OUT_7", "HELD_OUT_8", "HELD_OUT_9", "HELD_OUT_BATCHES",
+           "HELD_OUT_5", "HELD_OUT_6", "HELD_OUT_7", "HELD_OUT_8", "HELD_OUT_9", "HELD_OUT_10", "HELD_OUT_BATCHES",
            "ALL_HELD_OUT", "ACCEPTABLE", "VERDICTS",
            "SimulatedRun", "simulate_run", "write_simulation", "write_truth", "write_vehicle_config", "judge",
            "draw_case", "pack_signals", "vehicle_config_for", "SIMULATOR"]
@@ -396,11 +396,16 @@ def simulate_run(
         u = brentq(lambda x: math.tanh(x) / x - (1.0 - float(params["compression"])), 1e-6, 1e3)
         f_s = float(np.max(np.abs(fx))) / u
         fx = f_s * np.tanh(fx / f_s)
-    elif effect == "load_lag":  # a first-order filter of time constant tau_s on the load channel
+    elif effect in ("load_lag", "my_lag"):  # a first-order filter of time constant tau_s on one channel
         from scipy.signal import lfilter
 
         a = dt / (float(params["tau_s"]) + dt)
-        w_meas, _ = lfilter([a], [1.0, a - 1.0], w_meas, zi=[(1.0 - a) * w_meas[0]])
+        x = w_meas if effect == "load_lag" else my
+        x, _ = lfilter([a], [1.0, a - 1.0], x, zi=[(1.0 - a) * x[0]])
+        if effect == "load_lag":
+            w_meas = x
+        else:
+            my = x
     gnss_gain, rl_gain, rl_delay_s = speed_channel_errors(effect, params, load, static)
 
     start_s = 1765416600 + int(seed % 5000) * 3607 + rng.uniform(0, 1)  # a December morning, seeded
@@ -1027,6 +1032,9 @@ effects (--effect; parameters with --param NAME=VALUE, the others drawn at --siz
     fx_saturation        the transducer's Fx saturates: F_s tanh(Fx/F_s), the largest |Fx| compression low
     tyre_compliance      the tread's deformation slip e T/(r W0) is part of the computed slip
     slip_sinkage_lag     Vasil'ev slip sinkage H s_lag, the slip through a first-order lag tau_s
+    speed_resistance     Dp less e W (V / 5 m/s)^2: a resistance growing with the forward speed
+    rate_sinkage         kc, kphi x (1 + e ln(1 + V / 0.025 m/s)): a soil stiffer at the wheel's loading rate
+    my_lag               the torque channel through a first-order lag of time constant tau_s
 
 The recording holds only what a logger would record plus a provenance record
 (kind "simulated", the seed): the effect and its parameters go to --truth FILE

@@ -157,6 +157,19 @@ Held out, ninth batch (``--effects held-out-9``; added with the rule of the eigh
                        of 0.3-2 s (the instrumented wheel; the vehicle's dynamics use H s). A listed
                        cause with a twist: ``slip_sinkage`` or ``unexplained`` are acceptable.
 
+Held out, tenth batch (``--effects held-out-10``; added with the rule of ``c97d54e`` unchanged, scored
+once).  The first causes that depend on the forward speed V, which no hypothesis takes as an input:
+  ``speed_resistance`` a resistance growing with the square of the forward speed (the soil the tread and
+                       the bow wave throw forward, its inertia; Wong, Theory of Ground Vehicles, ch. 4, on
+                       speed effects): Dp less e W (V / 5 m/s)^2, e 1-10 %; the torque as Wong's.
+  ``rate_sinkage``     a pressure-sinkage relation that stiffens with the loading rate (viscous clays,
+                       wet soils; the lab's plate pressed at 25 mm/s): kc and kphi x
+                       (1 + e ln(1 + V / 0.025 m/s)), e 0.5-10 %.
+  ``my_lag``           the transducer's torque channel lags its force channels: a first-order filter of
+                       time constant 0.03-0.5 s (a different anti-alias filter in the My bridge's amplifier).
+The vehicle's dynamics use Wong's forces for the two speed effects (the force table has no speed axis);
+the instrumented wheel's forces carry them.
+
 Sensor effects (``fx_gain``, ``my_gain``, ``load_gain``, ``angle_offset``, ``zero_drift``) change only
 what the transducer reports; the soil forces (and the vehicle) are Wong's.
 """
@@ -172,7 +185,8 @@ import numpy as np
 from .terra import sinkage_eq10, wheel_forces
 
 __all__ = ["EFFECTS", "IN_FAMILY", "OUT_OF_FAMILY", "HELD_OUT", "HELD_OUT_2", "HELD_OUT_3", "HELD_OUT_4",
-           "HELD_OUT_5", "HELD_OUT_6", "HELD_OUT_7", "HELD_OUT_8", "HELD_OUT_9", "HELD_OUT_BATCHES", "ALONG_RUN",
+           "HELD_OUT_5", "HELD_OUT_6", "HELD_OUT_7", "HELD_OUT_8", "HELD_OUT_9", "HELD_OUT_10", "HELD_OUT_BATCHES",
+           "ALONG_RUN",
            "ALL_HELD_OUT", "ACCEPTABLE", "VERDICTS", "SENSOR_EFFECTS", "draw_effect", "TruthModel", "family_of"]
 
 #: The verdicts a report can give (report.json ``diagnosis.effect``).
@@ -200,19 +214,26 @@ HELD_OUT_7 = ("fz_zero_drift", "my_crosstalk", "rate_shear")
 HELD_OUT_8 = ("loose_top", "interface", "bouncing")
 #: the ninth, scored once with the rule of the eighth
 HELD_OUT_9 = ("fx_saturation", "tyre_compliance", "slip_sinkage_lag")
+#: the tenth, scored once with the rule of c97d54e (the first causes that depend on the forward speed)
+HELD_OUT_10 = ("speed_resistance", "rate_sinkage", "my_lag")
 #: the batches by their ``bench_diagnosis.py --effects`` name, and all held-out effects
 HELD_OUT_BATCHES = {"held-out": HELD_OUT, "held-out-2": HELD_OUT_2, "held-out-3": HELD_OUT_3,
                     "held-out-4": HELD_OUT_4, "held-out-5": HELD_OUT_5, "held-out-6": HELD_OUT_6,
-                    "held-out-7": HELD_OUT_7, "held-out-8": HELD_OUT_8, "held-out-9": HELD_OUT_9}
+                    "held-out-7": HELD_OUT_7, "held-out-8": HELD_OUT_8, "held-out-9": HELD_OUT_9,
+                    "held-out-10": HELD_OUT_10}
 ALL_HELD_OUT = tuple(e for batch in HELD_OUT_BATCHES.values() for e in batch)
 SENSOR_EFFECTS = ("fx_gain", "my_gain", "load_gain", "angle_offset", "zero_drift", "gnss_gain", "inertia_error",
                   "fz_crosstalk", "load_radius", "wheel_latency", "fx_gain_drift", "load_lag",
-                  "fz_zero_drift", "my_crosstalk", "fx_saturation")
+                  "fz_zero_drift", "my_crosstalk", "fx_saturation", "my_lag")
 #: effects whose truth changes along the run (the simulator tabulates their forces against distance too)
 ALONG_RUN = ("terrain_drift", "mud_buildup")
 
 #: ``rate_shear``'s reference slip: the strength is the lab's at slips well below it
 RATE_SLIP_REF = 0.02
+#: ``speed_resistance``'s reference speed [m/s]: the extra resistance is e W at it
+SPEED_REF_MPS = 5.0
+#: ``rate_sinkage``'s reference loading rate [m/s]: the lab plate's penetration speed
+PLATE_RATE_MPS = 0.025
 
 #: Acceptable verdicts per effect (contract F). See the module docstring for the two
 #: out-of-family effects with an exact in-family equivalent (load_gain, width_error).
@@ -261,6 +282,9 @@ ACCEPTABLE: dict[str, tuple[str, ...]] = {
     "fx_saturation": ("unexplained",),
     "tyre_compliance": ("unexplained",),
     "slip_sinkage_lag": ("slip_sinkage", "unexplained"),
+    "speed_resistance": ("unexplained",),
+    "rate_sinkage": ("unexplained",),
+    "my_lag": ("unexplained",),
 }
 
 #: Terrain parameters a mismatch / drift may change, with the relative (or absolute) range
@@ -312,6 +336,9 @@ _ONE_PARAM: dict[str, tuple[str, float, float, bool, str]] = {
     "bouncing": ("amplitude", 0.05, 0.30, True, "plain"),
     "fx_saturation": ("compression", 0.02, 0.25, True, "plain"),
     "tyre_compliance": ("e", 0.02, 0.15, True, "plain"),
+    "speed_resistance": ("e", 0.003, 0.05, True, "plain"),
+    "rate_sinkage": ("e", 0.005, 0.10, True, "plain"),
+    "my_lag": ("tau_s", 0.03, 0.5, True, "plain"),
 }
 
 
@@ -480,10 +507,12 @@ class TruthModel:
             soil["kphi"] = soil["kphi"] * v
         return soil
 
-    def drive_forces(self, load_n, slip, frac=0.5, variability=None, slip_lag=None) -> dict[str, np.ndarray]:
+    def drive_forces(self, load_n, slip, frac=0.5, variability=None, slip_lag=None,
+                     speed_mps=None) -> dict[str, np.ndarray]:
         """True soil forces of a driven wheel, 0 <= s < 1: dict of (N,) ``drawbar_pull_n``,
         ``torque_nm``, ``sinkage_m`` (soil/tyre effects applied, not sensor effects).
         ``slip_lag`` (N,): the lagged slip of ``slip_sinkage_lag`` (None: the slip itself).
+        ``speed_mps`` (N,) the forward speed V of the speed effects (None: they are left out).
         Raises ValueError when the wheel buries itself (sinkage >= r)."""
         w = np.atleast_1d(np.asarray(load_n, float))
         s = np.broadcast_to(np.atleast_1d(np.asarray(slip, float)), w.shape)
@@ -538,12 +567,17 @@ class TruthModel:
             b = self.width_m * p["factor"]
         elif e == "tyre_deflection":
             r = self.radius_m * (1.0 + p["kappa"] * w / self.static_load_n)
-        elif e == "load_dependent":
-            f = (w / self.static_load_n) ** p["beta"]
+        elif e in ("load_dependent", "rate_sinkage"):
+            if e == "load_dependent":
+                f = (w / self.static_load_n) ** p["beta"]
+            else:
+                f = 1.0 + (0.0 if speed_mps is None else p["e"] * np.log1p(np.abs(speed_mps) / PLATE_RATE_MPS))
             soil = dict(soil)
             soil["kc"] = soil["kc"] * f
             soil["kphi"] = soil["kphi"] * f
         out = wheel_forces(soil, r, b, w, s, epsrel=self.epsrel, **kw)
+        if e == "speed_resistance" and speed_mps is not None:
+            out["drawbar_pull_n"] = out["drawbar_pull_n"] - p["e"] * w * (np.asarray(speed_mps) / SPEED_REF_MPS) ** 2
         if e == "tyre_hysteresis":
             out["torque_nm"] = out["torque_nm"] + p["f"] * w * r
         if e == "bulldozing":

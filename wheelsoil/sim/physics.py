@@ -145,11 +145,13 @@ def simulate_physics(truth: TruthModel, rng: np.random.Generator, *, added_load_
         a = dt / (float(truth.params["tau_s"]) + dt)
         s_in = np.clip(np.nan_to_num(slip, nan=0.0), 0.0, 0.97)
         lag = lfilter([a], [1.0, a - 1.0], s_in, zi=[(1.0 - a) * s_in[0]])[0][drive]
-    f = truth.drive_forces(load[drive], s_drive, frac=frac[drive], variability=var[drive], slip_lag=lag)
+    f = truth.drive_forces(load[drive], s_drive, frac=frac[drive], variability=var[drive], slip_lag=lag,
+                           speed_mps=V[drive])
     dp[drive], tq[drive], z[drive] = f["drawbar_pull_n"], f["torque_nm"], f["sinkage_m"]
     skid = ~standstill & np.isfinite(slip) & (slip < 0)
     if skid.any():
-        f0 = truth.drive_forces(load[skid], np.zeros(skid.sum()), frac=frac[skid], variability=var[skid])
+        f0 = truth.drive_forces(load[skid], np.zeros(skid.sum()), frac=frac[skid], variability=var[skid],
+                                speed_mps=V[skid])
         dp[skid], tq[skid] = skid_forces(f0["drawbar_pull_n"], f0["torque_nm"], load[skid], slip[skid], r,
                                          veh.rolling_skid)
         z[skid] = f0["sinkage_m"]
