@@ -933,11 +933,13 @@ _LOOK_ALIKES = {
     "terrain_mismatch": ("a firm layer under the soil, a soil rebounding behind the wheel, lugs or a tread that "
                          "shear the soil at a larger radius, a slip angle, a deflecting tyre, a tyre-soil interface "
                          "weaker than the soil (it acts as a lower friction angle), a loose top layer (as a "
-                         "different cohesion): each can change the drawbar pull and torque as a soil of other "
-                         "values would (measured on the benchmark's held-out batches)",
+                         "different cohesion), a soil stiffer at the wheel's loading rate than under the lab's "
+                         "plate (a viscous or wet soil: as a larger k_eq): each can change the drawbar pull and "
+                         "torque as a soil of other values would (measured on the benchmark's held-out batches)",
                          "plate-sinkage and shear tests of this soil in the field, at the surface and at the rut's "
-                         "depth, a shear test of the tyre's rubber on this soil, the wheel's sinkage and rut depth "
-                         "against the load, and the wheel's tread, alignment and loaded radius"),
+                         "depth and at the wheel's loading rate, a shear test of the tyre's rubber on this soil, the "
+                         "wheel's sinkage and rut depth against the load, the same sweep at another forward speed, "
+                         "and the wheel's tread, alignment and loaded radius"),
     "stress_distribution": ("a shear strength that falls with slip (a soil remoulded at high shear) shifts the "
                             "forces as a moving stress maximum does",
                             "shear tests at several shear rates and the normal stress under the wheel (pressure "
