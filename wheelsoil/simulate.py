@@ -400,12 +400,14 @@ def simulate_run(
         from scipy.signal import lfilter
 
         a = dt / (float(params["tau_s"]) + dt)
-        x = w_meas if effect == "load_lag" else my
-        x, _ = lfilter([a], [1.0, a - 1.0], x, zi=[(1.0 - a) * x[0]])
+
+        def lag(x):
+            return lfilter([a], [1.0, a - 1.0], x, zi=[(1.0 - a) * x[0]])[0]
+
         if effect == "load_lag":
-            w_meas = x
+            w_meas = lag(w_meas)
         else:
-            my = x
+            my = lag(my)
     gnss_gain, rl_gain, rl_delay_s = speed_channel_errors(effect, params, load, static)
 
     start_s = 1765416600 + int(seed % 5000) * 3607 + rng.uniform(0, 1)  # a December morning, seeded

@@ -161,7 +161,7 @@ Held out, tenth batch (``--effects held-out-10``; added with the rule of ``c97d5
 once).  The first causes that depend on the forward speed V, which no hypothesis takes as an input:
   ``speed_resistance`` a resistance growing with the square of the forward speed (the soil the tread and
                        the bow wave throw forward, its inertia; Wong, Theory of Ground Vehicles, ch. 4, on
-                       speed effects): Dp less e W (V / 5 m/s)^2, e 1-10 %; the torque as Wong's.
+                       speed effects): Dp less e W (V / 5 m/s)^2, e 0.3-5 %; the torque as Wong's.
   ``rate_sinkage``     a pressure-sinkage relation that stiffens with the loading rate (viscous clays,
                        wet soils; the lab's plate pressed at 25 mm/s): kc and kphi x
                        (1 + e ln(1 + V / 0.025 m/s)), e 0.5-10 %.
@@ -567,11 +567,9 @@ class TruthModel:
             b = self.width_m * p["factor"]
         elif e == "tyre_deflection":
             r = self.radius_m * (1.0 + p["kappa"] * w / self.static_load_n)
-        elif e in ("load_dependent", "rate_sinkage"):
-            if e == "load_dependent":
-                f = (w / self.static_load_n) ** p["beta"]
-            else:
-                f = 1.0 + (0.0 if speed_mps is None else p["e"] * np.log1p(np.abs(speed_mps) / PLATE_RATE_MPS))
+        elif e == "load_dependent" or (e == "rate_sinkage" and speed_mps is not None):
+            f = ((w / self.static_load_n) ** p["beta"] if e == "load_dependent"
+                 else 1.0 + p["e"] * np.log1p(np.abs(speed_mps) / PLATE_RATE_MPS))
             soil = dict(soil)
             soil["kc"] = soil["kc"] * f
             soil["kphi"] = soil["kphi"] * f
