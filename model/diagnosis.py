@@ -1536,7 +1536,7 @@ def _fmt(v, unit="N", nd=3):
 def _param_text(name, value, se) -> str:
     """'name = value +/- se unit' in field units (phi in deg, k_eq in kN/m^(n+2), c in kPa)."""
     k, unit = {"phi": (180 / math.pi, " deg"), "k_eq": (1e-3, " kN/m^(n+2)"), "c": (1e-3, " kPa"),
-               "g_phi": (180 / math.pi, " deg"), "g_c": (1e-3, " kPa"),
+               "g_phi": (180 / math.pi, " deg"),
                "H": (1.0, " m"), "K": (1.0, " m")}.get(name, (1.0, ""))
     se_txt = _fmt(se * k, "", 2) if se is not None and np.isfinite(se) else "n/a"
     return f"{name} = {_fmt(value * k, '', 3)} +/- {se_txt}{unit}"

@@ -71,12 +71,14 @@ The hypotheses (paper numbering for Eqs.; Wong = *Theory of Ground Vehicles*, 4t
 * ``drift_linear``: terrain drift.  The terrain changes along the run:
   repeated passes compact the soil (k_eq, c and phi grow with the number of
   passes, Wong ch. 2 on repetitive loading), or the wheel reaches another patch
-  of ground.  ln k_eq, n, phi, c and ln K vary linearly with the normalised travelled
-  distance x in [-0.5, 0.5] (time when no distance is recorded) around a
-  mid-run terrain that is itself re-fitted against the lab priors.  The forces
-  at x are the linear interpolation of the exact forces of the start (x = -0.5)
-  and end (x = 0.5) terrain (two kernel calls instead of one per cell; exact at
-  the ends, the interpolation error is second order in the drift).
+  of ground.  ln k_eq, n, phi, ln c and ln K vary linearly with the normalised
+  travelled distance x in [-0.5, 0.5] (time when no distance is recorded)
+  around a mid-run terrain that is itself re-fitted against the lab priors:
+  the three positive scale values (k_eq, c, K) change by a factor along the
+  run, the exponent and the angle by an amount.  The forces at x are the
+  quadratic interpolation of the exact forces of the start, middle and end
+  terrains (three kernel calls instead of one per cell; exact at the nodes,
+  the interpolation error is third order in the drift).
 * ``drift_step``: terrain drift as another patch of ground: the same five
   values step at the change point that the diagnosis found in Wong's residuals
   along the run (tried only when it found one); the forces on each side are
@@ -458,21 +460,20 @@ class WongReece(Hypothesis):
 
 
 class DriftLinear(Hypothesis):
-    """Terrain drift: ln k_eq, n, phi, c and ln K linear in the normalised distance x (module doc)."""
+    """Terrain drift: ln k_eq, n, phi, ln c and ln K linear in the normalised distance x (module doc)."""
 
     name, effect, title = "drift_linear", "terrain_drift", "terrain drifting along the run"
     source = "repeated passes compact the soil (Wong 2008 ch. 2); linear drift in travelled distance"
     terrain_block = True
     needs_x = True
     nested = ("terrain",)
-    C_FLOOR_PA = 50.0  #: width of the smooth floor that keeps the start/end cohesion >= 0 [Pa]
 
     def own_params(self, ctx):
         return (
             HParam("g_lnk", 0.0, -1.5, 1.5, "-", "change of ln k_eq over the run (end - start)"),
             HParam("g_n", 0.0, -0.5, 0.5, "-", "change of the sinkage exponent n over the run (end - start)"),
             HParam("g_phi", 0.0, -0.35, 0.35, "rad", "change of phi over the run (end - start)"),
-            HParam("g_c", 0.0, -20e3, 20e3, "Pa", "change of cohesion over the run (end - start)"),
+            HParam("g_lnc", 0.0, -1.5, 1.5, "-", "change of ln c over the run (end - start)"),
             HParam("g_lnK", 0.0, -1.5, 1.5, "-", "change of ln K over the run (end - start)"),
         )
 
@@ -487,9 +488,7 @@ class DriftLinear(Hypothesis):
             q["k_eq"] = base["k_eq"] * math.exp(xe * base["g_lnk"])
             q["n"] = base["n"] + xe * base["g_n"]
             q["phi"] = base["phi"] + xe * base["g_phi"]
-            # cohesion cannot be negative: a smooth floor at 0 (softplus, C_FLOOR_PA wide; exact
-            # to < 1e-6 Pa above 1 kPa) instead of a kink the Gauss-Newton steps cannot settle on
-            q["c"] = self.C_FLOOR_PA * float(np.logaddexp(0.0, (base["c"] + xe * base["g_c"]) / self.C_FLOOR_PA))
+            q["c"] = base["c"] * math.exp(xe * base["g_lnc"])
             q["K"] = base["K"] * math.exp(xe * base["g_lnK"])
             terrain = apply_terrain(ctx.terrain, q)
             out.append(wong_forces(terrain, ctx.wheel, load_n, slip, sinkage=ctx.sinkage))
@@ -531,7 +530,7 @@ def _weighted_sum(weights, forces) -> WheelForces:
 class DriftStep(DriftLinear):
     """Terrain drift: another patch of ground from the change point ``ctx.x_step`` on.
 
-    ln k_eq, n, phi, c and ln K step by (g_lnk, g_n, g_phi, g_c, g_lnK) at x_step, around a
+    ln k_eq, n, phi, ln c and ln K step by (g_lnk, g_n, g_phi, g_lnc, g_lnK) at x_step, around a
     terrain re-fitted against the lab priors (the mean of the two patches).  The change point is
     the one the diagnosis found in Wong's residuals along the run (a change-point test over the
     accelerate cycles, refined over the cells); its choice among the possible splits is paid
@@ -558,8 +557,8 @@ class DriftStep(DriftLinear):
 
 
 class DriftOne(DriftLinear):
-    """Terrain drift in one soil value: ``param`` (one of k_eq, n, c, phi, K) varies linearly along
-    the run around its own mid-run level (re-fitted against its lab prior); the other four stay
+    """Terrain drift in one soil value: ``param`` (one of k_eq, n, c, phi, K; the scale values
+    k_eq, c and K on the log scale) varies linearly along the run around its own mid-run level (re-fitted against its lab prior); the other four stay
     at the lab values.  Repeated passes or a slowly changing soil often move one value most
     (Wong 2008 ch. 2); :class:`DriftLinear` lets all five drift and pays for ten parameters
     where this pays for two.  With ``ctx.fit_terrain`` the whole terrain is re-fitted and only the
@@ -590,7 +589,7 @@ class DriftOne(DriftLinear):
 
 
 #: The drift slope of each terrain value (:class:`DriftLinear`'s parameter names).
-_SLOPE = {"k_eq": "g_lnk", "n": "g_n", "c": "g_c", "phi": "g_phi", "K": "g_lnK"}
+_SLOPE = {"k_eq": "g_lnk", "n": "g_n", "c": "g_lnc", "phi": "g_phi", "K": "g_lnK"}
 
 
 class DriftStepOne(DriftOne, DriftStep):

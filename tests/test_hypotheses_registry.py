@@ -61,23 +61,26 @@ def test_drift_changes_the_forces_along_the_run_only_with_a_slope():
     assert h.available(CTX, False) and not h.available(CTX, True)
 
 
-def test_a_drift_moves_the_soil_values_linearly_along_the_run_not_the_forces():
-    """K falling by a factor of 3.3 over the run (ln K linear in x): at each place the drift's forces
-    are Wong's with that place's K, to 6 % of their change along the run (the forces interpolated
-    linearly between the two end terrains erred by 30 % of it mid-run, where the drift is the lab's
-    value: a drift fitted so lost to Wong on the middle cycles of a run)."""
-    h = HYPOTHESES["drift_K"]
+@pytest.mark.parametrize("soil,param,slope", [("sand", "K", "g_lnK"), ("clay", "c", "g_lnc")])
+def test_a_drift_moves_the_soil_values_linearly_along_the_run_not_the_forces(soil, param, slope):
+    """K (or c) falling by a factor of 3.3 over the run (its log linear in x): at each place the
+    drift's forces are Wong's with that place's value, to 6 % of their change along the run (the
+    forces interpolated linearly between the two end terrains erred by 30 % of it mid-run, where the
+    drift is the lab's value: a drift fitted so lost to Wong on the middle cycles of a run)."""
+    terrain = load_terrain(soil)
+    ctx = Context(terrain, DEFAULT_WHEEL, "eq10", lab_prior(terrain, DEFAULT_WHEEL))
+    h = HYPOTHESES[f"drift_{param}"]
     x = np.linspace(-0.5, 0.5, 9)
     w, s = np.full(9, 13000.0), np.full(9, 0.3)
-    p = {"K": SAND.K, "g_lnK": -1.2}
-    f = h.predict(CTX, w, s, x, p)
-    exact = np.array([wong_forces(SAND.replace(K=SAND.K * math.exp(-1.2 * xi)), DEFAULT_WHEEL, 13000.0, 0.3)
-                      .drawbar_pull_n[0] for xi in x])
+    lab = getattr(terrain, param)
+    f = h.predict(ctx, w, s, x, {param: lab, slope: -1.2})
+    exact = np.array([wong_forces(terrain.replace(**{param: lab * math.exp(-1.2 * xi)}), DEFAULT_WHEEL, 13000.0,
+                                  0.3).drawbar_pull_n[0] for xi in x])
     change = exact.max() - exact.min()
     assert change > 0
     np.testing.assert_allclose(f.drawbar_pull_n, exact, atol=0.06 * change)
-    assert f.drawbar_pull_n[4] == pytest.approx(wong_forces(SAND, DEFAULT_WHEEL, 13000.0, 0.3).drawbar_pull_n[0],
-                                                rel=1e-9)  # mid-run: the lab's own K
+    assert f.drawbar_pull_n[4] == pytest.approx(wong_forces(terrain, DEFAULT_WHEEL, 13000.0, 0.3).drawbar_pull_n[0],
+                                                rel=1e-9)  # mid-run: the lab's own value
 
 
 def test_the_load_dependent_modulus_matches_the_kernel_at_each_load():
