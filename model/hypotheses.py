@@ -557,14 +557,14 @@ class DriftStep(DriftLinear):
 
 
 class DriftOne(DriftLinear):
-    """Terrain drift in one soil value: ``param`` (one of k_eq, n, c, phi, K; the scale values
-    k_eq, c and K on the log scale) varies linearly along the run around its own mid-run level (re-fitted against its lab prior); the other four stay
-    at the lab values.  Repeated passes or a slowly changing soil often move one value most
-    (Wong 2008 ch. 2); :class:`DriftLinear` lets all five drift and pays for ten parameters
-    where this pays for two.  With ``ctx.fit_terrain`` the whole terrain is re-fitted and only the
-    slope is this hypothesis' own.  The effect vanishes when the slope is zero (``nulls``): a
-    moved level alone is the one-value terrain mismatch it contains (``nested``:
-    ``terrain_<param>``)."""
+    """Terrain drift in one soil value: ``param`` (one of k_eq, n, c, phi, K; the scale values k_eq, c
+    and K on the log scale) varies linearly along the run around its own mid-run level (re-fitted
+    against its lab prior); the other four stay at the lab values. Repeated passes or a slowly
+    changing soil often move one value most (Wong 2008 ch. 2); :class:`DriftLinear` lets all five
+    drift and pays for ten parameters where this pays for two. With ``ctx.fit_terrain`` the whole
+    terrain is re-fitted and only the slope is this hypothesis' own. The effect vanishes when the
+    slope is zero (``nulls``): a moved level alone is the one-value terrain mismatch it contains
+    (``nested``: ``terrain_<param>``)."""
 
     param: ClassVar[str] = ""
     terrain_block = False
