@@ -30,7 +30,8 @@ with ``--terrains``, the next soil of the list).
     python benchmarks/bench_diagnosis.py --effects held-out-7       # ... a seventh
     python benchmarks/bench_diagnosis.py --effects held-out-8       # ... an eighth
     python benchmarks/bench_diagnosis.py --effects held-out-9       # ... a ninth
-    python benchmarks/bench_diagnosis.py --effects held-out-10      # ... and a tenth
+    python benchmarks/bench_diagnosis.py --effects held-out-10      # ... a tenth
+    python benchmarks/bench_diagnosis.py --effects held-out-11      # ... and an eleventh
 
 A held-out batch is scored once with the rule as it stands when the batch is added: that first
 score measures how the rule meets causes it was not developed on; anything changed because of it
@@ -381,7 +382,9 @@ def main(argv=None) -> int:
                     "layer, a tyre-soil interface weaker than the soil, a bouncing vehicle); 'held-out-9' a ninth (a "
                     "saturating Fx channel, a compliant tyre tread, slip sinkage lagging the slip); 'held-out-10' a tenth "
                     "(a resistance growing with the forward speed, a soil stiffer at the loading rate, a lagging "
-                    "torque channel)")
+                    "torque channel); 'held-out-11' an eleventh (a soil value drifting in shapes no drifting form "
+                    "follows: a saturating compaction, a gradual patch, alternating ground; terrain_drift or "
+                    "unexplained acceptable)")
     ap.add_argument("--json", default=None, metavar="FILE", help="also write the rows as JSON")
     ap.add_argument("--keep", default=None, metavar="DIR", help="keep recordings, truths and reports here")
     args = ap.parse_args(argv)

@@ -87,6 +87,35 @@ def test_terrain_drift_changes_the_soil_along_the_run(mode):
     assert np.all(np.diff(f["sinkage_m"]) <= 1e-12) and f["sinkage_m"][0] > f["sinkage_m"][-1] * 1.05
 
 
+@pytest.mark.parametrize("effect,shape", [("saturating_drift", {"length": 0.15}),
+                                          ("gradual_patch", {"change_at": 0.4, "width": 0.2}),
+                                          ("patchy_ground", {"cycles": 1.5, "phase": 0.1})])
+def test_drifts_no_drifting_form_follows_change_the_soil_as_stated(effect, shape):
+    """Held-out batch 11: the soil's k_eq runs by the stated shape between lab/1.3 and lab*1.3."""
+    from wheelsoil.simulate import _cli_params
+
+    params = _cli_params(effect, {"k_eq": 1.3, **shape})
+    assert params == {"changes": {"k_eq": {"kind": "factor", "value": 1.3}}, **shape}
+    assert set(draw_effect(effect, np.random.default_rng(3))) == {"changes", "size", *shape}
+    tm = _tm(effect, **params)
+    x = np.linspace(0.0, 1.0, 401)
+    g = np.log(tm.soil_at(x)["kphi"] / SOIL["kphi"]) / (2.0 * math.log(1.3))  # the change's fraction
+    assert np.all(np.abs(g) <= 0.5 + 1e-12)
+    if effect == "saturating_drift":  # lab/1.3 at the start, lab*1.3 at the end, most of it early
+        assert g[0] == pytest.approx(-0.5) and g[-1] == pytest.approx(0.5)
+        assert np.all(np.diff(g) > 0)
+        assert np.interp(0.15, x, g) == pytest.approx((1 - math.exp(-1)) / (1 - math.exp(-1 / 0.15)) - 0.5)
+        assert np.interp(0.3, x, g) > 0.3  # 80 % of the change in the first 30 % of the run
+    elif effect == "gradual_patch":  # the lab value at x0, tanh(1)/2 of the change one width on
+        assert np.interp(0.4, x, g) == pytest.approx(0.0, abs=1e-12)
+        assert np.interp(0.6, x, g) == pytest.approx(0.5 * math.tanh(1.0))
+        assert g[0] > -0.49  # not complete at the run's start: no step
+    else:  # alternating: the change's sign reverses along the run
+        assert g.max() == pytest.approx(0.5, abs=1e-4) and g.min() == pytest.approx(-0.5, abs=1e-4)
+        assert np.sum(np.diff(np.sign(np.diff(g))) != 0) >= 2  # a maximum and a minimum inside the run
+    assert ACCEPTABLE[effect] == ("terrain_drift", "unexplained") and family_of(effect) == "out"
+
+
 def test_out_of_family_soil_and_tyre_effects(wong):
     ty = _tm("tyre_deflection", kappa=0.2).drive_forces(LOAD, SLIP)
     assert np.all(ty["sinkage_m"] < wong["sinkage_m"])  # a larger equivalent wheel sinks less

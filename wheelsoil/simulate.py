@@ -47,14 +47,14 @@ import numpy as np
 
 from wheelsoil.sim.effects import (ACCEPTABLE, ALL_HELD_OUT, EFFECTS, HELD_OUT, HELD_OUT_2, HELD_OUT_3,
                                    HELD_OUT_4, HELD_OUT_5, HELD_OUT_6, HELD_OUT_7, HELD_OUT_8, HELD_OUT_9,
-                                   HELD_OUT_10, HELD_OUT_BATCHES, IN_FAMILY, OUT_OF_FAMILY, PARAM_NAMES, SENSOR_EFFECTS, VERDICTS, TruthModel, draw_effect, family_of)
+                                   HELD_OUT_10, HELD_OUT_11, HELD_OUT_BATCHES, IN_FAMILY, OUT_OF_FAMILY, PARAM_NAMES, SENSOR_EFFECTS, VERDICTS, TruthModel, draw_effect, family_of)
 from wheelsoil.sim.physics import bandlimited as _bandlimited
 from wheelsoil.sim.terra import soil_dict
 from wheelsoil.sim.vehicle import PROCEDURES
 
 __all__ = ["EFFECTS", "IN_FAMILY", "OUT_OF_FAMILY", "HELD_OUT", "HELD_OUT_2", "HELD_OUT_3", "HELD_OUT_4",
-           "HELD_OUT_5", "HELD_OUT_6", "HELD_OUT_7", "HELD_OUT_8", "HELD_OUT_9", "HELD_OUT_10", "HELD_OUT_BATCHES",
-           "ALL_HELD_OUT", "ACCEPTABLE", "VERDICTS",
+           "HELD_OUT_5", "HELD_OUT_6", "HELD_OUT_7", "HELD_OUT_8", "HELD_OUT_9", "HELD_OUT_10", "HELD_OUT_11",
+           "HELD_OUT_BATCHES", "ALL_HELD_OUT", "ACCEPTABLE", "VERDICTS",
            "SimulatedRun", "simulate_run", "write_simulation", "write_truth", "write_vehicle_config", "judge",
            "draw_case", "pack_signals", "vehicle_config_for", "SIMULATOR"]
 
@@ -1005,7 +1005,7 @@ effects (--effect; parameters with --param NAME=VALUE, the others drawn at --siz
                          kphi and c x factor, so terrain_mismatch is acceptable too
     zero_drift           the transducer's My zero drifts over the run (drift_nm, end - start)
   held out (out of family, added after the diagnosis' rule to score it on causes it was
-  not developed on; bench_diagnosis.py --effects held-out / held-out-2 / ... / -9):
+  not developed on; bench_diagnosis.py --effects held-out / held-out-2 / ... / -11):
     exit_angle           a rebounding soil: contact on to theta2 = exit_frac theta1 behind the
                          bottom (a stress distribution: stress_distribution acceptable too)
     shear_hump           Wong's hump-shaped shear curve, residual Kr x the strength
@@ -1037,6 +1037,9 @@ effects (--effect; parameters with --param NAME=VALUE, the others drawn at --siz
     speed_resistance     Dp less e W (V / 5 m/s)^2: a resistance growing with the forward speed
     rate_sinkage         kc, kphi x (1 + e ln(1 + V / 0.025 m/s)): a soil stiffer at the wheel's loading rate
     my_lag               the torque channel through a first-order lag of time constant tau_s
+    saturating_drift     a soil value drifting fast, then slowly (1 - exp(-x/length)) -> terrain_drift or unexplained
+    gradual_patch        another patch of ground over a transition of width x the run -> terrain_drift or unexplained
+    patchy_ground        a soil value alternating along the track, cycles periods -> terrain_drift or unexplained
 
 The recording holds only what a logger would record plus a provenance record
 (kind "simulated", the seed): the effect and its parameters go to --truth FILE
@@ -1120,8 +1123,9 @@ def _parse_params(items) -> dict[str, float]:
 
 
 #: Parameters each effect takes on the command line: the drawn ones, but a terrain change as its soil values.
-CLI_PARAMS = {**PARAM_NAMES, "terrain_mismatch": ("k_eq", "n", "c", "phi", "K"),
-              "terrain_drift": ("k_eq", "n", "c", "phi", "K")}
+SOIL_VALUES = ("k_eq", "n", "c", "phi", "K")
+CLI_PARAMS = {**PARAM_NAMES, "terrain_mismatch": SOIL_VALUES, "terrain_drift": SOIL_VALUES,
+              **{e: SOIL_VALUES + tuple(k for k in PARAM_NAMES[e] if k != "changes") for e in HELD_OUT_11}}
 
 OUTPUT_SUFFIXES = (".mcap", ".log", ".asc", ".blf", ".trc")
 
@@ -1131,17 +1135,19 @@ def _cli_params(effect: str, given: dict[str, float]) -> dict[str, Any]:
     bad = set(given) - set(allowed)
     if bad:
         raise ValueError(f"effect {effect!r} has no parameter(s) {sorted(bad)}; known: {list(allowed) or 'none'}")
-    if effect in ("terrain_mismatch", "terrain_drift") and given:
-        # k_eq, c, K as factors on the lab value; n, phi as deltas (phi in degrees)
-        changes = {}
+    if effect in ("terrain_mismatch", "terrain_drift") + HELD_OUT_11 and set(given) & set(SOIL_VALUES):
+        # k_eq, c, K as factors on the lab value; n, phi as deltas (phi in degrees); a drift's shape as given
+        changes, shape = {}, {k: v for k, v in given.items() if k not in SOIL_VALUES}
         for k, v in given.items():
+            if k not in SOIL_VALUES:
+                continue
             if k in ("n",):
                 changes[k] = {"kind": "delta", "value": v}
             elif k == "phi":
                 changes[k] = {"kind": "delta_deg", "value": v}
             else:
                 changes[k] = {"kind": "factor", "value": v}
-        return {"changes": changes}
+        return {"changes": changes, **shape}
     return dict(given)
 
 

@@ -170,6 +170,19 @@ once).  The first causes that depend on the forward speed V, which no hypothesis
 The vehicle's dynamics use Wong's forces for the two speed effects (the force table has no speed axis);
 the instrumented wheel's forces carry them.
 
+Held out, eleventh batch (``--effects held-out-11``; added with the rule of ``9cc7f4a`` unchanged, scored
+once).  A soil value changing along the run in shapes the drifting hypotheses do not follow (they are
+linear in the distance, or a step): the cause is a terrain drift, so ``terrain_drift`` or
+``unexplained`` are acceptable.  One value (k_eq, n, c, phi or K) changes by the ranges of
+``terrain_drift``, from lab/f to lab*f (a factor) or lab - d to lab + d (a delta), g the change's
+fraction in [-1/2, 1/2] at the distance fraction x:
+  ``saturating_drift`` repeated passes compacting the soil fast at first, then slowly:
+                       g = (1 - exp(-x/L)) / (1 - exp(-1/L)) - 1/2, L 0.08-0.3 of the run.
+  ``gradual_patch``    another patch of ground reached over a long transition:
+                       g = tanh((x - x0)/w) / 2, x0 0.3-0.7, w 0.08-0.25 of the run.
+  ``patchy_ground``    two kinds of ground alternating along the track: g = sin(2 pi (k x + p)) / 2,
+                       k 1-2 periods over the run, p a random phase.
+
 Sensor effects (``fx_gain``, ``my_gain``, ``load_gain``, ``angle_offset``, ``zero_drift``) change only
 what the transducer reports; the soil forces (and the vehicle) are Wong's.
 """
@@ -185,8 +198,8 @@ import numpy as np
 from .terra import sinkage_eq10, wheel_forces
 
 __all__ = ["EFFECTS", "IN_FAMILY", "OUT_OF_FAMILY", "HELD_OUT", "HELD_OUT_2", "HELD_OUT_3", "HELD_OUT_4",
-           "HELD_OUT_5", "HELD_OUT_6", "HELD_OUT_7", "HELD_OUT_8", "HELD_OUT_9", "HELD_OUT_10", "HELD_OUT_BATCHES",
-           "ALONG_RUN",
+           "HELD_OUT_5", "HELD_OUT_6", "HELD_OUT_7", "HELD_OUT_8", "HELD_OUT_9", "HELD_OUT_10", "HELD_OUT_11",
+           "HELD_OUT_BATCHES", "ALONG_RUN",
            "ALL_HELD_OUT", "ACCEPTABLE", "VERDICTS", "SENSOR_EFFECTS", "draw_effect", "TruthModel", "family_of"]
 
 #: The verdicts a report can give (report.json ``diagnosis.effect``).
@@ -216,17 +229,19 @@ HELD_OUT_8 = ("loose_top", "interface", "bouncing")
 HELD_OUT_9 = ("fx_saturation", "tyre_compliance", "slip_sinkage_lag")
 #: the tenth, scored once with the rule of c97d54e (the first causes that depend on the forward speed)
 HELD_OUT_10 = ("speed_resistance", "rate_sinkage", "my_lag")
+#: the eleventh, scored once with the rule of 9cc7f4a (a soil drifting in shapes no drifting form follows)
+HELD_OUT_11 = ("saturating_drift", "gradual_patch", "patchy_ground")
 #: the batches by their ``bench_diagnosis.py --effects`` name, and all held-out effects
 HELD_OUT_BATCHES = {"held-out": HELD_OUT, "held-out-2": HELD_OUT_2, "held-out-3": HELD_OUT_3,
                     "held-out-4": HELD_OUT_4, "held-out-5": HELD_OUT_5, "held-out-6": HELD_OUT_6,
                     "held-out-7": HELD_OUT_7, "held-out-8": HELD_OUT_8, "held-out-9": HELD_OUT_9,
-                    "held-out-10": HELD_OUT_10}
+                    "held-out-10": HELD_OUT_10, "held-out-11": HELD_OUT_11}
 ALL_HELD_OUT = tuple(e for batch in HELD_OUT_BATCHES.values() for e in batch)
 SENSOR_EFFECTS = ("fx_gain", "my_gain", "load_gain", "angle_offset", "zero_drift", "gnss_gain", "inertia_error",
                   "fz_crosstalk", "load_radius", "wheel_latency", "fx_gain_drift", "load_lag",
                   "fz_zero_drift", "my_crosstalk", "fx_saturation", "my_lag")
 #: effects whose truth changes along the run (the simulator tabulates their forces against distance too)
-ALONG_RUN = ("terrain_drift", "mud_buildup")
+ALONG_RUN = ("terrain_drift", "mud_buildup") + HELD_OUT_11
 
 #: ``rate_shear``'s reference slip: the strength is the lab's at slips well below it
 RATE_SLIP_REF = 0.02
@@ -285,6 +300,7 @@ ACCEPTABLE: dict[str, tuple[str, ...]] = {
     "speed_resistance": ("unexplained",),
     "rate_sinkage": ("unexplained",),
     "my_lag": ("unexplained",),
+    **{e: ("terrain_drift", "unexplained") for e in HELD_OUT_11},
 }
 
 #: Terrain parameters a mismatch / drift may change, with the relative (or absolute) range
@@ -347,6 +363,8 @@ PARAM_NAMES: dict[str, tuple[str, ...]] = {
     "none": (), "vasilev": ("H",), "lyasko": ("m1", "m2"), "ding": ("n1",),
     "terrain_mismatch": ("changes",), "terrain_drift": ("changes", "mode", "change_at"),
     "stress_distribution": ("a1", "a2"), "vertical_balance": (), "slip_sinkage_lag": ("H", "tau_s"),
+    "saturating_drift": ("changes", "length"), "gradual_patch": ("changes", "change_at", "width"),
+    "patchy_ground": ("changes", "cycles", "phase"),
     **{e: (v[0],) for e, v in _ONE_PARAM.items()},
 }
 
@@ -396,9 +414,9 @@ def draw_effect(effect: str, rng: np.random.Generator, *, size: float | None = N
         p = {"m1": _mag(u, 0.08, 0.8, log=True), "m2": float(rng.uniform(0.0, 0.08))}
     elif effect == "ding":
         p = {"n1": _mag(u, 0.06, 0.6, log=True)}
-    elif effect in ("terrain_mismatch", "terrain_drift"):
+    elif effect in ("terrain_mismatch", "terrain_drift") + HELD_OUT_11:
         names = list(_MISMATCH)
-        k = 1 if (effect == "terrain_drift" or rng.random() < 0.7) else 2
+        k = 1 if (effect != "terrain_mismatch" or rng.random() < 0.7) else 2
         chosen = [str(x) for x in rng.choice(names, size=k, replace=False)]
         changes = {}
         for name in chosen:
@@ -415,6 +433,12 @@ def draw_effect(effect: str, rng: np.random.Generator, *, size: float | None = N
         if effect == "terrain_drift":
             p["mode"] = "compaction" if rng.random() < 0.5 else "patch"
             p["change_at"] = float(rng.uniform(0.3, 0.7))  # fraction of the distance (patch)
+        elif effect == "saturating_drift":
+            p["length"] = float(rng.uniform(0.08, 0.3))
+        elif effect == "gradual_patch":
+            p["change_at"], p["width"] = float(rng.uniform(0.3, 0.7)), float(rng.uniform(0.08, 0.25))
+        elif effect == "patchy_ground":
+            p["cycles"], p["phase"] = float(rng.uniform(1.0, 2.0)), float(rng.uniform(0.0, 1.0))
     elif effect == "stress_distribution":
         p = {"a1": _mag(u, 0.08, 0.45), "a2": float(rng.uniform(0.0, 0.3))}
     elif effect == "vertical_balance":
@@ -428,6 +452,20 @@ def draw_effect(effect: str, rng: np.random.Generator, *, size: float | None = N
     p.update(given)
     p["size"] = u
     return p
+
+
+def _drift_fraction(effect: str, p: Mapping[str, Any], x: np.ndarray) -> np.ndarray:
+    """The fraction g in [-1/2, 1/2] of a drift's change at distance fraction x (module doc)."""
+    if effect == "saturating_drift":
+        length = float(p["length"])
+        return -np.expm1(-x / length) / -math.expm1(-1.0 / length) - 0.5
+    if effect == "gradual_patch":
+        return 0.5 * np.tanh((x - float(p["change_at"])) / float(p["width"]))
+    if effect == "patchy_ground":
+        return 0.5 * np.sin(2.0 * math.pi * (float(p["cycles"]) * x + float(p["phase"])))
+    if p["mode"] == "compaction":  # terrain_drift: linear in distance, centred: the lab value mid-run
+        return x - 0.5
+    return 0.5 * np.tanh((x - float(p["change_at"])) / 0.02)  # another patch (2 % of the run transition)
 
 
 def _apply_change(soil: dict, wheel_width_m: float, name: str, kind: str, value: float, frac=1.0) -> dict:
@@ -491,13 +529,8 @@ class TruthModel:
         if self.effect == "terrain_mismatch":
             for name, ch in self.params["changes"].items():
                 soil = _apply_change(soil, self.width_m, name, ch["kind"], ch["value"])
-        elif self.effect == "terrain_drift":
-            frac = np.asarray(frac, float)
-            if self.params["mode"] == "compaction":
-                g = frac - 0.5  # linear in distance, centred: the lab value mid-run
-            else:  # another patch of ground from change_at on (2 % of the run transition)
-                x = (frac - float(self.params["change_at"])) / 0.02
-                g = 0.5 * np.tanh(x)
+        elif self.effect == "terrain_drift" or self.effect in HELD_OUT_11:
+            g = _drift_fraction(self.effect, self.params, np.asarray(frac, float))
             for name, ch in self.params["changes"].items():
                 soil = _apply_change(soil, self.width_m, name, ch["kind"], ch["value"], frac=2.0 * g)
         if variability is not None:
