@@ -458,7 +458,7 @@ def _drift_fraction(effect: str, p: Mapping[str, Any], x: np.ndarray) -> np.ndar
     """The fraction g in [-1/2, 1/2] of a drift's change at distance fraction x (module doc)."""
     if effect == "saturating_drift":
         length = float(p["length"])
-        return -np.expm1(-x / length) / -math.expm1(-1.0 / length) - 0.5
+        return np.expm1(-x / length) / math.expm1(-1.0 / length) - 0.5
     if effect == "gradual_patch":
         return 0.5 * np.tanh((x - float(p["change_at"])) / float(p["width"]))
     if effect == "patchy_ground":
