@@ -127,7 +127,9 @@ decides with this rule (constants below; none was tuned on a benchmark):
    limit of Eq. 10's small-angle form), when there are fewer than
    ``MIN_UNITS_HIGH`` independent units, or when a fold could not be refitted.
    ``unexplained`` is at most ``medium``.  ``none`` is ``low`` when fewer than ``MIN_UNITS_HIGH``
-   independent units cannot exclude a relevant error (below), and ``high`` only when the
+   independent units cannot exclude a relevant error (below; the accelerate cycles for the mean
+   error and the error along the run, the cells for a shape against slip or load) or when the
+   posterior probability of no effect is under ``P_NAME`` (as for a named cause), and ``high`` only when the
    posterior probability of no effect is at least ``P_HIGH`` (the probabilities
    may favour an effect below the relevance threshold), no
    structure test comes near significance (p >= 0.05), the measured sinkage does
@@ -1471,14 +1473,17 @@ def _confidence(effect, model, fits, eprobs, consistency, data, tests_w, sink_ev
         # makes an error unpredictable cycle by cycle, not absent)
         loose = _loose(tests_w)
         if loose:
-            # few independent units that cannot exclude a relevant error: the run cannot tell
-            level = max(level, 2 if n_units < MIN_UNITS_HIGH else 1)
+            # few independent units that cannot exclude a relevant error: the run cannot tell (the
+            # units of each bound: the cells for a shape against slip or load, the accelerate
+            # cycles for the mean error and the error along the run)
+            few = min(tests_w[k].get("cycles" if kind == "mean" else "units", n_units) for k, kind, *_ in loose)
+            level = max(level, 2 if min(few, n_units) < MIN_UNITS_HIGH else 1)
             why.append("the accelerate cycles scatter too much to exclude a relevant error: " + _loose_text(loose))
-        # the confidence words follow the posterior (as for a named cause): the probabilities may
-        # favour an effect too small to matter
+        # the confidence words follow the posterior as for a named cause (medium from P_NAME on):
+        # the probabilities may favour an effect too small to matter
         p_none = eprobs.get("none", 0.0)
         if p_none < P_HIGH:
-            level = max(level, 1)
+            level = max(level, 1 if p_none >= P_NAME else 2)
             top = max((e for e in eprobs if e != "none"), key=lambda e: eprobs[e], default=None)
             name = "a cause on no list" if top == "unexplained" else EFFECT_TITLES.get(top)
             why.append(f"posterior probability of no effect: {p_none:.3g}" + (

@@ -321,6 +321,32 @@ def test_none_from_a_few_units_that_cannot_exclude_a_relevant_error_is_low():
     assert conf(MIN_UNITS_HIGH + 20, 0.5 * MIN_REL) == "high"
 
 
+def test_none_counts_the_cycles_behind_a_loose_bound_and_follows_its_posterior():
+    """A time series of many cells but few accelerate cycles whose mean error or error along the run
+    the cycles cannot bound (a soil alternating along the track, held-out batch 11): 'none' is low;
+    and, as for a named cause, a posterior of no effect under P_NAME makes it low."""
+    from types import SimpleNamespace
+
+    from wheelsoil.model.diagnosis import MIN_REL, MIN_UNITS_HIGH, P_HIGH, P_NAME, _confidence
+
+    def conf(cycles, upper_rel, p_none=1.0, key="drawbar_pull_n"):
+        t = {"p": 0.5, "channel": "drawbar_pull_n", "units": 170 if key == "drawbar_pull_n" else cycles,
+             "level_upper_rel": upper_rel, "level_upper_abs": upper_rel * 1000.0}
+        if key == "drawbar_pull_n":
+            t["cycles"] = cycles
+        else:  # along the run: the cycle means are the units of the RMS bound
+            t.update(level_upper_rel=0.0, rms_upper_rel=upper_rel, rms_upper_abs=upper_rel * 1000.0)
+        return _confidence("none", "wong", {}, {"none": p_none, "unexplained": 1.0 - p_none}, {},
+                           SimpleNamespace(n_units=170), {key: t}, None, [], [], {}, {}, [])[0]
+
+    assert conf(MIN_UNITS_HIGH - 3, 10 * MIN_REL) == "low"
+    assert conf(MIN_UNITS_HIGH - 3, 10 * MIN_REL, key="drawbar_pull_n@x") == "low"
+    assert conf(MIN_UNITS_HIGH + 5, 10 * MIN_REL) == "medium"
+    assert conf(MIN_UNITS_HIGH - 3, 0.5 * MIN_REL) == "high"  # the cycles bound the error: not loose
+    assert conf(MIN_UNITS_HIGH + 5, 0.5 * MIN_REL, p_none=0.5 * (P_NAME + P_HIGH)) == "medium"
+    assert conf(MIN_UNITS_HIGH + 5, 0.5 * MIN_REL, p_none=0.5 * P_NAME) == "low"
+
+
 def test_none_is_high_only_when_the_run_bounds_an_error_of_every_tested_form():
     """An error with no mean (a gain drifting over the run, an error following the load) passes a bound on
     the mean; "none" at "high" also needs the 95 % bound on the RMS of an error of each structure test's
