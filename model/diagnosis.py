@@ -1477,7 +1477,7 @@ def _confidence(effect, model, fits, eprobs, consistency, data, tests_w, sink_ev
             # units of each bound: the cells for a shape against slip or load, the accelerate
             # cycles for the mean error and the error along the run)
             few = min(tests_w[k].get("cycles" if kind == "mean" else "units", n_units) for k, kind, *_ in loose)
-            level = max(level, 2 if min(few, n_units) < MIN_UNITS_HIGH else 1)
+            level = max(level, 2 if few < MIN_UNITS_HIGH else 1)
             why.append("the accelerate cycles scatter too much to exclude a relevant error: " + _loose_text(loose))
         # the confidence words follow the posterior as for a named cause (medium from P_NAME on):
         # the probabilities may favour an effect too small to matter
