@@ -11,14 +11,14 @@
   its mean is the forces averaged over that spread (``Cells.slip_sd``), which
   the fit models as such (:func:`wheelsoil.model.crossval.cell_forces`).
 * :func:`cell_noise` estimates each channel's noise of one cell mean from
-  what no smooth function of slip, load and time explains: second differences
-  between *consecutive accelerate cycles in the same slip bin* (a linear drift
-  in time, whatever its cause, cancels exactly; slip dependence does not enter
-  because the slip bin is the same), and, as a second, within-cycle view,
-  second differences along slip inside one cycle (a smooth slip dependence
-  cancels to second order).  Never from a model's residuals, so an effect
-  cannot inflate its own noise.  The between-cycle (unit-level) scatter is the
-  floor that an out-of-sample error can reach.
+  what no smooth function of slip, load and time explains: the scatter of the
+  cell means about a flexible smooth in slip, load and the drift coordinate
+  (whatever effect is a smooth function of them, modelled or not, is absorbed
+  and cannot inflate the noise), and, as a second, within-cycle view for the
+  report, three-point pseudo-residuals along slip inside one cycle.  Never
+  from a model's residuals, so an effect cannot inflate its own noise.  The
+  cycle-to-cycle (unit-level) scatter stays in it: it is the floor that an
+  out-of-sample error can reach.
 
 Sources: von Neumann et al. (1941) and Rice (1984) for difference-based noise
 estimators; Gasser, Sroka & Jennen-Steinmetz (1986) for the three-point
@@ -616,8 +616,8 @@ def _robust_sd(r: np.ndarray) -> float:
 
 def _smooth_basis(slip, load_n, x, n_cells):
     """Design matrix of a flexible smooth in (slip, load, drift coordinate): a cubic B-spline in
-    slip (4..8 functions, interior knots at slip quantiles), its product with the centred load
-    (when the load varies), and x, x^2 in the drift coordinate (time series)."""
+    slip (4..8 functions, interior knots at slip quantiles), the centred load and its product with
+    the centred slip (when the load varies at all), and x, x^2 in the drift coordinate (time series)."""
     from scipy.interpolate import BSpline
 
     s = np.asarray(slip, float)
@@ -628,7 +628,7 @@ def _smooth_basis(slip, load_n, x, n_cells):
     B = BSpline.design_matrix(np.clip(s, lo, hi), t, 3).toarray()
     cols = [B]
     w = np.asarray(load_n, float)
-    if np.std(w) > 0.01 * abs(np.mean(w)):
+    if np.std(w) > 1e-9 * max(1.0, abs(float(np.mean(w)))):  # however little it varies (see cell_noise)
         wc = (w - w.mean()) / np.std(w)
         sc = (s - s.mean()) / (np.std(s) or 1.0)
         cols.append(np.column_stack([wc, wc * sc]))
@@ -646,7 +646,11 @@ def cell_noise(channels: dict, slip, load_n, t_s, group, sbin, kind: str, x=None
     drift coordinate (:func:`_smooth_basis`: cubic B-spline in slip, load x
     (1, slip), x and x^2); sigma^2 = RSS / (C - p).  Whatever is a smooth
     function of slip, load or time/distance (any effect, modelled or not) is
-    absorbed by the smooth, so it cannot inflate the noise; what remains is
+    absorbed by the smooth, so it cannot inflate the noise.  The load enters
+    however little it varies: the torque is about proportional to it, so the
+    0.6-1 % that load transfer moves a wheel's load by in a sweep moves the
+    torque by 10-20 N m, up to 15x its noise (a smooth without the load counted
+    that as noise); what remains is
     measurement noise plus cycle-to-cycle (unit-level) scatter, the floor an
     out-of-sample error can reach.  When C - p < 4 (tiny tables) the
     three-point pseudo-residuals along slip are used instead.  Also returned,

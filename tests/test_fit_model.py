@@ -244,3 +244,24 @@ def test_a_recording_without_accelerate_cycles_gets_units_of_about_a_cycle(durat
     assert np.unique(d.groups).size == max(5, round(used_s / BLOCK_S))
     assert np.all(np.diff(d.groups) >= 0)
     assert prepare_data(_table(1)).group_kind != "contiguous blocks"
+
+
+def test_noise_estimate_is_not_inflated_by_a_load_varying_under_one_percent():
+    """Load transfer moves a wheel's load by well under 1 % in a sweep, and the torque (about
+    proportional to the load) by many times its noise: the smooth the noise is measured about
+    must take the load in however little it varies, or that motion is counted as noise."""
+    from wheelsoil.model.wong import wong_forces
+
+    df = synthetic_data(SAND, DEFAULT_WHEEL, "wong", duration_s=120.0, noise_dp_n=40.0, seed=3)
+    rng = np.random.default_rng(3)
+    t = df["t_s"].to_numpy()
+    df["load_n"] = 13000.0 * (1.0 + 0.007 * np.sin(2 * np.pi * t / 3.7))  # 0.5 % RMS, not locked to slip
+    f = wong_forces(SAND, DEFAULT_WHEEL, df["load_n"].to_numpy(), np.clip(df["slip"].to_numpy(), 0.0, 0.99))
+    noise_t = 2.0
+    df["torque_nm"] = f.torque_nm + rng.normal(0.0, noise_t, len(df))
+    cells = prepare_data(df).cells
+    # white sample noise: the cell mean's noise is noise_t / sqrt(samples per cell)
+    expected = noise_t / np.sqrt(np.median(cells.count))
+    assert cells.sigma["torque_nm"] < 2.0 * expected
+    # the motion the load gives the torque is far above that noise (the test can fail)
+    assert np.std(f.torque_nm) > 0 and 0.007 * np.mean(f.torque_nm) / np.sqrt(2) > 10 * expected
