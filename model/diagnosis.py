@@ -1499,6 +1499,17 @@ def _confidence(effect, model, fits, eprobs, consistency, data, tests_w, sink_ev
     pe = eprobs.get(effect, 0.0)
     level = 0 if pe >= P_HIGH else (1 if pe >= P_NAME else 2)
     why.append(f"posterior probability of {EFFECT_TITLES[effect]}: {pe:.3g}")
+    # the effect's probability may rest on a hypothesis of the same effect that the out-of-sample
+    # gates turned down: then it does not back the named model's claim (which value, which form)
+    pm = probs.get(model, 0.0)
+    over = [k for k in probs if k not in supported and k != model and fits[k].effect == effect
+            and probs[k] > BF_ALTERNATIVE * pm]
+    if over:
+        cap = max(cap, 2)
+        k = max(over, key=lambda q: probs[q])
+        why.append(f"{TITLES[k]} has {probs[k] / max(pm, 1e-300):.3g} times the evidence of {TITLES[model]} "
+                   f"(posterior {probs[k]:.3g} against {pm:.3g}) but is not supported out of sample: the "
+                   f"data back {EFFECT_TITLES[effect]}, not clearly this model of it")
     cons = consistency.get(model, {})
     if not cons.get("consistent", True):
         cap = max(cap, 1)

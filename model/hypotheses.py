@@ -240,7 +240,7 @@ def apply_terrain(terrain, p: Mapping[str, float]):
     if "k_eq" in p:
         kw["kc"] = 0.0
         kw["kphi"] = float(p["k_eq"])
-    return terrain.replace(**kw) if kw else terrain
+    return terrain.with_values(**kw) if kw else terrain
 
 
 class Hypothesis:

@@ -210,8 +210,30 @@ class Terrain:
     uncertainty_source: str = ""
 
     def __post_init__(self) -> None:
+        self._check_values(("c", "phi", "K", "n", "kc", "kphi"))
         where = f"terrain {self.name!r}"
-        for field in ("c", "phi", "K", "n", "kc", "kphi"):
+        overrides = self.uncertainty if self.uncertainty is not None else {}
+        if not isinstance(overrides, Mapping):
+            raise ValueError(f"{where}: uncertainty must be a mapping {{name: sd}} with names "
+                             f"{', '.join(PRIOR_KEYS)}, got {type(overrides).__name__}")
+        clean: dict[str, float] = {}
+        for key, value in overrides.items():
+            if key not in PRIOR_KEYS:
+                raise ValueError(f"{where}: unknown uncertainty {key!r}; names: {', '.join(PRIOR_KEYS)}")
+            try:
+                sd = float(value)
+            except (TypeError, ValueError):
+                raise ValueError(f"{where}: uncertainty {key} must be a number, got {value!r}") from None
+            if not (math.isfinite(sd) and sd > 0):
+                raise ValueError(f"{where}: uncertainty {key} must be a finite number > 0 "
+                                 f"[{PRIOR_SD_UNITS[key]}], got {value!r}")
+            clean[key] = sd
+        object.__setattr__(self, "uncertainty", _FrozenSD(clean))
+
+    def _check_values(self, fields) -> None:
+        """Turn ``fields`` (soil values) into finite floats and check every value's range."""
+        where = f"terrain {self.name!r}"
+        for field in fields:
             value = getattr(self, field)
             try:
                 value = float(value)
@@ -230,23 +252,20 @@ class Terrain:
             raise ValueError(f"{where}: shear deformation modulus K must be > 0 m, got {self.K!r}")
         if not 0.0 < self.n < 3.0:
             raise ValueError(f"{where}: sinkage exponent n must be in (0, 3) (Eq. 10), got {self.n!r}")
-        overrides = self.uncertainty if self.uncertainty is not None else {}
-        if not isinstance(overrides, Mapping):
-            raise ValueError(f"{where}: uncertainty must be a mapping {{name: sd}} with names "
-                             f"{', '.join(PRIOR_KEYS)}, got {type(overrides).__name__}")
-        clean: dict[str, float] = {}
-        for key, value in overrides.items():
-            if key not in PRIOR_KEYS:
-                raise ValueError(f"{where}: unknown uncertainty {key!r}; names: {', '.join(PRIOR_KEYS)}")
-            try:
-                sd = float(value)
-            except (TypeError, ValueError):
-                raise ValueError(f"{where}: uncertainty {key} must be a number, got {value!r}") from None
-            if not (math.isfinite(sd) and sd > 0):
-                raise ValueError(f"{where}: uncertainty {key} must be a finite number > 0 "
-                                 f"[{PRIOR_SD_UNITS[key]}], got {value!r}")
-            clean[key] = sd
-        object.__setattr__(self, "uncertainty", _FrozenSD(clean))
+
+    def with_values(self, **values: float) -> "Terrain":
+        """A copy with soil values changed (``c``, ``phi``, ``K``, ``n``, ``kc``, ``kphi``; SI), checked
+        as the constructor checks them: the fitter's hot path (:meth:`replace` re-validates every
+        field and the uncertainty mapping, ten times the cost).  Raises ``ValueError`` like the
+        constructor, TypeError for another field."""
+        bad = set(values) - {"c", "phi", "K", "n", "kc", "kphi"}
+        if bad:
+            raise TypeError(f"with_values: not a soil value: {', '.join(sorted(bad))}")
+        new = object.__new__(type(self))
+        new.__dict__.update(self.__dict__)
+        new.__dict__.update(values)
+        new._check_values(tuple(values))
+        return new
 
     @property
     def phi_deg(self) -> float:

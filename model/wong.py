@@ -141,6 +141,11 @@ def _check(mask: np.ndarray, name: str, values: np.ndarray, rule: str) -> None:
 
 def _as_samples(load_n, slip) -> tuple[np.ndarray, np.ndarray]:
     """Validate and broadcast load W [N] and slip s [-] to float arrays of shape (N,)."""
+    if (type(load_n) is np.ndarray and type(slip) is np.ndarray and load_n.ndim == 1 and load_n.shape == slip.shape
+            and load_n.dtype == np.float64 and slip.dtype == np.float64):  # the fitter's case: no broadcasting
+        w, s = load_n.copy(), slip.copy()
+        if np.all((w > 0) & (w < np.inf) & (s >= 0) & (s < 1)):
+            return w, s
     w = np.asarray(load_n, dtype=float)
     s = np.asarray(slip, dtype=float)
     try:

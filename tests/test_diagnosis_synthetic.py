@@ -489,3 +489,25 @@ def test_a_one_value_refit_falls_short_when_its_whole_predicts_a_channel_better(
     assert _whole_better(data, {"terrain_phi": one, "terrain": trade}, one) == []
     assert _whole_better(data, {"terrain_phi": one}, one) == []  # the whole not fitted
     assert _whole_better(data, {"terrain": better}, better) == []  # no whole
+
+
+def test_a_named_model_outweighed_by_a_turned_down_sibling_is_low():
+    """The effect's probability may come from a hypothesis of the same effect that the out-of-sample
+    gates turned down (batch 10, seed 14062: a k_eq re-fit with 116x the evidence failed the paired
+    test, an n re-fit passed and was named at 'high'): it does not back the named model's claim."""
+    from types import SimpleNamespace
+
+    from wheelsoil.model.diagnosis import BF_ALTERNATIVE, MIN_UNITS_HIGH, _confidence
+
+    def conf(p_sibling, p_named):
+        fits = {k: SimpleNamespace(effect="terrain_mismatch", cv={}) for k in ("terrain_n", "terrain_k_eq")}
+        paired = {"terrain_n": {"drawbar_pull_n": {"wong_cv_rmse": 46.0, "cv_rmse": 35.0, "p_improve": 0.003,
+                                                   "folds": 13}}}
+        probs = {"terrain_n": p_named, "terrain_k_eq": p_sibling}
+        return _confidence("terrain_mismatch", "terrain_n", fits, {"terrain_mismatch": 1.0}, {},
+                           SimpleNamespace(n_units=MIN_UNITS_HIGH + 50), {}, None, [], ["terrain_n"], probs,
+                           paired, ["drawbar_pull_n"])
+
+    word, why = conf(0.9, 0.9 / (2 * BF_ALTERNATIVE))
+    assert word == "low" and any("not supported out of sample" in w for w in why)
+    assert conf(0.9, 0.9 / (0.5 * BF_ALTERNATIVE))[0] == "high"  # within the Bayes factor: as before

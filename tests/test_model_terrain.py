@@ -278,3 +278,17 @@ def test_bad_uncertainty_in_library_names_the_entry(tmp_path):
     path.write_text("[terrains.a]\n" + body + "\nuncertainty = 0.3\n")
     with pytest.raises(ValueError, match=r"lib\.toml \[terrains\.a\] \[uncertainty\]: must be a table"):
         load_terrain_file(path)
+
+
+def test_with_values_is_replace_checked_the_same_way():
+    """The fitter's fast copy gives the terrain ``replace`` gives and refuses what the constructor refuses."""
+    sand = load_terrain("sand").replace(prior_sd={"n": 0.2})
+    fast = sand.with_values(n=0.9, kc=0.0, kphi=2.0e6)
+    assert fast == sand.replace(n=0.9, kc=0.0, kphi=2.0e6)
+    assert fast.prior_sd == sand.prior_sd and sand.n != 0.9  # the original is untouched
+    with pytest.raises(ValueError, match="sinkage exponent n"):
+        sand.with_values(n=3.5)
+    with pytest.raises(ValueError, match="finite"):
+        sand.with_values(K=float("nan"))
+    with pytest.raises(TypeError, match="not a soil value"):
+        sand.with_values(name="other")
