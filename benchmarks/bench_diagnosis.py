@@ -218,6 +218,7 @@ def run_seed(seed: int, duration_s: float, front_wheels: str, keep_dir: str | No
     row.update({k: j[k] for k in ("family", "acceptable", "verdict", "model", "confidence", "right",
                                   "wrong_cause", "missed", "false_alarm", "form_ok", "latency_error_s")})
     dg = report["diagnosis"]  # how the named candidate held against rivals of other effects (and their effect)
+    row["target"] = dg.get("target_channels")  # the channels a cause had to improve (Wong errs relevantly there)
     row["holds_against"] = {k: [route, dg["models"][k]["effect"]]
                             for k, route in (dg.get("holds_against") or {}).items()}
     return row
