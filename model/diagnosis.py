@@ -125,7 +125,10 @@ decides with this rule (constants below; none was tuned on a benchmark):
    evidence: the data do not exclude an off-list cause), (model W / measured W outside
    ``LOAD_RATIO_TOL`` in a slip bin, Eq. 7, or static sinkage above D/6, the
    limit of Eq. 10's small-angle form), when there are fewer than
-   ``MIN_UNITS_HIGH`` independent units, or when a fold could not be refitted.
+   ``MIN_UNITS_HIGH`` independent units, or when a fold could not be refitted;
+   ``low`` when a hypothesis of the named effect that step 3 turned down has
+   more than ``BF_ALTERNATIVE`` times the named model's evidence (the effect's
+   probability then rests on it, not on the model named).
    ``unexplained`` is at most ``medium``.  ``none`` is ``low`` when fewer than ``MIN_UNITS_HIGH``
    independent units cannot exclude a relevant error (below; the accelerate cycles for the mean
    error and the error along the run, the cells for a shape against slip or load) or when the
