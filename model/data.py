@@ -20,9 +20,10 @@
   cycle-to-cycle (unit-level) scatter stays in it: it is the floor that an
   out-of-sample error can reach.
 
-Sources: von Neumann et al. (1941) and Rice (1984) for difference-based noise
-estimators; Gasser, Sroka & Jennen-Steinmetz (1986) for the three-point
-pseudo-residual; Cameron & Miller (2015) for clustered data.
+Sources: Ruppert, Wand & Carroll (2003, Semiparametric Regression, ch. 3) for
+the residual variance about a regression spline; Gasser, Sroka &
+Jennen-Steinmetz (1986) for the three-point pseudo-residual; Cameron & Miller
+(2015) for clustered data.
 """
 
 from __future__ import annotations
