@@ -83,6 +83,8 @@ TERRAIN_KEYS: dict[str, str] = {
 }
 
 
+#: The soil values of a :class:`Terrain` (SI): what the constructor and ``with_values`` check.
+SOIL_VALUES: tuple[str, ...] = ("c", "phi", "K", "n", "kc", "kphi")
 #: Names of the identifiable terrain parameters that carry a lab prior (SI units in ``prior_sd``).
 PRIOR_KEYS: tuple[str, ...] = ("k_eq", "n", "c", "phi", "K")
 
@@ -210,7 +212,7 @@ class Terrain:
     uncertainty_source: str = ""
 
     def __post_init__(self) -> None:
-        self._check_values(("c", "phi", "K", "n", "kc", "kphi"))
+        self._check_values(SOIL_VALUES)
         where = f"terrain {self.name!r}"
         overrides = self.uncertainty if self.uncertainty is not None else {}
         if not isinstance(overrides, Mapping):
@@ -258,7 +260,7 @@ class Terrain:
         as the constructor checks them: the fitter's hot path (:meth:`replace` re-validates every
         field and the uncertainty mapping, ten times the cost).  Raises ``ValueError`` like the
         constructor, TypeError for another field."""
-        bad = set(values) - {"c", "phi", "K", "n", "kc", "kphi"}
+        bad = set(values) - set(SOIL_VALUES)
         if bad:
             raise TypeError(f"with_values: not a soil value: {', '.join(sorted(bad))}")
         new = object.__new__(type(self))

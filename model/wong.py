@@ -144,18 +144,17 @@ def _as_samples(load_n, slip) -> tuple[np.ndarray, np.ndarray]:
     if (type(load_n) is np.ndarray and type(slip) is np.ndarray and load_n.ndim == 1 and load_n.shape == slip.shape
             and load_n.dtype == np.float64 and slip.dtype == np.float64):  # the fitter's case: no broadcasting
         w, s = load_n.copy(), slip.copy()
-        if np.all((w > 0) & (w < np.inf) & (s >= 0) & (s < 1)):
-            return w, s
-    w = np.asarray(load_n, dtype=float)
-    s = np.asarray(slip, dtype=float)
-    try:
-        w, s = np.broadcast_arrays(w, s)
-    except ValueError:
-        raise ValueError(f"load_n shape {w.shape} and slip shape {s.shape} do not match") from None
-    if w.ndim > 1:
-        raise ValueError(f"load_n and slip must be 1-D arrays of samples, got shape {w.shape}")
-    w = np.atleast_1d(w).astype(float, copy=True)
-    s = np.atleast_1d(s).astype(float, copy=True)
+    else:
+        w = np.asarray(load_n, dtype=float)
+        s = np.asarray(slip, dtype=float)
+        try:
+            w, s = np.broadcast_arrays(w, s)
+        except ValueError:
+            raise ValueError(f"load_n shape {w.shape} and slip shape {s.shape} do not match") from None
+        if w.ndim > 1:
+            raise ValueError(f"load_n and slip must be 1-D arrays of samples, got shape {w.shape}")
+        w = np.atleast_1d(w).astype(float, copy=True)
+        s = np.atleast_1d(s).astype(float, copy=True)
     if np.all((w > 0) & (w < np.inf) & (s >= 0) & (s < 1)):  # the common case: one pass, nothing to name
         return w, s
     _check(~np.isfinite(w), "load_n", w, "load W must be a finite number (NaN/inf given)")
