@@ -143,7 +143,11 @@ decides with this rule (constants below; none was tuned on a benchmark):
    of step 1 is an RMS, and an error that drifts or follows the load can have
    no mean) are below ``MIN_REL`` of the channel (equivalence testing,
    Schuirmann 1987; the RMS bound by inverting the noncentral F-test, Wellek
-   2010; rough ground or few cycles cannot prove "none").
+   2010; rough ground or few cycles cannot prove "none"), and no channel's
+   cell noise reaches ``MIN_REL`` of the channel (``MIN_EFFECT`` sigma then sets
+   the relevance threshold, and an error of relevant size in a form no test looks
+   for, within the cycles or in slip and distance together, passes for noise:
+   a gain drifting over the run, a lagging load channel; held-out batches 5, 6).
 
 Per channel (``channels``): ``none`` when Wong shows no relevant structure
 in that channel, else the effect of the most probable hypothesis that
@@ -621,6 +625,7 @@ def _structure_cells(data: FitData, pred: dict) -> dict:
                 t["level_upper_rel"] = t["level_upper_abs"] / size if size > 0 else float("inf")
             t["rms_upper_abs"] = t["rms_upper"] * cells.sigma[c]
             t["rms_upper_rel"] = t["rms_upper_abs"] / size if size > 0 else float("inf")
+            t["sigma_rel"] = cells.sigma[c] / size if size > 0 else float("inf")
             t["channel"] = c
             out[k] = t
     return out
@@ -1439,6 +1444,27 @@ def _loose(tests_w: dict) -> list:
     return out
 
 
+def _noisy(tests_w: dict) -> dict:
+    """Channels whose cell noise sets the relevance threshold: ``MIN_EFFECT`` cell-noise sigmas reach
+    ``MIN_REL`` of the channel's magnitude.  An error of the relevant size in a form no structure test
+    looks for (within the accelerate cycles, slip and distance together) then passes for noise: the
+    noise is what no smooth function of slip, load and distance explains
+    (:func:`wheelsoil.model.data.cell_noise`).  Returns ``{channel: sigma / magnitude}``."""
+    out = {}
+    for t in tests_w.values():
+        r = t.get("sigma_rel", 0.0)
+        if MIN_EFFECT * r >= MIN_REL:
+            out[t["channel"]] = r
+    return out
+
+
+def _noisy_text(noisy: dict) -> str:
+    chans = "; ".join(f"{CHANNEL_TITLES[c]} {r:.1%}" for c, r in noisy.items())
+    return (f"the cell noise reaches the {MIN_REL:.0%} relevance floor ({chans} of the channel's magnitude): an error "
+            "of relevant size in a form the structure tests do not look for (within the accelerate cycles, or "
+            "slip and distance together) would pass for noise")
+
+
 _AGAINST = {"": "against slip", "@load": "against load", "@x": "along the run"}
 
 
@@ -1482,6 +1508,10 @@ def _confidence(effect, model, fits, eprobs, consistency, data, tests_w, sink_ev
             few = min(tests_w[k].get("cycles" if kind == "mean" else "units", n_units) for k, kind, *_ in loose)
             level = max(level, 2 if few < MIN_UNITS_HIGH else 1)
             why.append("the accelerate cycles scatter too much to exclude a relevant error: " + _loose_text(loose))
+        noisy = _noisy(tests_w)
+        if noisy:
+            level = max(level, 1)
+            why.append(_noisy_text(noisy))
         # the confidence words follow the posterior as for a named cause (medium from P_NAME on):
         # the probabilities may favour an effect too small to matter
         p_none = eprobs.get("none", 0.0)
