@@ -217,7 +217,11 @@ def lab_prior(terrain, wheel, *, widen: float = 1.0) -> dict:
 
 
 def terrain_params(ctx: Context) -> tuple[HParam, ...]:
-    """The terrain block k_eq, n, c, phi, K with the context's priors (see :func:`lab_prior`)."""
+    """The terrain block k_eq, n, c, phi, K with the context's priors (see :func:`lab_prior`).
+
+    The search box is the field's usual range (n 0.2-2.5, c up to 100 kPa, phi 1-60 deg, K 0.1 mm
+    to 0.3 m; Wong, Theory of Ground Vehicles, Tab. 2.3-2.5) widened to hold the lab value with room
+    on either side: a heavy clay's n of 0.11-0.13 must not start the re-fit at a bound."""
     t, w = ctx.terrain, ctx.wheel
     pr = ctx.prior or lab_prior(t, w)
     k = t.k_eq(w.width)
@@ -225,10 +229,13 @@ def terrain_params(ctx: Context) -> tuple[HParam, ...]:
     return (
         HParam("k_eq", k, k / 1e3, k * 1e3, "N/m^(n+2)", "pressure-sinkage modulus kc/b + kphi (Eq. 2)",
                pr["k_eq"][:2], True),
-        HParam("n", t.n, 0.2, 2.5, "-", "sinkage exponent (Eq. 2)", pr["n"][:2]),
-        HParam("c", t.c, 0.0, 100e3, "Pa", "cohesion (Eq. 4)", pr["c"][:2]),
-        HParam("phi", t.phi, math.radians(1.0), math.radians(60.0), "rad", "friction angle (Eq. 4)", pr["phi"][:2]),
-        HParam("K", t.K, 1e-4, 0.3, "m", "shear deformation modulus (Eq. 4)", pr["K"][:2], True),
+        HParam("n", t.n, min(0.2, 0.5 * t.n), max(2.5, 0.5 * (t.n + 3.0)), "-", "sinkage exponent (Eq. 2)",
+               pr["n"][:2]),
+        HParam("c", t.c, 0.0, max(100e3, 3.0 * t.c), "Pa", "cohesion (Eq. 4)", pr["c"][:2]),
+        HParam("phi", t.phi, min(math.radians(1.0), 0.5 * t.phi), max(math.radians(60.0), 0.5 * (t.phi + math.pi / 2)),
+               "rad", "friction angle (Eq. 4)", pr["phi"][:2]),
+        HParam("K", t.K, min(1e-4, t.K / 3.0), max(0.3, 3.0 * t.K), "m", "shear deformation modulus (Eq. 4)",
+               pr["K"][:2], True),
     )
 
 

@@ -260,3 +260,19 @@ def test_a_curved_envelope_and_a_stress_dependent_K_are_stand_ins_that_meet_the_
                                       wong_forces(SAND, DEFAULT_WHEEL, W, S).torque_nm)
     with pytest.raises(ValueError, match="reference load"):
         env.predict(CTX, W, S, X, {"beta": 0.8})
+
+
+def test_the_terrain_search_box_holds_every_library_soils_lab_values():
+    """The re-fit starts at the lab value, inside its search box with room on either side, for every
+    soil of the built-in library (heavy clay's n = 0.11-0.13 sat below the old 0.2 bound: every
+    terrain re-fit on it began, and stayed, at n = 0.2)."""
+    from wheelsoil.model.hypotheses import terrain_params
+    from wheelsoil.model.terrain import _load_builtin
+
+    for slug, terrain in _load_builtin().items():
+        for q in terrain_params(Context(terrain, DEFAULT_WHEEL, "eq10", lab_prior(terrain, DEFAULT_WHEEL))):
+            assert q.lower < q.default < q.upper, (slug, q)
+            if q.log:
+                assert q.lower <= q.default / 2 and 2 * q.default <= q.upper, (slug, q)
+            elif q.name != "c" or q.default > 0:
+                assert q.lower <= q.default / 2 or q.lower == 0.0, (slug, q)
