@@ -117,6 +117,12 @@ decides with this rule (constants below; none was tuned on a benchmark):
    five-value re-fit then predicts the torque better): ``unexplained``, with
    the one-value re-fit as the candidate.
    No supported hypothesis -> ``unexplained``.
+   Whatever the above gives, Wong's sample residuals are also compared on rising against
+   falling slip within each accelerate cycle (:func:`_hysteresis_test`): every hypothesis is a
+   static function of slip, load and place, and the cells pool both directions, so a channel
+   lagging the others or an effect of the rates is invisible to steps 1-5.  A difference that is
+   significant (t-test over the cycles, ``ALPHA`` / channels) and relevant (step 1's floors)
+   -> ``unexplained``, with the reason, and ``unexplained`` for that channel.
 6. **Confidence** follows the effect's posterior probability (``high`` >=
    ``P_HIGH``, ``medium`` >= ``P_NAME``), capped at ``medium`` when the
    named model is physically inconsistent, when one of the generic
@@ -238,6 +244,7 @@ class Diagnosis:
     on the measured channels like it, and what would rule them out); consistency; flags; data (:class:`FitData`);
     fits (name -> :class:`~wheelsoil.model.crossval.HypFit`); structure
     (``{"wong": {channel: test}, "<model>": ...}``); load_test, time_test;
+    hysteresis_test (channel -> Wong's residuals on rising against falling slip, :func:`_hysteresis_test`);
     binned (Wong's binned sample residuals per channel); sinkage_evidence;
     forms_distinguishable, indistinguishable_forms; confidence_reasons;
     thresholds; notes; failures; gain; fit_terrain; identifiability; tried;
@@ -280,6 +287,7 @@ class Diagnosis:
     paired: dict = field(default_factory=dict)
     supported: list = field(default_factory=list)
     target_channels: list = field(default_factory=list)
+    hysteresis_test: dict = field(default_factory=dict)
 
     def to_dict(self) -> dict:
         """The ``diagnosis`` object of report.json (contract D), JSON-ready (SI units)."""
@@ -325,6 +333,7 @@ class Diagnosis:
             "thresholds": self.thresholds,
             "c_hat": self.c_hat,
             "design_effect": self.deff,
+            "hysteresis_test": self.hysteresis_test,
             "noise": {"sigma_cell": self.data.cells.sigma, "sigma_within_cycle": self.data.cells.sigma_within,
                       "method": self.data.cells.noise_method, "cells": self.data.cells.n},
         })
@@ -629,6 +638,79 @@ def _structure_cells(data: FitData, pred: dict) -> dict:
             t["channel"] = c
             out[k] = t
     return out
+
+
+def _hysteresis_test(data: FitData, pred: dict) -> dict:
+    """Wong's residuals on rising against falling slip, cycle by cycle: what no hypothesis can make.
+
+    Every hypothesis is a static function of slip, load and place, so at the same slip, load and
+    place it predicts the same forces whether the slip is rising or falling; the cells pool both.
+    A channel lagging the others (a different filter in an amplifier), a soil or sensor effect of
+    the rates, a mis-set wheel inertia make the residuals differ by direction, and the pooled
+    cells average that away.  In each accelerate cycle with both directions over a common slip
+    range, the sample residuals ``e`` (channel - ``pred``, (N,)) are fitted with a cubic in slip
+    (the static error, whatever model) plus ``h d/2``, d = +1 on rising and -1 on falling slip
+    (the sign of ds/dt); the cycles' h are the independent units of a two-sided t-test.  The
+    error's RMS is |mean h|/2, judged as a structure test is: relevant when >= ``MIN_EFFECT``
+    cell-noise sigma and >= ``MIN_REL`` of the channel's magnitude; significant when p <
+    ``ALPHA`` / the number of channels.  Returns channel -> ``{p, h, se, cycles, effect,
+    effect_abs, effect_rel, significant, channel}`` for channels with >= 3 such cycles; empty for
+    tables (no time).  Source: a direction (hysteresis) term in a regression on the
+    cycles, Student's t over independent cycles (as the level test of the cells)."""
+    out = {}
+    if data.kind == "table" or data.t_s is None:
+        return out
+    gids = np.unique(data.groups)
+    for c, y in data.channels.items():
+        e = np.asarray(y, float) - np.asarray(pred[c], float)
+        hs = []
+        for g in gids:
+            m = (data.groups == g) & np.isfinite(e)
+            if m.sum() < 20:
+                continue
+            order = np.argsort(data.t_s[m], kind="stable")
+            t, s, ee = data.t_s[m][order], data.slip[m][order], e[m][order]
+            keep = np.r_[True, np.diff(t) > 0]
+            t, s, ee = t[keep], s[keep], ee[keep]
+            if t.size < 20:
+                continue
+            d = np.sign(np.gradient(s, t))
+            up, dn = d > 0, d < 0
+            if up.sum() < 10 or dn.sum() < 10:
+                continue
+            lo, hi = max(s[up].min(), s[dn].min()), min(s[up].max(), s[dn].max())
+            sel = (s >= lo) & (s <= hi) & (up | dn)
+            if hi - lo < 0.1 or (sel & up).sum() < 10 or (sel & dn).sum() < 10:
+                continue
+            u = (s[sel] - 0.5 * (lo + hi)) / (0.5 * (hi - lo))
+            X = np.column_stack([np.ones_like(u), u, u**2, u**3, 0.5 * d[sel]])
+            coef, *_ = np.linalg.lstsq(X, ee[sel], rcond=None)
+            hs.append(coef[-1])
+        if len(hs) < 3:
+            continue
+        h = np.asarray(hs)
+        mean, se = float(h.mean()), float(h.std(ddof=1) / math.sqrt(h.size))
+        p = float(2 * stats.t.sf(abs(mean) / se, h.size - 1)) if se > 0 else (0.0 if mean != 0 else 1.0)
+        cm = data.cells.channels[c]
+        size = float(np.sqrt(np.nanmean(cm**2))) if np.isfinite(cm).any() else float("nan")
+        rms = abs(mean) / 2
+        sigma = data.cells.sigma[c]
+        out[c] = {"p": p, "h": mean, "se": se, "cycles": int(h.size), "effect": rms / sigma if sigma > 0 else float("inf"),
+                  "effect_abs": rms, "effect_rel": rms / size if size > 0 else float("inf"), "channel": c}
+    for t in out.values():
+        t["significant"] = bool(t["p"] < ALPHA / len(out) and _relevant(t))
+    return out
+
+
+def _hysteresis_text(hyst: dict) -> str:
+    sig = [t for t in hyst.values() if t["significant"]]
+    parts = [f"the {CHANNEL_TITLES[t['channel']]} by {_fmt(abs(t['h']), _UNITS[t['channel']])} "
+             f"({'higher' if t['h'] > 0 else 'lower'} on rising slip; RMS {t['effect_rel']:.1%} of the channel, "
+             f"p = {t['p']:.2g} over {t['cycles']} cycles)" for t in sig]
+    return ("Wong's residuals differ between rising and falling slip at the same slip: " + "; ".join(parts)
+            + ". No hypothesis can make that (each is a static function of slip, load and place): a channel "
+            "lagging the others, an effect of the loading or shear rate, or a wrong wheel inertia in the "
+            "compensation could")
 
 
 _UNITS = {"drawbar_pull_n": "N", "torque_nm": "N m", "sinkage_m": "m"}  #: SI unit of each channel
@@ -1218,6 +1300,12 @@ def diagnose(
             effect = fits[best].effect
         sep_names = [best, *alternatives, *rivals[:1]]
         sep = _separating({fits[k].effect for k in sep_names}, set(data.channels), sep_names)
+    hyst = _hysteresis_test(data, wong.predictions)
+    if any(t["significant"] for t in hyst.values()):
+        if effect == "none":
+            model = None
+        effect = "unexplained"
+        reasons.append(_hysteresis_text(hyst))
     # per-channel verdicts
     channels = {}
     for c in CHANNELS:
@@ -1232,7 +1320,9 @@ def diagnose(
         sig_c = [k for k in sig_w if tests_w[k]["channel"] == c]
         row["structure_p"] = min((t["p"] for t in tc.values() if np.isfinite(t["p"])), default=None)
         imp = [k for k in fits if k != "wong" and paired[k][c]["improves"] and fits[k].success and _effective(fits[k])]
-        if not sig_c:
+        if c in hyst and hyst[c]["significant"]:
+            row["effect"] = "unexplained"
+        elif not sig_c:
             row["effect"] = "none"
         elif not imp:
             row["effect"] = "unexplained"
@@ -1288,7 +1378,7 @@ def diagnose(
         effect_probabilities=eprobs, alternatives=alternatives, holds_against=holds, separating_measurement=sep,
         not_excluded=not_excl,
         consistency=consistency, flags=flags, tried=tried, c_hat=c_hat, deff=deff, paired=paired, supported=supported,
-        target_channels=target,
+        target_channels=target, hysteresis_test=hyst,
     )
     diag._why_not = why_not  # noqa: SLF001 - for the summary
     diag._remain = remain  # noqa: SLF001

@@ -544,3 +544,36 @@ def test_none_is_not_high_when_the_cell_noise_reaches_the_relevance_floor():
     rel = d.structure["wong"]["drawbar_pull_n"]["sigma_rel"]
     assert MIN_EFFECT * rel >= MIN_REL, rel
     assert d.effect != "none" or d.confidence != "high", (d.effect, d.confidence_reasons)
+
+
+def test_a_lagging_torque_channel_is_unexplained_not_none_nor_a_cause():
+    """A torque channel behind the force channels by a first-order lag (held-out batch 10's torque
+    lags): the accelerate cycles' cells pool rising and falling slip and average the lag away, so the
+    static hypotheses saw `none` or, from the torque alone, slip sinkage.  Wong's residuals differ
+    between rising and falling slip, which no static hypothesis can make: `unexplained`, with the
+    reason and the torque's verdict; the same run without the lag shows no such difference."""
+    from scipy.signal import lfilter, lfilter_zi
+
+    df = synthetic_data(SAND, W, "wong", duration_s=120.0, load_n=13000.0, seed=4)
+    # each cycle with its falling ramp, as processing labels a recording's accelerate cycles
+    # (synthetic_data labels the rising ramp only)
+    cyc = df["cycle"].where(df["cycle"] >= 0).ffill()
+    df["cycle"] = np.where(df["slip"] > 0, cyc, -1).astype(int)
+    d0 = diagnose(df, SAND, W)
+    _invariants(d0)
+    assert d0.effect == "none", d0.summary
+    assert d0.hysteresis_test["torque_nm"]["cycles"] >= 3
+    assert not any(t["significant"] for t in d0.hysteresis_test.values()), d0.hysteresis_test
+    tau_s, dt = 0.8, float(np.median(np.diff(df["t_s"])))
+    a = dt / (tau_s + dt)
+    x = df["torque_nm"].to_numpy()
+    lagged = df.copy()
+    lagged["torque_nm"] = lfilter([a], [1.0, a - 1.0], x, zi=lfilter_zi([a], [1.0, a - 1.0]) * x[0])[0]
+    d = diagnose(lagged, SAND, W)
+    _invariants(d)
+    h = d.hysteresis_test["torque_nm"]
+    assert h["significant"] and h["h"] < 0, h  # a lagging torque reads low on rising slip
+    assert d.effect == "unexplained" and d.confidence != "high", d.summary
+    assert "rising and falling slip" in d.summary
+    assert d.to_dict()["channels"]["torque_nm"]["effect"] == "unexplained"
+    assert diagnose(_table(seed=0), SAND, W).hysteresis_test == {}  # a table has no time
