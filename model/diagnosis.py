@@ -1306,6 +1306,10 @@ def diagnose(
             model = None
         effect = "unexplained"
         reasons.append(_hysteresis_text(hyst))
+        sep = "; ".join(x for x in (sep, "the transducer channels' relative delay (a tap or step test) and the same "
+                                   "sweep at another slip ramp rate: a lag's loop grows with the ramp rate, a wrong "
+                                   "wheel inertia's with the acceleration, a rate effect of the soil with the speed")
+                       if x)
     # per-channel verdicts
     channels = {}
     for c in CHANNELS:

@@ -575,5 +575,6 @@ def test_a_lagging_torque_channel_is_unexplained_not_none_nor_a_cause():
     assert h["significant"] and h["h"] < 0, h  # a lagging torque reads low on rising slip
     assert d.effect == "unexplained" and d.confidence != "high", d.summary
     assert "rising and falling slip" in d.summary
+    assert "ramp rate" in d.separating_measurement
     assert d.to_dict()["channels"]["torque_nm"]["effect"] == "unexplained"
     assert diagnose(_table(seed=0), SAND, W).hysteresis_test == {}  # a table has no time
