@@ -580,6 +580,11 @@ def _level_test(gm: np.ndarray) -> dict:
     return out
 
 
+def _magnitude(y: np.ndarray) -> float:
+    """RMS of a channel's cell means ``y`` (C,), NaN ignored: what ``MIN_REL`` is a fraction of."""
+    return float(np.sqrt(np.nanmean(y**2))) if np.isfinite(y).any() else float("nan")
+
+
 def _structure_cells(data: FitData, pred: dict) -> dict:
     """Structure tests of cell residuals of one model, in cell-noise sigmas:
     ``{"<channel>": vs slip, "<channel>@load", "<channel>@x"}``.
@@ -600,7 +605,7 @@ def _structure_cells(data: FitData, pred: dict) -> dict:
     by_cycle = data.kind != "table" and n_g >= 3
     for c, y in cells.channels.items():
         e = (y - pred[c]) / cells.sigma[c]
-        size = float(np.sqrt(np.nanmean(y**2))) if np.isfinite(y).any() else float("nan")
+        size = _magnitude(y)
         tests = {}
         if not by_cycle:
             tests[c] = _structure_1d(cells.slip, e)
@@ -691,8 +696,7 @@ def _hysteresis_test(data: FitData, pred: dict) -> dict:
         h = np.asarray(hs)
         mean, se = float(h.mean()), float(h.std(ddof=1) / math.sqrt(h.size))
         p = float(2 * stats.t.sf(abs(mean) / se, h.size - 1)) if se > 0 else (0.0 if mean != 0 else 1.0)
-        cm = data.cells.channels[c]
-        size = float(np.sqrt(np.nanmean(cm**2))) if np.isfinite(cm).any() else float("nan")
+        size = _magnitude(data.cells.channels[c])
         rms = abs(mean) / 2
         sigma = data.cells.sigma[c]
         out[c] = {"p": p, "h": mean, "se": se, "cycles": int(h.size), "effect": rms / sigma if sigma > 0 else float("inf"),

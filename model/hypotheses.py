@@ -220,8 +220,9 @@ def terrain_params(ctx: Context) -> tuple[HParam, ...]:
     """The terrain block k_eq, n, c, phi, K with the context's priors (see :func:`lab_prior`).
 
     The search box is the field's usual range (n 0.2-2.5, c up to 100 kPa, phi 1-60 deg, K 0.1 mm
-    to 0.3 m: the soils of Wong, Theory of Ground Vehicles, ch. 2, and the built-in library) widened to hold the lab value with room
-    on either side: a heavy clay's n of 0.11-0.13 must not start the re-fit at a bound."""
+    to 0.3 m: the soils of Wong, Theory of Ground Vehicles, ch. 2, and the built-in library),
+    widened to hold the lab value with room on either side: a heavy clay's n of 0.11-0.13 must
+    not start the re-fit at a bound."""
     t, w = ctx.terrain, ctx.wheel
     pr = ctx.prior or lab_prior(t, w)
     k = t.k_eq(w.width)
