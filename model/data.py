@@ -615,10 +615,13 @@ def _robust_sd(r: np.ndarray) -> float:
     return float(math.sqrt(np.median(r**2) / _CHI2_1_MEDIAN)) if r.size else float("nan")
 
 
-def _smooth_basis(slip, load_n, x, n_cells):
+def _smooth_basis(slip, load_n, x, n_cells, interaction: bool = True):
     """Design matrix of a flexible smooth in (slip, load, drift coordinate): a cubic B-spline in
     slip (4..8 functions, interior knots at slip quantiles), the centred load and its product with
-    the centred slip (when the load varies at all), and x, x^2 in the drift coordinate (time series)."""
+    the centred slip (when the load varies at all), and, for a time series, x, x^2 in the drift
+    coordinate and the slip spline times x (a slip curve that changes along the run: a soil
+    compacting pass by pass stiffens the low-slip branch more than the high-slip one, an effect
+    of slip and place together that an additive smooth would count as noise)."""
     from scipy.interpolate import BSpline
 
     s = np.asarray(slip, float)
@@ -635,6 +638,8 @@ def _smooth_basis(slip, load_n, x, n_cells):
         cols.append(np.column_stack([wc, wc * sc]))
     if x is not None and np.std(x) > 0:
         cols.append(np.column_stack([x, x**2 - np.mean(x**2)]))
+        if interaction:
+            cols.append(B * (x - np.mean(x))[:, None])
     return np.column_stack(cols)
 
 
@@ -645,9 +650,10 @@ def cell_noise(channels: dict, slip, load_n, t_s, group, sbin, kind: str, x=None
     ``group`` (accelerate cycle), ``sbin`` (slip bin), ``x`` drift coordinate or None (C,).
     The cell means are regressed on a flexible smooth of slip, load and the
     drift coordinate (:func:`_smooth_basis`: cubic B-spline in slip, load x
-    (1, slip), x and x^2); sigma^2 = RSS / (C - p).  Whatever is a smooth
-    function of slip, load or time/distance (any effect, modelled or not) is
-    absorbed by the smooth, so it cannot inflate the noise.  The load enters
+    (1, slip), x and x^2, the slip spline x x while that leaves at least C / 2 degrees of
+    freedom); sigma^2 = RSS / (C - p).  Whatever is a smooth
+    function of slip, load or time/distance, or a slip curve changing linearly along the run
+    (any effect, modelled or not) is absorbed by the smooth, so it cannot inflate the noise.  The load enters
     however little it varies: the torque is about proportional to it, so the
     0.6-1 % that load transfer moves a wheel's load by in a sweep moves the
     torque by 10-20 N m, up to 15x its noise (a smooth without the load counted
@@ -679,6 +685,9 @@ def cell_noise(channels: dict, slip, load_n, t_s, group, sbin, kind: str, x=None
         if C >= 8:
             X = _smooth_basis(slip[ok], load_n[ok], None if x is None else x[ok], C)
             rank = np.linalg.matrix_rank(X)
+            if 2 * (C - rank) < C:  # the interaction only while half the cells stay degrees of freedom
+                X = _smooth_basis(slip[ok], load_n[ok], None if x is None else x[ok], C, interaction=False)
+                rank = np.linalg.matrix_rank(X)
             if C - rank >= 4:
                 coef, *_ = np.linalg.lstsq(X, y[ok], rcond=None)
                 e = y[ok] - X @ coef
