@@ -230,7 +230,8 @@ def dataclasses_replace(obj, **kw):
     return dataclasses.replace(obj, **kw)
 
 
-def prepare_data(df, *, slip_min: float = 0.1, source: str = "data", n_blocks: int | None = None) -> FitData:
+def prepare_data(df, *, slip_min: float = 0.1, source: str = "data", n_blocks: int | None = None,
+                 wheel_radius_m: float | None = None) -> FitData:
     """Select and check the samples a driving model is fitted to.
 
     ``df``: pandas DataFrame with columns ``slip``, ``load_n``, ``drawbar_pull_n``
@@ -247,13 +248,17 @@ def prepare_data(df, *, slip_min: float = 0.1, source: str = "data", n_blocks: i
     and for a time series without cycles contiguous blocks of about ``BLOCK_S`` of data each (at
     least 5 per run).
     The samples are then aggregated into :class:`Cells` (:func:`make_cells`).
+    ``wheel_radius_m`` [m], when given, bounds the measured sinkage: a wheel cannot sink by
+    more than its diameter.
 
     Raises
     ------
     ValueError
         (naming ``source``) for a missing column, an empty table, no rows left
-        after the selection, or only one distinct slip value (no slip
-        dependence can be fitted).
+        after the selection, only one distinct slip value (no slip
+        dependence can be fitted), slip in per cent (most finite slips above 1.5:
+        slip is the fraction of Eq. 6) or a sinkage deeper than the wheel's
+        diameter (millimetres in the ``sinkage_m`` column).
     """
     import pandas as pd
 
@@ -289,6 +294,11 @@ def prepare_data(df, *, slip_min: float = 0.1, source: str = "data", n_blocks: i
     keep &= ~bad
     if not keep.any():
         raise ValueError(f"{source}: no row has finite slip, load_n and drawbar_pull_n")
+    fin = keep & np.isfinite(s)
+    if np.count_nonzero(s[fin] > 1.5) > fin.sum() / 2:  # a driven wheel's slip (Eq. 6) is at most 1
+        raise ValueError(f"{source}: the slip column looks like per cent ({np.count_nonzero(s[fin] > 1.5)} of "
+                         f"{int(fin.sum())} values above 1.5, median {np.median(s[fin]):.3g}); slip is the fraction "
+                         "1 - V / (omega r) of Eq. 6: divide it by 100")
     with np.errstate(invalid="ignore"):
         skid = keep & (s < -_ZERO_SLIP)
         zero = keep & (np.abs(s) <= _ZERO_SLIP)
@@ -340,6 +350,12 @@ def prepare_data(df, *, slip_min: float = 0.1, source: str = "data", n_blocks: i
         if col in df.columns:
             v = pd.to_numeric(df[col], errors="coerce").to_numpy(float)[keep]
             n_ok = int(np.isfinite(v).sum())
+            if col == "sinkage_m" and wheel_radius_m and n_ok and np.nanmax(np.abs(v)) > 2.0 * wheel_radius_m:
+                i = int(np.nanargmax(np.abs(v)))
+                raise ValueError(f"{source}: sinkage_m reaches {v[i]:.4g} m (row {int(np.flatnonzero(keep)[i])}), "
+                                 f"more than the wheel's "
+                                 f"diameter {2.0 * wheel_radius_m:.3g} m: the column must be in metres (millimetres "
+                                 "divided by 1000?)")
             if n_ok >= max(3, n // 2):
                 channels[col] = v
                 if n_ok < n:

@@ -156,6 +156,21 @@ def test_bad_tables_get_clear_errors(frame, match):
         prepare_data(frame, source="t.csv")
 
 
+def test_slip_in_per_cent_and_sinkage_in_millimetres_are_errors_naming_the_file():
+    """Units a table can be off by: slip written in per cent (5..90), sinkage in mm.  Either would
+    flow into a fit (slip rows all dropped as s >= 1; a 42 m sinkage fitted as measured), so each
+    is an error naming the file, and the place for the sinkage; the same values scaled right fit."""
+    slip = np.linspace(0.15, 0.85, 15)
+    ok = pd.DataFrame({"slip": slip, "load_n": 25.0, "drawbar_pull_n": 5.0 + 20.0 * slip,
+                       "sinkage_m": 0.015 + 0.03 * slip})
+    d = prepare_data(ok, source="t.csv", wheel_radius_m=0.06)
+    assert "sinkage_m" in d.channels and d.n == 15
+    with pytest.raises(ValueError, match=r"t\.csv: the slip column looks like per cent.*divide it by 100"):
+        prepare_data(ok.assign(slip=100.0 * slip), source="t.csv")
+    with pytest.raises(ValueError, match=r"t\.csv: sinkage_m reaches 40.5 m \(row 14\).*diameter 0.12 m"):
+        prepare_data(ok.assign(sinkage_m=1000.0 * ok["sinkage_m"]), source="t.csv", wheel_radius_m=0.06)
+
+
 def test_nan_rows_are_dropped_with_a_note():
     df = _table(7, n=30)
     df.loc[3, "drawbar_pull_n"] = np.nan

@@ -98,8 +98,11 @@ def test_cli_fit_on_two_tables_fits_jointly_with_per_run_metrics(tmp_path):
         ("slip,load_n,drawbar_pull_n\n0.3,1000,5\n0.3,1000,6\n", "one slip value"),
         ("slip,load_n,drawbar_pull_n\nnan,1000,5\n0.4,nan,6\n", "finite"),
         ("slip,load_n\n0.3,1000\n0.5,1000\n", "missing column"),
+        ("slip,load_n,drawbar_pull_n\n20,1000,5\n40,1000,6\n60,1000,7\n", "per cent"),
+        ("slip,load_n,drawbar_pull_n,sinkage_m\n0.2,1000,5,20\n0.4,1000,6,30\n0.6,1000,7,40\n",
+         r"sinkage_m reaches 40 m \(row 2\), more than the wheel's diameter 0.94 m"),
     ],
-    ids=["no-bytes", "header-only", "one-slip", "nan", "missing-column"],
+    ids=["no-bytes", "header-only", "one-slip", "nan", "missing-column", "slip-per-cent", "sinkage-mm"],
 )
 def test_bad_tables_give_a_clear_message_and_a_report_saying_so(tmp_path, content, match):
     p = tmp_path / "t.csv"

@@ -583,7 +583,7 @@ def run_fit(
                                      wheel_source=wheel_source, settings=settings)
     source = inputs[0] if len(inputs) == 1 else f"{len(inputs)} inputs"
     try:
-        data = prepare_data(df, slip_min=slip_min, source=source)
+        data = prepare_data(df, slip_min=slip_min, source=source, wheel_radius_m=wheel.radius)
         diag = diagnose(data, ter, wheel, models=[m for m in models if m != "wong"], fit_terrain=fit_terrain,
                         sinkage=sinkage, progress=progress)
     except ValueError as exc:
@@ -668,9 +668,11 @@ examples:
       --wheel-radius 0.0625 --wheel-width 0.06 -o reports/testbed
   wheelsoil fit table.csv --terrain my_soil.toml --models wong,lyasko -o out/
 
-inputs: a table CSV with columns slip, load_n [N], drawbar_pull_n [N] and optional
-torque_nm [N m], sinkage_m [m] (one row per steady-state test point), or a recording
-(.mcap) that is processed first. Several inputs of one terrain are fitted jointly.
+inputs: a table CSV with columns slip (a fraction, Eq. 6: 0.3, not 30 %), load_n [N],
+drawbar_pull_n [N] and optional torque_nm [N m], sinkage_m [m, not mm] (one row per
+steady-state test point; slip in per cent or a sinkage deeper than the wheel's diameter is an
+error naming the file), or a recording (.mcap) that is processed first. Several inputs of one
+terrain are fitted jointly.
 
 output: DIR/report.html (one self-contained file, opens offline, prints), DIR/report.json
 (schema wheelsoil.report/1, SI units), DIR/*.png (overview.png: the run against time with the
