@@ -224,6 +224,21 @@ def run_seed(seed: int, duration_s: float, front_wheels: str, keep_dir: str | No
     return row
 
 
+def terrain_list(text: str | None) -> list[str] | None:
+    """``--terrains``: None (the scenarios' terrains), ``library`` (every built-in terrain but the
+    paper's clay and sand) or comma-separated slugs.  Raises ValueError naming an unknown slug."""
+    if not text:
+        return None
+    from wheelsoil.model.terrain import TERRAINS
+
+    terrains = ([t for t in TERRAINS if t not in ("clay", "sand")] if text == "library"
+                else [t.strip() for t in text.split(",") if t.strip()])
+    unknown = [t for t in terrains if t not in TERRAINS]
+    if unknown or not terrains:
+        raise ValueError(f"--terrains: unknown {unknown} (built-in: {', '.join(TERRAINS)})")
+    return terrains
+
+
 def thresholds() -> dict:
     """The diagnosis' numeric module constants as the code holds them (for the record)."""
     import wheelsoil.model.diagnosis as d
@@ -390,15 +405,10 @@ def main(argv=None) -> int:
     ap.add_argument("--keep", default=None, metavar="DIR", help="keep recordings, truths and reports here")
     args = ap.parse_args(argv)
     args.jobs = max(1, min(args.jobs, 2))
-    terrains = None
-    if args.terrains:
-        from wheelsoil.model.terrain import TERRAINS
-
-        terrains = ([t for t in TERRAINS if t not in ("clay", "sand")] if args.terrains == "library"
-                    else [t.strip() for t in args.terrains.split(",") if t.strip()])
-        unknown = [t for t in terrains if t not in TERRAINS]
-        if unknown or not terrains:
-            ap.error(f"--terrains: unknown {unknown} (built-in: {', '.join(TERRAINS)})")
+    try:
+        terrains = terrain_list(args.terrains)
+    except ValueError as exc:
+        ap.error(str(exc))
     sim_options = {k: v for k, v in (("soil_variability", args.soil_variability), ("slip_max", args.slip_max),
                                      ("procedure", args.procedure), ("wft_noise", args.wft_noise),
                                      ("wft_noise_hz", args.wft_noise_hz)) if v is not None}
