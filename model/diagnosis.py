@@ -84,7 +84,12 @@ decides with this rule (constants below; none was tuned on a benchmark):
    error in another channel gives it), or the rival leaves a relevant error of
    Wong's in some channel that the candidate explains (it improves on the
    rival there: a drawbar-pull-only stand-in does not explain a 13 % torque
-   error that a stress shift removes).  An Occam factor alone names no cause: a Wong-Reece stress shift with
+   error that a stress shift removes), or the rival leaves significant structure of
+   relevant size in its own residuals (step 1's test and floors) where the candidate
+   leaves none, and the candidate is no worse on new data (as above): a model
+   that leaves a relevant systematic error does not explain the data as well,
+   whatever its parameter count (a phi re-fit leaving 6 % of Dp against a clay
+   stress shift).  An Occam factor alone names no cause: a Wong-Reece stress shift with
    2 parameters can out-score the 5-parameter terrain re-fit on a terrain
    mismatch, and then predicts new data worse than the re-fit; decisive
    evidence that new data do not contradict does.  Otherwise the causes that explain the data about
@@ -238,7 +243,8 @@ class Diagnosis:
     probabilities (hypothesis -> posterior); effect_probabilities; alternatives; holds_against
     (each supported hypothesis of another effect with less evidence than the candidate, outside
     the Bayes-factor band -> how the candidate holds against it: ``"out of sample"``,
-    ``"relevant error"``, ``"evidence"``, or None: it does not, and it is an alternative);
+    ``"relevant error"``, ``"evidence"``, ``"leaves structure"``, or None: it does not, and it is an
+    alternative);
     target_channels (the channels a named cause must improve out of sample, rule step 3);
     separating_measurement; not_excluded (for a named cause: the causes on no list known to act
     on the measured channels like it, and what would rule them out); consistency; flags; data (:class:`FitData`);
@@ -775,7 +781,7 @@ def _paired(data: FitData, wong: HypFit, f: HypFit) -> dict:
     return out
 
 
-def _holds_against(data: FitData, f: HypFit, rival: HypFit, target, relevant=()) -> str | None:
+def _holds_against(data: FitData, f: HypFit, rival: HypFit, target, relevant=(), leaves=None) -> str | None:
     """How ``f`` holds against ``rival``, a supported hypothesis of another effect (a listed cause, or a
     generic alternative for causes on no list) with less evidence (module doc, step 5), or None when it
     does not.  Out of sample (step 2's paired test of ``f`` against ``rival``): ``"out of sample"``
@@ -792,15 +798,22 @@ def _holds_against(data: FitData, f: HypFit, rival: HypFit, target, relevant=())
     only new data (the paired test) can show it.  A candidate with no more parameters than the
     rival gains nothing by flexibility.  (A stress shift, 2 parameters, out-scored a one-value
     phi re-fit on a sand phi mismatch of the benchmark's independent simulator at a quarter of
-    the usual noise, with held-out errors within the folds' scatter.)"""
+    the usual noise, with held-out errors within the folds' scatter.)  ``"leaves structure"``
+    when ``leaves()`` (a callable, asked last: the rival's own residuals show significant structure
+    of relevant size, step 1's test and floors, where the candidate's do not), with the
+    same guard on new data as the evidence route: a model that leaves a relevant systematic
+    error does not explain the data as well, whatever its parameter count, just as a candidate
+    leaving one is not named."""
     pr = _paired(data, rival, f)
     if all(pr[c]["improves"] for c in target):
         return "out of sample"
     if any(pr[c]["improves"] for c in relevant if c in pr):
         return "relevant error"
-    if (f.k <= rival.k and all(pr[c]["gain_noise_var"] >= 0 for c in target)
-            and not any(r["worsens"] for r in pr.values())):
+    no_worse = all(pr[c]["gain_noise_var"] >= 0 for c in target) and not any(r["worsens"] for r in pr.values())
+    if f.k <= rival.k and no_worse:
         return "evidence"
+    if no_worse and leaves is not None and leaves():
+        return "leaves structure"
     return None
 
 
@@ -809,6 +822,8 @@ _ROUTE_TEXT = {
     "out of sample": "it predicts new data better",
     "relevant error": "they leave an error of Wong's that it explains",
     "evidence": f"more than {BF_ALTERNATIVE:g} times their evidence with no more parameters, and no worse on new data",
+    "leaves structure": "they leave a significant systematic error of relevant size that it does not, and it is no "
+                        "worse on new data",
 }
 
 
@@ -1262,14 +1277,20 @@ def diagnose(
         # a supported hypothesis of another effect, a listed cause or a stand-in for causes on no list,
         # that the candidate does not hold against out of sample explains the data as well where it
         # matters, whatever the in-sample evidence says
-        holds = {k: _holds_against(data, fits[best], fits[k], target, relevant) for k in supported
-                 if k != best and k not in alternatives and eff_of[k] != fits[best].effect}
+        tests_b = _structure_cells(data, fits[best].cell_pred)
+        remain = _significant_tests(tests_b, len(tests_b))
+
+        def leaves(k):  # the rival's own residuals keep relevant structure (asked only when needed)
+            t = _structure_cells(data, fits[k].cell_pred)
+            return bool(_significant_tests(t, len(t)))
+
+        holds = {k: _holds_against(data, fits[best], fits[k], target, relevant,
+                                   None if remain else lambda k=k: leaves(k))
+                 for k in supported if k != best and k not in alternatives and eff_of[k] != fits[best].effect}
         alternatives += [k for k, route in holds.items() if route is None]
         other_eff = {fits[k].effect for k in alternatives} - {fits[best].effect}
         pe = eprobs.get(fits[best].effect, 0.0)
-        tests_b = _structure_cells(data, fits[best].cell_pred)
         structure[best] = tests_b
-        remain = _significant_tests(tests_b, len(tests_b))
         if other_eff:
             effect = "unexplained"
             reasons.append("causes of different effects explain the data about equally well ("

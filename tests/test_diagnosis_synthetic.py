@@ -40,7 +40,8 @@ def _invariants(d):
         assert d.fits[d.model].effect == d.effect
         # every supported rival of another effect is an alternative or says how the cause held against it
         for k, route in d.holds_against.items():
-            assert k in d.supported and route in ("out of sample", "relevant error", "evidence", None)
+            assert k in d.supported and route in ("out of sample", "relevant error", "evidence", "leaves structure",
+                                                  None)
             assert (route is None) == (k in d.alternatives) and out["holds_against"][k] == route
         if any(d.holds_against.values()):
             assert "Named over the other supported causes" in d.summary
@@ -435,7 +436,9 @@ def test_a_none_that_cannot_exclude_a_relevant_error_says_so():
 def test_the_evidence_route_needs_no_more_parameters_than_the_rival():
     """Two fits that predict the held-out cells alike: the candidate holds against the rival by
     evidence only when it has no more fitted parameters (a more flexible form's in-sample edge may
-    be absorbed model discrepancy; seed 5869 of the benchmark)."""
+    be absorbed model discrepancy; seed 5869 of the benchmark), or when the rival leaves a relevant
+    systematic error that the candidate does not (seed 7196: a clay stress shift against a phi
+    re-fit leaving 6 % of Dp)."""
     from types import SimpleNamespace
 
     from wheelsoil.model.diagnosis import _holds_against
@@ -453,6 +456,16 @@ def test_the_evidence_route_needs_no_more_parameters_than_the_rival():
     assert _holds_against(data, fit(1), fit(1), ["drawbar_pull_n"]) == "evidence"
     assert _holds_against(data, fit(1), fit(2), ["drawbar_pull_n"]) == "evidence"
     assert _holds_against(data, fit(2), fit(1), ["drawbar_pull_n"]) is None
+    # ... unless the simpler rival leaves a relevant systematic error of its own that the candidate
+    # does not (asked only when no other route holds)
+    assert _holds_against(data, fit(2), fit(1), ["drawbar_pull_n"], leaves=lambda: True) == "leaves structure"
+    assert _holds_against(data, fit(2), fit(1), ["drawbar_pull_n"], leaves=lambda: False) is None
+    asked = []
+    _holds_against(data, fit(1), fit(1), ["drawbar_pull_n"], leaves=lambda: asked.append(1) or True)
+    assert not asked
+    # and never for a candidate that predicts new data worse than the rival
+    worse = SimpleNamespace(k=2, cv={**cv, "held_cells": {"drawbar_pull_n": y + rng.normal(0.0, 60.0, 40)}})
+    assert _holds_against(data, worse, fit(1), ["drawbar_pull_n"], leaves=lambda: True) is None
 
 
 def test_a_one_value_refit_falls_short_when_its_whole_predicts_a_channel_better():
