@@ -294,11 +294,11 @@ def prepare_data(df, *, slip_min: float = 0.1, source: str = "data", n_blocks: i
     keep &= ~bad
     if not keep.any():
         raise ValueError(f"{source}: no row has finite slip, load_n and drawbar_pull_n")
-    fin = keep & np.isfinite(s)
-    if np.count_nonzero(s[fin] > 1.5) > fin.sum() / 2:  # a driven wheel's slip (Eq. 6) is at most 1
-        raise ValueError(f"{source}: the slip column looks like per cent ({np.count_nonzero(s[fin] > 1.5)} of "
-                         f"{int(fin.sum())} values above 1.5, median {np.median(s[fin]):.3g}); slip is the fraction "
-                         "1 - V / (omega r) of Eq. 6: divide it by 100")
+    n_pct = int(np.count_nonzero(s[keep] > 1.5))
+    if n_pct > keep.sum() / 2:  # a driven wheel's slip (Eq. 6) is at most 1
+        raise ValueError(f"{source}: the slip column looks like per cent ({n_pct} of {int(keep.sum())} values above "
+                         f"1.5, median {np.median(s[keep]):.3g}); slip is the fraction 1 - V / (omega r) of Eq. 6: "
+                         "divide it by 100")
     with np.errstate(invalid="ignore"):
         skid = keep & (s < -_ZERO_SLIP)
         zero = keep & (np.abs(s) <= _ZERO_SLIP)
@@ -353,9 +353,8 @@ def prepare_data(df, *, slip_min: float = 0.1, source: str = "data", n_blocks: i
             if col == "sinkage_m" and wheel_radius_m and n_ok and np.nanmax(np.abs(v)) > 2.0 * wheel_radius_m:
                 i = int(np.nanargmax(np.abs(v)))
                 raise ValueError(f"{source}: sinkage_m reaches {v[i]:.4g} m (row {int(np.flatnonzero(keep)[i])}), "
-                                 f"more than the wheel's "
-                                 f"diameter {2.0 * wheel_radius_m:.3g} m: the column must be in metres (millimetres "
-                                 "divided by 1000?)")
+                                 f"more than the wheel's diameter {2.0 * wheel_radius_m:.3g} m: the column must be "
+                                 "in metres (millimetres divided by 1000?)")
             if n_ok >= max(3, n // 2):
                 channels[col] = v
                 if n_ok < n:
