@@ -13,7 +13,6 @@ drift.  The runs are the ones ``bench_diagnosis.py`` makes for the same seeds (s
 from __future__ import annotations
 
 import argparse
-import math
 import sys
 import tempfile
 from concurrent.futures import ProcessPoolExecutor
@@ -24,17 +23,11 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 
-def _sd(X, y) -> float:
-    rank = np.linalg.matrix_rank(X)
-    e = y - X @ np.linalg.lstsq(X, y, rcond=None)[0]
-    return math.sqrt(float(e @ e) / (y.size - rank))
-
-
 def run_seed(seed: int, terrains) -> dict:
     """Simulate seed ``seed`` as the diagnosis benchmark does, process it, and compare the two smooths."""
     from bench_diagnosis import simulate_seed
 
-    from wheelsoil.model.data import _smooth_basis, make_cells, prepare_data
+    from wheelsoil.model.data import _scatter_about, _smooth_basis, make_cells, prepare_data
     from wheelsoil.pipeline import load_inputs
     from wheelsoil.simulate import write_simulation
 
@@ -50,7 +43,8 @@ def run_seed(seed: int, terrains) -> dict:
     for c, y in cells.channels.items():
         ok = np.isfinite(y)
         args = (cells.slip[ok], cells.load_n[ok], cells.x[ok], int(ok.sum()))
-        out["ratio"][c] = _sd(_smooth_basis(*args), y[ok]) / _sd(_smooth_basis(*args, interaction=False), y[ok])
+        out["ratio"][c] = (_scatter_about(_smooth_basis(*args), y[ok])
+                           / _scatter_about(_smooth_basis(*args, interaction=False), y[ok]))
     return out
 
 

@@ -630,6 +630,17 @@ def _robust_sd(r: np.ndarray) -> float:
     return float(math.sqrt(np.median(r**2) / _CHI2_1_MEDIAN)) if r.size else float("nan")
 
 
+def _scatter_about(X: np.ndarray, y: np.ndarray) -> float:
+    """Residual standard deviation of ``y`` (C,) about its least-squares fit on the design ``X``
+    (C, p): sqrt(RSS / (C - rank X)) (Ruppert, Wand & Carroll 2003, ch. 3); NaN when fewer than
+    4 degrees of freedom remain.  Units of ``y``."""
+    rank = np.linalg.matrix_rank(X)
+    if y.size - rank < 4:
+        return float("nan")
+    e = y - X @ np.linalg.lstsq(X, y, rcond=None)[0]
+    return float(math.sqrt(float(e @ e) / (y.size - rank)))
+
+
 def _smooth_basis(slip, load_n, x, n_cells, interaction: bool = True):
     """Design matrix of a flexible smooth in (slip, load, drift coordinate): a cubic B-spline in
     slip (4..8 functions, interior knots at slip quantiles), the centred load and its product with
@@ -698,15 +709,12 @@ def cell_noise(channels: dict, slip, load_n, t_s, group, sbin, kind: str, x=None
         sd = float("nan")
         C = int(ok.sum())
         if C >= 8:
-            X = _smooth_basis(slip[ok], load_n[ok], None if x is None else x[ok], C)
-            rank = np.linalg.matrix_rank(X)
-            if 2 * (C - rank) < C:  # the interaction only while half the cells stay degrees of freedom
-                X = _smooth_basis(slip[ok], load_n[ok], None if x is None else x[ok], C, interaction=False)
-                rank = np.linalg.matrix_rank(X)
-            if C - rank >= 4:
-                coef, *_ = np.linalg.lstsq(X, y[ok], rcond=None)
-                e = y[ok] - X @ coef
-                sd = float(math.sqrt(float(e @ e) / (C - rank)))
+            xo = None if x is None else x[ok]
+            X = _smooth_basis(slip[ok], load_n[ok], xo, C)
+            if 2 * (C - np.linalg.matrix_rank(X)) < C:  # the interaction only while half the cells stay dof
+                X = _smooth_basis(slip[ok], load_n[ok], xo, C, interaction=False)
+            sd = _scatter_about(X, y[ok])
+            if np.isfinite(sd):
                 method = (f"residual scatter of the cell means about a smooth in slip, load"
                           + (" and the drift coordinate" if x is not None else "") + " (cubic B-spline, RSS/(C - p))")
         if not np.isfinite(sd):

@@ -106,7 +106,7 @@ def test_noise_estimate_is_not_inflated_by_a_slip_curve_changing_along_the_run()
     about follows it (the slip spline times the drift coordinate), so the noise stays what a
     run without it gives; without that term the same run's noise is several times larger (the
     test can fail)."""
-    from wheelsoil.model.data import _smooth_basis
+    from wheelsoil.model.data import _scatter_about, _smooth_basis
 
     df = synthetic_data(SAND, DEFAULT_WHEEL, "wong", duration_s=120.0, noise_dp_n=40.0, seed=8)
     base = prepare_data(df).cells.sigma["drawbar_pull_n"]
@@ -115,10 +115,8 @@ def test_noise_estimate_is_not_inflated_by_a_slip_curve_changing_along_the_run()
     drifted["drawbar_pull_n"] += 600.0 * u * np.cos(np.pi * df["slip"])  # one branch up, the other down
     cells = prepare_data(drifted).cells
     assert cells.sigma["drawbar_pull_n"] == pytest.approx(base, rel=0.05)
-    X = _smooth_basis(cells.slip, cells.load_n, cells.x, cells.n, interaction=False)
-    y = cells.channels["drawbar_pull_n"]
-    e = y - X @ np.linalg.lstsq(X, y, rcond=None)[0]
-    additive = np.sqrt(e @ e / (cells.n - np.linalg.matrix_rank(X)))
+    additive = _scatter_about(_smooth_basis(cells.slip, cells.load_n, cells.x, cells.n, interaction=False),
+                             cells.channels["drawbar_pull_n"])
     assert additive > 3.0 * base
 
 
