@@ -88,3 +88,56 @@ def test_fit_refuses_a_radius_in_mm(tmp_path):
     pd.DataFrame({"slip": [0.2, 0.3], "load_n": [1e4, 1e4], "drawbar_pull_n": [1e3, 2e3]}).to_csv(tab, index=False)
     with pytest.raises(ValueError, match=r"--wheel-radius = 470.*did you give mm"):
         run_fit([tab], "clay", tmp_path / "out", wheel_radius=470)
+
+
+def test_a_table_states_its_wheel_in_columns_or_a_sidecar(tmp_path):
+    """A table's wheel comes from its wheel_radius_m/wheel_width_m columns or a sidecar
+    <table>.json (the way measured data sets describe their wheel), else the default wheel with a
+    loud note; a sidecar that is not JSON is an error naming it."""
+    import json
+
+    import pandas as pd
+
+    from wheelsoil.pipeline import _table_wheel, load_inputs
+
+    tab = tmp_path / "rig.csv"
+    pd.DataFrame({"slip": [0.2, 0.3], "load_n": [20.0, 20.0], "drawbar_pull_n": [1.0, 2.0]}).to_csv(tab, index=False)
+    assert _table_wheel(tab, pd.read_csv(tab)) == ([], [], "")
+    (tmp_path / "rig.json").write_text(json.dumps({"wheel": {"radius_m": 0.0575, "width_m": 0.06}}))
+    _, info = load_inputs([tab])
+    assert (info["wheel_radius_m"], info["wheel_width_m"]) == (0.0575, 0.06)
+    assert "rig.json" in info["table_wheel_source"]
+    _, info = load_inputs([tab], wheel_radius_m=0.0625)  # the command line against the sidecar: loud
+    assert any("WHEEL RADIUS CONFLICT" in n and "rig.json" in n for n in info["notes"])
+    df = pd.read_csv(tab).assign(wheel_width_m=0.05)  # columns win over the sidecar
+    assert _table_wheel(tab, df) == ([], [0.05], "its wheel_radius_m/wheel_width_m columns")
+    (tmp_path / "rig.json").write_text('{"wheel": {"radius_m": "57.5 mm"}}')
+    with pytest.raises(ValueError, match=r"rig\.json: wheel radius_m = '57.5 mm'"):
+        load_inputs([tab])
+    (tmp_path / "rig.json").write_text("{not json")
+    with pytest.raises(ValueError, match=r"rig\.json: the table's sidecar is not readable JSON"):
+        load_inputs([tab])
+
+
+def test_a_table_without_its_wheel_gets_a_loud_note(tmp_path):
+    import json
+
+    import pandas as pd
+
+    from wheelsoil.model import DEFAULT_WHEEL
+    from wheelsoil.pipeline import run_fit
+
+    rng = np.random.default_rng(3)
+    s = np.repeat(np.linspace(0.15, 0.8, 8), 3)
+    tab = tmp_path / "t.csv"
+    pd.DataFrame({"slip": s, "load_n": 1e4, "drawbar_pull_n": 3e3 * s + rng.normal(0, 50, s.size)}).to_csv(
+        tab, index=False)
+    rep = run_fit([tab], "sand", tmp_path / "out", models=["vasilev"], progress=False)
+    assert rep["wheel"] == {"radius_m": DEFAULT_WHEEL.radius, "width_m": DEFAULT_WHEEL.width}
+    assert any(n.startswith("WHEEL GEOMETRY ASSUMED: no radius or width") for n in rep["notes"])
+    (tmp_path / "t.json").write_text(json.dumps({"wheel_radius_m": 0.5}))  # top-level keys, radius only
+    rep = run_fit([tab], "sand", tmp_path / "out2", models=["vasilev"], progress=False)
+    assert rep["wheel"]["radius_m"] == 0.5
+    assert any(n.startswith("WHEEL GEOMETRY ASSUMED: no width") for n in rep["notes"])
+    assert "t.json" in json.loads((tmp_path / "out2" / "report.json").read_text())["provenance"][
+        "vehicle_config"]["wheel_source"]

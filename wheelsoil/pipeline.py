@@ -62,7 +62,7 @@ def load_inputs(inputs, *, progress: bool = False, rate_hz: float = 100.0, cutof
     import pandas as pd
 
     frames, kinds, sync, notes, processing, results, tables = [], [], [], [], [], [], []
-    radius = width = None
+    radius = width = radius_source = None
     for i, raw in enumerate(inputs):
         path = Path(raw)
         if not path.exists():
@@ -100,12 +100,11 @@ def load_inputs(inputs, *, progress: bool = False, rate_hz: float = 100.0, cutof
             kinds.append("table")
             results.append(None)
             tables.append(df)
-            tr = (pd.to_numeric(df["wheel_radius_m"], errors="coerce").dropna().unique()
-                  if "wheel_radius_m" in df.columns else [])
+            tr, tw, tsrc = _table_wheel(path, df)
             if len(tr) > 1 or (len(tr) == 1 and wheel_radius_m is not None
                                and abs(float(tr[0]) - wheel_radius_m) > 1e-6 * wheel_radius_m):
                 notes.append(f"WHEEL RADIUS CONFLICT: {path.name} states wheel_radius_m = "
-                             f"{', '.join(f'{float(x):g}' for x in tr)} m; the fit uses "
+                             f"{', '.join(f'{float(x):g}' for x in tr)} m ({tsrc}); the fit uses "
                              f"{wheel_radius_m if wheel_radius_m is not None else float(tr[0]):g} m while the "
                              "table's slip was computed with its own radius (Eq. 6)")
             elif len(tr) == 1 and radius is None:
@@ -114,6 +113,13 @@ def load_inputs(inputs, *, progress: bool = False, rate_hz: float = 100.0, cutof
                 notes.append(f"{path.name}: the table's slip was computed outside wheelsoil with a radius it "
                              f"does not state; the fit uses r = {wheel_radius_m:g} m: it must be the radius "
                              "that slip (Eq. 6) was computed with")
+            if len(tw) > 1:
+                notes.append(f"WHEEL WIDTH CONFLICT: {path.name} states wheel_width_m = "
+                             f"{', '.join(f'{float(x):g}' for x in tw)} m ({tsrc}); the fit uses one width")
+            if len(tw) and width is None:
+                width = float(tw[0])
+            if (len(tr) or len(tw)) and radius_source is None and "recording" not in kinds:
+                radius_source = f"{path.name}: {tsrc}"
             sync.append({"input": str(path), "gnss_latency_s": None})
         else:
             raise ValueError(
@@ -129,7 +135,42 @@ def load_inputs(inputs, *, progress: bool = False, rate_hz: float = 100.0, cutof
     if "t_s" in df.columns and df["t_s"].isna().any():  # tables mixed with recordings
         df["t_s"] = df["t_s"].fillna(df.groupby("run").cumcount().astype(float))
     return df, {"kinds": kinds, "time_sync": sync, "wheel_radius_m": radius, "wheel_width_m": width,
-                "notes": notes, "processing": processing, "results": results, "tables": tables}
+                "table_wheel_source": radius_source, "notes": notes, "processing": processing, "results": results,
+                "tables": tables}
+
+
+def _table_wheel(path: Path, df) -> tuple[list, list, str]:
+    """The wheel a table states: its ``wheel_radius_m`` / ``wheel_width_m`` columns, else a sidecar
+    ``<table>.json`` next to it with ``{"wheel": {"radius_m": R, "width_m": B}}`` (or the keys
+    ``wheel_radius_m`` / ``wheel_width_m`` at its top level), the way measured data sets describe
+    their wheel.  Returns ``(radii, widths, source)``: the distinct finite values [m] (empty when
+    not stated) and where they came from.  Raises ValueError (naming the file) for a sidecar
+    that is not valid JSON or states a non-numeric geometry."""
+    import json
+
+    import pandas as pd
+
+    def column(name):
+        return list(pd.to_numeric(df[name], errors="coerce").dropna().unique()) if name in df.columns else []
+
+    radii, widths = column("wheel_radius_m"), column("wheel_width_m")
+    if radii or widths:
+        return radii, widths, "its wheel_radius_m/wheel_width_m columns"
+    side = path.with_suffix(".json")
+    if not side.is_file():
+        return [], [], ""
+    try:
+        meta = json.loads(side.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, ValueError) as exc:
+        raise ValueError(f"{side}: the table's sidecar is not readable JSON: {exc}") from None
+    wheel = meta.get("wheel") if isinstance(meta, dict) and isinstance(meta.get("wheel"), dict) else {}
+    out = []
+    for key, top in (("radius_m", "wheel_radius_m"), ("width_m", "wheel_width_m")):
+        v = wheel.get(key, meta.get(top) if isinstance(meta, dict) else None)
+        if v is not None and (isinstance(v, bool) or not isinstance(v, (int, float)) or not v > 0):
+            raise ValueError(f"{side}: wheel {key} = {v!r} is not a positive number of metres")
+        out.append([float(v)] if v is not None else [])
+    return out[0], out[1], f"its sidecar {side.name}"
 
 
 def _attachment_name(warning: str, path: Path) -> str:
@@ -413,7 +454,7 @@ def build_provenance(inputs, info, *, command, terrain, ter, wheel, wheel_source
         entries.append(e)
         quality.append(q)
     first_cfg = next((e["vehicle_config"] for e in entries if "vehicle_config" in e), None)
-    vc = dict(first_cfg) if first_cfg else {"source": "none (table input): the model's default wheel"}
+    vc = dict(first_cfg) if first_cfg else {"source": "none (table input): the wheel as wheel_source says"}
     vc["wheel_radius_used_m"] = wheel.radius
     vc["wheel_width_used_m"] = wheel.width
     vc["wheel_source"] = wheel_source
@@ -504,8 +545,10 @@ def run_fit(
     terrain : a built-in terrain slug, a TOML path, or a ``Terrain``.
     out_dir : report directory (``report.html``, ``report.json``, ``*.png``).
     wheel_radius, wheel_width : [m]; default: the vehicle config's (0.47/0.32)
-        for recordings, the model's ``DEFAULT_WHEEL`` for tables.  The radius is
-        also the slip radius of Eq. (6) for recordings.
+        for recordings; for tables what the table states (``wheel_radius_m`` /
+        ``wheel_width_m`` columns, else a sidecar ``<table>.json``: :func:`_table_wheel`),
+        else the model's ``DEFAULT_WHEEL`` with a "WHEEL GEOMETRY ASSUMED" note.  The
+        radius is also the slip radius of Eq. (6) for recordings.
     slip_min : samples with s <= slip_min are not used (paper: 0.2 clay, 0.1 sand).
     models : hypotheses to try (default: every hypothesis of the registry; the legacy list
         ``vasilev, lyasko, ding, terrain_mismatch`` means the same; Wong always).
@@ -560,14 +603,14 @@ def run_fit(
     df, info = load_inputs(inputs, progress=progress, rate_hz=rate_hz, cutoff_hz=cutoff_hz,
                            wheel_radius_m=wheel_radius, inertia=inertia)
     recording = "recording" in info["kinds"]
-    r = wheel_radius or (info["wheel_radius_m"] if info["wheel_radius_m"] else DEFAULT_WHEEL.radius)
-    b = wheel_width or (info["wheel_width_m"] if recording and info["wheel_width_m"] else DEFAULT_WHEEL.width)
+    stated = "vehicle configuration" if recording else info["table_wheel_source"]
+    r = wheel_radius or info["wheel_radius_m"] or DEFAULT_WHEEL.radius
+    b = wheel_width or info["wheel_width_m"] or DEFAULT_WHEEL.width
     wheel = Wheel(float(r), float(b))
     wheel_source = ("radius: " + ("command line" if wheel_radius else
-                                  "vehicle configuration" if recording else
-                                  "the table's wheel_radius_m column" if info["wheel_radius_m"] else "model default")
+                                  stated if info["wheel_radius_m"] else "model default")
                     + ", width: " + ("command line" if wheel_width else
-                                     "vehicle configuration" if recording else "model default"))
+                                     stated if info["wheel_width_m"] else "model default"))
     settings = {
         "slip_min": float(slip_min),
         "models": ["wong", *[m for m in models if m != "wong"]],
@@ -594,9 +637,17 @@ def run_fit(
     prov["settings"]["diagnosis_thresholds"] = dict(getattr(diag, "thresholds", {}) or {})
     prov["settings"]["cross_validation"] = getattr(data, "group_kind", None)
     notes = list(info["notes"])
-    if wheel_radius is None or wheel_width is None:
-        notes.append(f"wheel radius {wheel.radius} m, width {wheel.width} m "
-                     + ("from the vehicle configuration" if recording else "(the model's default wheel)")
+    assumed = [w for w, given, stated in (("radius", wheel_radius, info["wheel_radius_m"]),
+                                          ("width", wheel_width, info["wheel_width_m"])) if not (given or stated)]
+    if assumed and not recording:
+        notes.append(f"WHEEL GEOMETRY ASSUMED: no {' or '.join(assumed)} given (command line, the table's "
+                     f"wheel_radius_m/wheel_width_m columns or a sidecar {Path(inputs[0]).stem}.json); the fit uses "
+                     f"the vehicle's default wheel r = {wheel.radius} m, b = {wheel.width} m (hardware.md). "
+                     "Data from another wheel need --wheel-radius and --wheel-width: the model's forces and "
+                     "sinkage scale with both, and slip (Eq. 6) was computed with the radius.")
+    elif wheel_radius is None or wheel_width is None:
+        notes.append(f"wheel radius {wheel.radius} m, width {wheel.width} m from "
+                     + ("the vehicle configuration" if recording else info["table_wheel_source"])
                      + " where not given.")
     ts = _time_sync_summary(info["time_sync"]) if recording else {"gnss_latency_s": None}
     details = []
@@ -672,7 +723,10 @@ inputs: a table CSV with columns slip (a fraction, Eq. 6: 0.3, not 30 %), load_n
 drawbar_pull_n [N] and optional torque_nm [N m], sinkage_m [m, not mm] (one row per
 steady-state test point; slip in per cent or a sinkage deeper than the wheel's diameter is an
 error naming the file), or a recording (.mcap) that is processed first. Several inputs of one
-terrain are fitted jointly.
+terrain are fitted jointly. A table's wheel: --wheel-radius/--wheel-width, else its columns
+wheel_radius_m/wheel_width_m, else a sidecar TABLE.json next to it ({"wheel": {"radius_m": R,
+"width_m": B}}), else the vehicle's 0.47 x 0.32 m wheel with a loud note; a radius that
+disagrees with the one the table states is noted as a conflict (slip, Eq. 6, used the table's).
 
 output: DIR/report.html (one self-contained file, opens offline, prints), DIR/report.json
 (schema wheelsoil.report/1, SI units), DIR/*.png (overview.png: the run against time with the
@@ -706,9 +760,11 @@ def register(subparsers) -> None:
                    help="built-in terrain slug (see 'wheelsoil terrains') or a terrain TOML file")
     p.add_argument("-o", "--output", required=True, metavar="DIR", help="report directory (created)")
     p.add_argument("--wheel-radius", type=float, default=None, metavar="R",
-                   help="wheel radius [m] (default: vehicle config 0.47 for recordings, 0.47 for tables)")
+                   help="wheel radius [m] (default: the vehicle config for recordings, 0.47; for tables what the "
+                   "table or its sidecar JSON states, else 0.47)")
     p.add_argument("--wheel-width", type=float, default=None, metavar="B",
-                   help="wheel width [m] (default: vehicle config 0.32 for recordings, 0.32 for tables)")
+                   help="wheel width [m] (default: the vehicle config for recordings, 0.32; for tables what the "
+                   "table or its sidecar JSON states, else 0.32)")
     p.add_argument("--slip-min", type=float, default=0.1, metavar="S",
                    help="use samples with slip > S (default 0.1; the paper used 0.2 on clay, 0.1 on sand)")
     from wheelsoil.model.hypotheses import HYPOTHESES
