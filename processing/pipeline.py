@@ -776,7 +776,8 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
               if issubclass(c.category, RuntimeWarning)
               and (str(path) in str(c.message) or path.name in str(c.message))]
     if span[0] is None:
-        raise ValueError(f"{path}: the recording holds no CAN frames" + "".join(f"; {w}" for w in warns))
+        raise ValueError(f"{path}: the recording holds no CAN frames" + _foreign_channels(read_report)
+                         + "".join(f"; {w}" for w in warns))
 
     def get(key_or_ref) -> tuple[np.ndarray, np.ndarray] | None:
         ref = sig[key_or_ref] if isinstance(key_or_ref, str) else key_or_ref
@@ -1131,3 +1132,20 @@ def _distance(speed: np.ndarray, dt: float) -> np.ndarray:
     d = np.concatenate([[0.0], np.cumsum(inc)])
     d[~fin] = np.nan
     return d
+
+
+def _foreign_channels(report) -> str:
+    """What an MCAP without wheelsoil frame channels holds instead (for the error message): its
+    channels' topics, schemas and encodings, and the layout wheelsoil reads."""
+    chans = [c for c in (getattr(report, "channels", None) or {}).values()
+             if c.get("topic") != "/wheelsoil/logger_status"]
+    if not chans:
+        return ""
+    from wheelsoil.daq.recording import SCHEMA_NAME
+
+    listed = ", ".join(f"{c.get('topic')} (schema {c.get('schema') or 'none'!r}, {c.get('encoding')})"
+                       for c in chans[:8]) + (f" and {len(chans) - 8} more" if len(chans) > 8 else "")
+    return (f" in the layout wheelsoil reads (channels of schema {SCHEMA_NAME}, docs/mcap-layout.md); it has "
+            f"{listed}. Export such a recording's frames as a candump log, ASC, BLF or TRC file and run "
+            "'wheelsoil import' on it")
+

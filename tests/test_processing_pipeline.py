@@ -165,6 +165,26 @@ def test_recording_without_configured_messages(tmp_path):
         process_recording(tmp_path / "missing.mcap")
 
 
+
+def test_an_mcap_in_another_layout_is_refused_naming_what_it_holds(tmp_path):
+    """An MCAP whose CAN frames are in another schema (another tool's JSON frames) is an error
+    naming its channels and the way in (a log file and ``wheelsoil import``), not "no frames"."""
+    import json
+
+    from mcap.writer import Writer
+
+    path = tmp_path / "foreign.mcap"
+    with open(path, "wb") as f:
+        w = Writer(f)
+        w.start()
+        cid = w.register_channel("/can0", "json", w.register_schema("can_frame", "jsonschema", b"{}"))
+        for i in range(5):
+            w.add_message(cid, log_time=i, publish_time=i, data=json.dumps({"id": 256}).encode())
+        w.finish()
+    with pytest.raises(ValueError, match=r"foreign\.mcap: the recording holds no CAN frames in the layout "
+                       r"wheelsoil reads .*it has /can0 \(schema 'can_frame', json\).*'wheelsoil import'"):
+        process_recording(path)
+
 # --------------------------------------------------------------------------- CLI
 def test_cli_writes_csv_and_parquet(tmp_path, short_truth, capsys):
     from wheelsoil.cli import main
