@@ -268,7 +268,8 @@ def prepare_data(df, *, slip_min: float = 0.1, source: str = "data", n_blocks: i
     if missing:
         raise ValueError(
             f"{source}: missing column(s) {', '.join(missing)}; a table needs slip, load_n, "
-            "drawbar_pull_n (optional torque_nm, sinkage_m)"
+            "drawbar_pull_n (optional torque_nm, sinkage_m) in SI units (slip a fraction); it has "
+            + (", ".join(map(str, df.columns[:20])) + (" ..." if len(df.columns) > 20 else "") or "no columns")
         )
     n_input = len(df)
     if n_input == 0:

@@ -141,3 +141,21 @@ def test_a_table_without_its_wheel_gets_a_loud_note(tmp_path):
     assert any(n.startswith("WHEEL GEOMETRY ASSUMED: no width") for n in rep["notes"])
     assert "t.json" in json.loads((tmp_path / "out2" / "report.json").read_text())["provenance"][
         "vehicle_config"]["wheel_source"]
+
+
+def test_a_table_names_the_columns_it_does_not_read(tmp_path):
+    """A channel in other units (sinkage_mm) is not silently dropped: the note names it; a missing
+    column's error lists what the table has."""
+    import pandas as pd
+
+    from wheelsoil.model.fit import prepare_data
+    from wheelsoil.pipeline import load_inputs
+
+    tab = tmp_path / "mm.csv"
+    df = pd.DataFrame({"slip": [0.2, 0.4, 0.6], "load_n": 1e4, "drawbar_pull_n": [1e3, 2e3, 2.5e3],
+                       "sinkage_mm": [40.0, 50.0, 60.0]})
+    df.to_csv(tab, index=False)
+    _, info = load_inputs([tab])
+    assert any(n.startswith("mm.csv: column(s) not read: sinkage_mm") for n in info["notes"])
+    with pytest.raises(ValueError, match=r"missing column\(s\) load_n.*it has slip, load_kn"):
+        prepare_data(df.rename(columns={"load_n": "load_kn"}), source="mm.csv")

@@ -18,6 +18,10 @@ __all__ = ["run_fit", "load_inputs", "build_provenance", "register", "RECORDING_
 
 RECORDING_SUFFIXES = (".mcap", ".log", ".blf", ".asc", ".trc")
 TABLE_SUFFIXES = (".csv", ".txt", ".tsv")
+#: The columns read from a table (SI units; slip a fraction, Eq. 6): a steady-state table's, the
+#: wheel it states, and the time series ``wheelsoil process`` writes (``wheelsoil.processing.COLUMNS``).
+TABLE_COLUMNS = ("slip", "load_n", "drawbar_pull_n", "torque_nm", "sinkage_m", "wheel_radius_m", "wheel_width_m",
+                 "t_s", "distance_m", "valid", "phase", "cycle", "fx_n", "my_nm", "speed_mps", "omega_radps")
 
 
 def _read_table(path: Path):
@@ -100,6 +104,11 @@ def load_inputs(inputs, *, progress: bool = False, rate_hz: float = 100.0, cutof
             kinds.append("table")
             results.append(None)
             tables.append(df)
+            unused = [c for c in df.columns if c not in TABLE_COLUMNS]
+            if unused:
+                notes.append(f"{path.name}: column(s) not read: {', '.join(unused)} (a table's columns are "
+                             f"{', '.join(TABLE_COLUMNS)}, in SI units; a channel in other units, e.g. "
+                             "sinkage in mm, must be converted to be used)")
             tr, tw, tsrc = _table_wheel(path, df)
             if len(tr) > 1 or (len(tr) == 1 and wheel_radius_m is not None
                                and abs(float(tr[0]) - wheel_radius_m) > 1e-6 * wheel_radius_m):
