@@ -66,7 +66,7 @@ def load_inputs(inputs, *, progress: bool = False, rate_hz: float = 100.0, cutof
     import pandas as pd
 
     frames, kinds, sync, notes, processing, results, tables = [], [], [], [], [], [], []
-    radius = width = radius_source = None
+    radius = width = table_source = None
     for i, raw in enumerate(inputs):
         path = Path(raw)
         if not path.exists():
@@ -127,8 +127,8 @@ def load_inputs(inputs, *, progress: bool = False, rate_hz: float = 100.0, cutof
                              f"{', '.join(f'{float(x):g}' for x in tw)} m ({tsrc}); the fit uses one width")
             if len(tw) and width is None:
                 width = float(tw[0])
-            if (len(tr) or len(tw)) and radius_source is None and "recording" not in kinds:
-                radius_source = f"{path.name}: {tsrc}"
+            if (len(tr) or len(tw)) and table_source is None and "recording" not in kinds:
+                table_source = f"{path.name}: {tsrc}"
             sync.append({"input": str(path), "gnss_latency_s": None})
         else:
             raise ValueError(
@@ -144,7 +144,7 @@ def load_inputs(inputs, *, progress: bool = False, rate_hz: float = 100.0, cutof
     if "t_s" in df.columns and df["t_s"].isna().any():  # tables mixed with recordings
         df["t_s"] = df["t_s"].fillna(df.groupby("run").cumcount().astype(float))
     return df, {"kinds": kinds, "time_sync": sync, "wheel_radius_m": radius, "wheel_width_m": width,
-                "table_wheel_source": radius_source, "notes": notes, "processing": processing, "results": results,
+                "table_wheel_source": table_source, "notes": notes, "processing": processing, "results": results,
                 "tables": tables}
 
 
