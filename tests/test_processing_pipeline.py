@@ -185,6 +185,28 @@ def test_an_mcap_in_another_layout_is_refused_naming_what_it_holds(tmp_path):
                        r"wheelsoil reads .*it has /can0 \(schema 'can_frame', json\).*'wheelsoil import'"):
         process_recording(path)
 
+
+def test_short_wft_frames_are_dropped_not_decoded_into_forces(tmp_path, short_truth):
+    """A WFT frame whose payload is shorter than its DBC layout (a DLC mismatch) has no counter:
+    it is dropped as a lost sample, with a warning, and the forces stay as the whole frames give."""
+    from wheelsoil.daq.convert import export_recording
+
+    info = write_recording(tmp_path / "r.mcap", short_truth, latency_s=0.1)
+    export_recording(info["path"], tmp_path / "r.log")
+    lines = (tmp_path / "r.log").read_text().splitlines()
+    force = [i for i, ln in enumerate(lines) if " 120#" in ln]
+    for i in force[::7]:  # every 7th force frame cut to 4 bytes
+        head, data = lines[i].split("#", 1)
+        lines[i] = f"{head}#{data.split()[0][:8]}"
+    (tmp_path / "short.log").write_text("\n".join(lines) + "\n")
+    a = process_recording(tmp_path / "r.log")
+    b = process_recording(tmp_path / "short.log")
+    assert any("DLC mismatch" in w and f"{len(force[::7])} WFT_RL_Force" in w for w in b.warnings)
+    ok = a.signals["valid"].to_numpy() & b.signals["valid"].to_numpy()
+    assert ok.mean() > 0.5
+    err = b.signals["drawbar_pull_n"].to_numpy()[ok] - a.signals["drawbar_pull_n"].to_numpy()[ok]
+    assert np.sqrt(np.mean(err**2)) < 3 * FORCE_NOISE_N
+
 # --------------------------------------------------------------------------- CLI
 def test_cli_writes_csv_and_parquet(tmp_path, short_truth, capsys):
     from wheelsoil.cli import main
