@@ -280,7 +280,10 @@ def prepare_data(df, *, slip_min: float = 0.1, source: str = "data", n_blocks: i
     dp = pd.to_numeric(df["drawbar_pull_n"], errors="coerce").to_numpy(float)
     keep = np.ones(n_input, bool)
     if "valid" in df.columns:
-        valid = df["valid"].fillna(False).astype(bool).to_numpy()
+        v = df["valid"]
+        if not pd.api.types.is_bool_dtype(v) and not pd.api.types.is_numeric_dtype(v):  # a table's text: "no" / "false" / "0" is not valid
+            v = v.astype(str).str.strip().str.lower().isin(("1", "1.0", "true", "yes", "y", "t"))
+        valid = v.fillna(False).astype(bool).to_numpy()
         if (~valid).any():
             notes.append(f"{int((~valid).sum())} of {n_input} samples marked invalid by processing were excluded.")
         keep &= valid
@@ -577,6 +580,11 @@ def make_cells(data: "FitData") -> Cells:
     chans = {c: mean(v) for c, v in data.channels.items()}
     ch_cnt = {c: np.bincount(inv, weights=np.isfinite(v).astype(float), minlength=uniq.size)
               for c, v in data.channels.items()}
+    if keep_cell.sum() < 3:
+        raise ValueError(f"only {int(keep_cell.sum())} cells with >= {MIN_CELL_SAMPLES} samples: too little data to "
+                         "fit" + ("" if data.kind == "table" else
+                                  " (a steady-state table with a t_s or distance_m column is read as a time series "
+                                  "of samples: drop those columns to fit one row per test point)"))
     x = None
     x_ref = (0.0, 1.0)
     if xs is not None:
@@ -585,8 +593,6 @@ def make_cells(data: "FitData") -> Cells:
         x_ref = (float(np.nanmin(xm[keep_cell])), rng)
         x = (xm - x_ref[0]) / rng - 0.5 if rng > 0 else np.zeros_like(xm)
     sel = keep_cell
-    if sel.sum() < 3:
-        raise ValueError(f"only {int(sel.sum())} cells with >= {MIN_CELL_SAMPLES} samples: too little data to fit")
     index = np.full(uniq.size, -1)
     index[sel] = np.arange(int(sel.sum()))
     cells_idx = index[inv]

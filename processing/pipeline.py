@@ -76,6 +76,8 @@ FREE_ROLLING_TORQUE_NM = 150.0
 LATENCY_MAX_S = 0.5
 #: Wheel load [N] below which the traction coefficient T/(rW) is not formed (wheel lifted).
 LATENCY_MIN_LOAD_N = 500.0
+#: Highest output rate [Hz] processing resamples to.
+MAX_RATE_HZ = 1000.0
 #: Systematic (model) uncertainty [s] of each latency estimator, added in quadrature to its
 #: statistical standard error: the wheel reference is exact for a free-rolling wheel; the
 #: slip-traction estimate is biased by up to ~15 ms where the torque is not a function of slip
@@ -686,8 +688,9 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
     from wheelsoil.daq import iter_frame_batches
 
     path = Path(path)
-    if not rate_hz > 0:
-        raise ValueError(f"rate must be > 0 Hz, not {rate_hz}")
+    if not 0 < rate_hz <= MAX_RATE_HZ:
+        raise ValueError(f"rate must be > 0 Hz and at most {MAX_RATE_HZ:g} Hz (the transducer's 500 Hz twice over: "
+                         f"a finer grid adds rows, not information), not {rate_hz}")
     cutoff = DEFAULT_CUTOFF_HZ if cutoff_hz is None else float(cutoff_hz)
     if not cutoff > 0:
         raise ValueError(f"cutoff must be > 0 Hz, not {cutoff_hz}")

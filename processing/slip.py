@@ -94,6 +94,8 @@ def _smooth_derivative(t: np.ndarray, x: np.ndarray, smooth_s: float) -> np.ndar
         return np.full(n, np.nan)
     dt = float(np.median(np.diff(t)))
     w = max(1, int(round(smooth_s / dt)))
+    if w > n:  # a run shorter than the window: no complete window anywhere
+        return np.full(n, np.nan)
     kernel = np.ones(w) / w
     fin = np.isfinite(x)
     xs = np.convolve(np.where(fin, x, 0.0), kernel, mode="same")

@@ -163,6 +163,8 @@ def test_recording_without_configured_messages(tmp_path):
         process_recording(path)
     with pytest.raises(OSError, match="no such file"):
         process_recording(tmp_path / "missing.mcap")
+    with pytest.raises(ValueError, match="at most 1000 Hz"):
+        process_recording(path, rate_hz=1e5)
 
 
 

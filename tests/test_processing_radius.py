@@ -159,3 +159,48 @@ def test_a_table_names_the_columns_it_does_not_read(tmp_path):
     assert any(n.startswith("mm.csv: column(s) not read: sinkage_mm") for n in info["notes"])
     with pytest.raises(ValueError, match=r"missing column\(s\) load_n.*it has slip, load_kn"):
         prepare_data(df.rename(columns={"load_n": "load_kn"}), source="mm.csv")
+
+
+def test_fit_refuses_inputs_it_cannot_fit_as_given(tmp_path):
+    """The same run twice, tables mixed with recordings, implausible wheel sizes from any source
+    are refused naming the file; a semicolon table is read; a 'no' in valid is not valid."""
+    import json
+
+    import pandas as pd
+
+    from wheelsoil.model.fit import prepare_data
+    from wheelsoil.pipeline import load_inputs, run_fit
+
+    s = np.repeat(np.linspace(0.15, 0.8, 8), 3)
+    df = pd.DataFrame({"slip": s, "load_n": 1e4, "drawbar_pull_n": 3e3 * s})
+    a, b = tmp_path / "a.csv", tmp_path / "b.csv"
+    df.to_csv(a, index=False)
+    df.to_csv(b, index=False)
+    with pytest.raises(ValueError, match=r"b\.csv: the same data as .*a\.csv"):
+        run_fit([a, b], "sand", tmp_path / "o1")
+    with pytest.raises(ValueError, match=r"--wheel-width = 0: not a plausible width"):
+        run_fit([a], "sand", tmp_path / "o2", wheel_width=0)
+    with pytest.raises(ValueError, match=r"--wheel-width = 320: .*did you give mm"):
+        run_fit([a], "sand", tmp_path / "o3", wheel_width=320)
+    (tmp_path / "a.json").write_text(json.dumps({"wheel": {"radius_m": 470, "width_m": 320}}))
+    with pytest.raises(ValueError, match=r"a\.csv: wheel_radius_m \(its sidecar a\.json\) = 470.*did you give mm"):
+        load_inputs([a])
+    semi = tmp_path / "semi.csv"
+    semi.write_text(df.to_csv(index=False, sep=";"))
+    got, _ = load_inputs([semi])
+    assert list(got.columns[:3]) == ["slip", "load_n", "drawbar_pull_n"] and len(got) == len(df)
+    text = df.assign(valid=["no", "yes", "true"] * 8)
+    data = prepare_data(text, source="t.csv")
+    assert data.n == 16
+
+
+def test_fit_refuses_a_table_mixed_with_a_recording(small_wheel, tmp_path):
+    import pandas as pd
+
+    from wheelsoil.pipeline import load_inputs
+
+    _, path = small_wheel
+    tab = tmp_path / "t.csv"
+    pd.DataFrame({"slip": [0.2, 0.3], "load_n": [1e4, 1e4], "drawbar_pull_n": [1e3, 2e3]}).to_csv(tab, index=False)
+    with pytest.raises(ValueError, match="tables and recordings cannot be fitted jointly"):
+        load_inputs([path, tab])

@@ -171,3 +171,14 @@ def test_latency_estimate_recovers_delay():
     assert 0 < est.stderr_s < 0.003
     with pytest.raises(ValueError):
         estimate_latency(t_fix, v_g, t_ref, np.full_like(t_ref, 0.1))  # below min speed: nothing usable
+
+
+def test_smoothed_derivative_of_a_run_shorter_than_its_window_is_nan():
+    """A few samples (a log cut after 50 lines) give no complete smoothing window: NaN, not a crash."""
+    from wheelsoil.processing.slip import _smooth_derivative
+
+    t = np.arange(5) * 0.01
+    d = _smooth_derivative(t, 2.0 * t, smooth_s=0.5)
+    assert d.shape == (5,) and np.isnan(d).all()
+    t = np.arange(500) * 0.01
+    assert np.nanmax(np.abs(_smooth_derivative(t, 2.0 * t, smooth_s=0.5) - 2.0)) < 1e-9

@@ -195,3 +195,16 @@ def test_vehicle_keys_replaced_or_added_and_loaded_by_the_daq_loader():
     assert vt["wheel_mass_kg"] == 80.0 and vt["wheel_inertia_kgm2"] == 11.5
     if hasattr(cfg, "wheel_mass_kg"):  # contract B (processing's VehicleConfig fields)
         assert (cfg.wheel_mass_kg, cfg.wheel_inertia_kgm2) == (80.0, 11.5)
+
+
+def test_simulate_refuses_a_run_length_or_wheel_it_cannot_make():
+    """An infinite or NaN duration and a zero wheel are refused naming the option, not run or defaulted."""
+    from wheelsoil.model import load_terrain
+    from wheelsoil.simulate import simulate_run
+
+    for bad in (float("inf"), float("nan"), 10.0):
+        with pytest.raises(ValueError, match="a run is 30 s"):
+            simulate_run(load_terrain("sand"), duration_s=bad)
+    proc = subprocess.run([sys.executable, "-m", "wheelsoil", "simulate", "--terrain", "sand", "--wheel-width", "0",
+                           "-o", "x.mcap"], capture_output=True, text=True)
+    assert proc.returncode != 0 and "--wheel-width = 0.0: not a plausible width" in proc.stderr

@@ -12,12 +12,15 @@ report).
 from __future__ import annotations
 
 import argparse
+import math
 from pathlib import Path
 
 __all__ = ["run_fit", "load_inputs", "build_provenance", "register", "RECORDING_SUFFIXES"]
 
 RECORDING_SUFFIXES = (".mcap", ".log", ".blf", ".asc", ".trc")
 TABLE_SUFFIXES = (".csv", ".txt", ".tsv")
+#: Plausible wheel widths [m] (a testbed's 2 cm wheel to twin tyres).
+WIDTH_RANGE_M = (0.02, 2.0)
 #: The columns read from a table (SI units; slip a fraction, Eq. 6): a steady-state table's, the
 #: wheel it states, and the time series ``wheelsoil process`` writes (``wheelsoil.processing.COLUMNS``).
 TABLE_COLUMNS = ("slip", "load_n", "drawbar_pull_n", "torque_nm", "sinkage_m", "wheel_radius_m", "wheel_width_m",
@@ -28,7 +31,10 @@ def _read_table(path: Path):
     import pandas as pd
 
     try:
-        df = pd.read_csv(path, sep=None, engine="python") if path.suffix == ".tsv" else pd.read_csv(path)
+        with open(path, encoding="utf-8-sig", errors="replace") as f:
+            head = f.readline()
+        sep = next((c for c in ("\t", ";") if c in head and "," not in head), ",")  # a tab or semicolon table
+        df = pd.read_csv(path, sep=sep)
     except pd.errors.EmptyDataError:
         raise ValueError(f"{path}: the table is empty (no header, no rows)") from None
     except (pd.errors.ParserError, UnicodeDecodeError) as exc:
@@ -110,6 +116,8 @@ def load_inputs(inputs, *, progress: bool = False, rate_hz: float = 100.0, cutof
                              f"{', '.join(TABLE_COLUMNS)}, in SI units; a channel in other units, e.g. "
                              "sinkage in mm, must be converted to be used)")
             tr, tw, tsrc = _table_wheel(path, df)
+            tr = [check_wheel_radius(v, f"{path.name}: wheel_radius_m ({tsrc})") for v in tr]
+            tw = [check_wheel_width(v, f"{path.name}: wheel_width_m ({tsrc})") for v in tw]
             if len(tr) > 1 or (len(tr) == 1 and wheel_radius_m is not None
                                and abs(float(tr[0]) - wheel_radius_m) > 1e-6 * wheel_radius_m):
                 notes.append(f"WHEEL RADIUS CONFLICT: {path.name} states wheel_radius_m = "
@@ -140,12 +148,55 @@ def load_inputs(inputs, *, progress: bool = False, rate_hz: float = 100.0, cutof
         frames.append(df)
     if not frames:
         raise ValueError("no input given")
+    if len(set(kinds)) > 1:
+        raise ValueError(f"{', '.join(map(str, inputs))}: tables and recordings cannot be fitted jointly (a table's "
+                         "rows have no accelerate cycles, time base or processing validity); fit them separately, "
+                         "or write the recordings as tables with 'wheelsoil process' first")
     df = pd.concat(frames, ignore_index=True, sort=False)
     if "t_s" in df.columns and df["t_s"].isna().any():  # tables mixed with recordings
         df["t_s"] = df["t_s"].fillna(df.groupby("run").cumcount().astype(float))
     return df, {"kinds": kinds, "time_sync": sync, "wheel_radius_m": radius, "wheel_width_m": width,
                 "table_wheel_source": table_source, "notes": notes, "processing": processing, "results": results,
                 "tables": tables}
+
+
+def check_wheel_radius(value, what: str = "wheel radius") -> float:
+    """:func:`wheelsoil.processing.pipeline.check_wheel_radius` (imported when used: the CLI starts fast)."""
+    from wheelsoil.processing.pipeline import check_wheel_radius as check
+
+    return check(value, what)
+
+
+def check_wheel_width(value, what: str = "wheel width") -> float:
+    """``value`` as a float width [m], checked finite and within :data:`WIDTH_RANGE_M`.
+    Raises ``ValueError`` naming ``what`` and the value (hint for millimetres)."""
+    try:
+        if isinstance(value, bool):
+            raise TypeError
+        b = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{what} = {value!r}: must be a number in m") from None
+    lo, hi = WIDTH_RANGE_M
+    if not (math.isfinite(b) and lo <= b <= hi):
+        hint = "; did you give mm?" if math.isfinite(b) and lo * 1e3 <= b <= hi * 1e3 else ""
+        raise ValueError(f"{what} = {value!r}: not a plausible width in m ({lo:g}-{hi:g}){hint}")
+    return b
+
+
+def _check_distinct(inputs) -> None:
+    """Refuse an input given twice (the same file, or the same bytes under two names): fitting it
+    twice doubles its weight and makes the run look like two runs that agree.  Raises ValueError."""
+    from wheelsoil.daq.provenance import file_sha256
+
+    seen: dict = {}
+    for raw in inputs:
+        path = Path(raw)
+        if not path.is_file():
+            continue  # load_inputs names what is wrong with it
+        key = file_sha256(path)
+        if key in seen:
+            raise ValueError(f"{path}: the same data as {seen[key]} (sha256 {key[:12]}...); give each run once")
+        seen[key] = path
 
 
 def _table_wheel(path: Path, df) -> tuple[list, list, str]:
@@ -596,9 +647,10 @@ def run_fit(
     if not 0.0 <= slip_min < 1.0:
         raise ValueError(f"--slip-min must be in [0, 1), got {slip_min}")
     if wheel_radius is not None:  # the same plausibility check as the slip radius of processing
-        from wheelsoil.processing.pipeline import check_wheel_radius
-
         wheel_radius = check_wheel_radius(wheel_radius, "--wheel-radius")
+    if wheel_width is not None:
+        wheel_width = check_wheel_width(wheel_width, "--wheel-width")
+    _check_distinct(inputs)
     ter = terrain if isinstance(terrain, Terrain) else load_terrain(terrain)
     models = list(models) if models else list(DEFAULT_MODELS)
     for m in models:
@@ -613,13 +665,13 @@ def run_fit(
                            wheel_radius_m=wheel_radius, inertia=inertia)
     recording = "recording" in info["kinds"]
     stated = "vehicle configuration" if recording else info["table_wheel_source"]
-    r = wheel_radius or info["wheel_radius_m"] or DEFAULT_WHEEL.radius
-    b = wheel_width or info["wheel_width_m"] or DEFAULT_WHEEL.width
+    r = next(v for v in (wheel_radius, info["wheel_radius_m"], DEFAULT_WHEEL.radius) if v is not None)
+    b = next(v for v in (wheel_width, info["wheel_width_m"], DEFAULT_WHEEL.width) if v is not None)
     wheel = Wheel(float(r), float(b))
-    wheel_source = ("radius: " + ("command line" if wheel_radius else
-                                  stated if info["wheel_radius_m"] else "model default")
-                    + ", width: " + ("command line" if wheel_width else
-                                     stated if info["wheel_width_m"] else "model default"))
+    wheel_source = ("radius: " + ("command line" if wheel_radius is not None else
+                                  stated if info["wheel_radius_m"] is not None else "model default")
+                    + ", width: " + ("command line" if wheel_width is not None else
+                                     stated if info["wheel_width_m"] is not None else "model default"))
     settings = {
         "slip_min": float(slip_min),
         "models": ["wong", *[m for m in models if m != "wong"]],
@@ -647,7 +699,7 @@ def run_fit(
     prov["settings"]["cross_validation"] = getattr(data, "group_kind", None)
     notes = list(info["notes"])
     assumed = [w for w, given, stated in (("radius", wheel_radius, info["wheel_radius_m"]),
-                                          ("width", wheel_width, info["wheel_width_m"])) if not (given or stated)]
+                                          ("width", wheel_width, info["wheel_width_m"])) if given is None and stated is None]
     if assumed and not recording:
         notes.append(f"WHEEL GEOMETRY ASSUMED: no {' or '.join(assumed)} given (command line, the table's "
                      f"wheel_radius_m/wheel_width_m columns or a sidecar {Path(inputs[0]).stem}.json); the fit uses "
@@ -710,6 +762,12 @@ def _handler(args) -> int:
     def n(v, unit=" N"):
         return "n/a" if v is None else f"{v:.3g}{unit}"
 
+    import re
+    import sys
+
+    for note in rep.get("notes") or []:  # the loud ones (WHEEL RADIUS CONFLICT: ...) reach the terminal too
+        if re.match(r"^(\S+: )?[A-Z]{4,}( [A-Z]{2,})+:", note):
+            print(f"warning: {note}", file=sys.stderr)
     print(f"effect: {d['effect']}   model: {d['model']}   confidence: {d['confidence']}")
     print(f"Dp R0 (in sample): {n(g['R0_n_before'])} -> {n(g['R0_n_after'])};  "
           f"out of sample: {n(g['cv_R0_n_before'])} -> {n(g['cv_R0_n_after'])}")

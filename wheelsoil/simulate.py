@@ -327,8 +327,8 @@ def simulate_run(
         raise ValueError(f"gnss_latency_s={gnss_latency_s} outside 0..1 s")
     if not 0.0 <= drop_rate <= 0.5:
         raise ValueError(f"drop_rate={drop_rate} outside 0..0.5")
-    if duration_s is not None and duration_s < 30.0:
-        raise ValueError(f"duration_s={duration_s} is too short: at least 30 s (one accelerate-brake cycle)")
+    if duration_s is not None and not 30.0 <= duration_s <= 3600.0:
+        raise ValueError(f"duration_s={duration_s}: a run is 30 s (one accelerate-brake cycle) to 3600 s long")
     if duration_s is None and n_cycles < 1:
         raise ValueError("n_cycles must be at least 1")
     if not 0.0 <= usb_batching_s <= 0.02:
@@ -1158,7 +1158,10 @@ def _cmd_simulate(args) -> int:
     from wheelsoil.model.terrain import load_terrain  # the lab terrain's values (a dataclass)
 
     terrain = load_terrain(args.terrain)
-    wheel = (args.wheel_radius or DEFAULT_RADIUS_M, args.wheel_width or DEFAULT_WIDTH_M)
+    from wheelsoil.pipeline import check_wheel_radius, check_wheel_width
+
+    wheel = (DEFAULT_RADIUS_M if args.wheel_radius is None else check_wheel_radius(args.wheel_radius, "--wheel-radius"),
+             DEFAULT_WIDTH_M if args.wheel_width is None else check_wheel_width(args.wheel_width, "--wheel-width"))
     added = args.added_load
     if added is None:
         added = 5000.0 if terrain.name.lower().startswith("sand") else 3000.0
