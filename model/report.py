@@ -1476,6 +1476,18 @@ def _fit_rows(data, signals, run: int):
     return np.isin(signals["t_s"].to_numpy(float), np.asarray(t_fit)[np.asarray(data.run) == run])
 
 
+#: The figures a report writes (a report directory's earlier ones are removed first).
+FIGURE_FILES = ("overview.png", "dp_vs_slip.png", "residuals.png", "sinkage_vs_slip.png")
+
+
+def clear_figures(out_dir: Path) -> None:
+    """Create ``out_dir`` and remove the figures an earlier report left there (``FIGURE_FILES``,
+    ``overview*.png``), so a report never sits next to another run's plots.  Raises OSError."""
+    out_dir.mkdir(parents=True, exist_ok=True)
+    for f in {*FIGURE_FILES, *(p.name for p in out_dir.glob("overview*.png"))}:
+        (out_dir / f).unlink(missing_ok=True)
+
+
 def write_report(diag, out_dir, *, terrain, wheel, inputs, time_sync: dict | None = None,
                  extra_notes: list | None = None, progress: bool = False, provenance: dict | None = None,
                  input_details: list | None = None) -> dict:
@@ -1501,7 +1513,7 @@ def write_report(diag, out_dir, *, terrain, wheel, inputs, time_sync: dict | Non
     import matplotlib.pyplot as plt
 
     out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
+    clear_figures(out)
     figs: list = []
     fig_notes: dict = {}
     notes = list(extra_notes or [])

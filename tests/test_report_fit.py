@@ -168,3 +168,19 @@ def test_cmu_grouser_wheel_real_data(tmp_path):
     assert "skid" in notes and "s ~ 0" in notes
     assert rep["models"]["terrain_mismatch"]["params"] is None
     assert rep["models"]["terrain_mismatch"]["status"]  # says why
+
+
+def test_a_failed_fit_leaves_no_earlier_figures_beside_its_report(tmp_path):
+    """A report directory's plots of an earlier run are removed: a failure report (or a table's
+    report) never sits next to another run's figures."""
+    from wheelsoil.pipeline import run_fit
+
+    out = tmp_path / "rep"
+    out.mkdir()
+    for name in ("dp_vs_slip.png", "overview_1.png"):
+        (out / name).write_bytes(b"old")
+    bad = tmp_path / "bad.csv"
+    bad.write_text("slip,load_n,drawbar_pull_n\n0.3,1000,5\n0.3,1000,6\n")
+    with pytest.raises(ValueError, match="one slip value"):
+        run_fit([bad], "sand", out)
+    assert sorted(p.name for p in out.iterdir()) == ["report.html", "report.json"]

@@ -544,9 +544,9 @@ def _failure_report(out_dir: Path, inputs, terrain, wheel, slip_min, error: str,
     import html
     import json
 
-    from wheelsoil.model.report import ALL_MODELS, SCHEMA, _clean, _terrain_dict
+    from wheelsoil.model.report import ALL_MODELS, SCHEMA, _clean, _terrain_dict, clear_figures
 
-    out_dir.mkdir(parents=True, exist_ok=True)
+    clear_figures(out_dir)
     rep = _clean({
         "schema": SCHEMA,
         "input": [str(i) for i in inputs],
