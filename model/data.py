@@ -230,6 +230,10 @@ def dataclasses_replace(obj, **kw):
     return dataclasses.replace(obj, **kw)
 
 
+#: Largest plausible magnitude of a wheel's load, drawbar pull [N] or torque [N m] in a table.
+MAX_FORCE = 1e6
+
+
 def prepare_data(df, *, slip_min: float = 0.1, source: str = "data", n_blocks: int | None = None,
                  wheel_radius_m: float | None = None) -> FitData:
     """Select and check the samples a driving model is fitted to.
@@ -297,7 +301,9 @@ def prepare_data(df, *, slip_min: float = 0.1, source: str = "data", n_blocks: i
         )
     keep &= ~bad
     if not keep.any():
-        raise ValueError(f"{source}: no row has finite slip, load_n and drawbar_pull_n")
+        raise ValueError(f"{source}: " + ("every row is marked invalid (column valid)" if "valid" in df.columns and not valid.any() else
+                                          "no row has finite slip, load_n and drawbar_pull_n (numbers without "
+                                          "units, a decimal point)"))
     n_pct = int(np.count_nonzero(s[keep] > 1.5))
     if n_pct > keep.sum() / 2:  # a driven wheel's slip (Eq. 6) is at most 1
         raise ValueError(f"{source}: the slip column looks like per cent ({n_pct} of {int(keep.sum())} values above "
@@ -365,6 +371,12 @@ def prepare_data(df, *, slip_min: float = 0.1, source: str = "data", n_blocks: i
                     notes.append(f"{col}: {n - n_ok} of {n} used rows have no value; fitted where present.")
             elif n_ok:
                 notes.append(f"{col}: only {n_ok} of {n} used rows have a value; channel not used.")
+    for col, v in (("load_n", w[keep]), *channels.items()):
+        big = np.abs(v) > MAX_FORCE
+        if big.any():  # 1 MN (N m) is a 100 t wheel load: a unit or transcription error, not a measurement
+            i = int(np.flatnonzero(big)[0])
+            raise ValueError(f"{source}: {col} = {v[i]:.4g} at row {int(np.flatnonzero(keep)[i])} is not a plausible "
+                             f"wheel force or torque (|value| > {MAX_FORCE:.0e} in N or N m)")
     inertia = {}
     for col, reading in (("drawbar_pull_n", "fx_n"), ("torque_nm", "my_nm")):
         if col in channels and reading in df.columns:
@@ -375,6 +387,10 @@ def prepare_data(df, *, slip_min: float = 0.1, source: str = "data", n_blocks: i
         else np.zeros(n_input, int)
     run = run_all[keep]
     t_s = pd.to_numeric(df["t_s"], errors="coerce").to_numpy(float)[keep] if "t_s" in df.columns else None
+    if t_s is not None and not np.isfinite(t_s).all():
+        notes.append(f"t_s has {int((~np.isfinite(t_s)).sum())} non-numeric value(s): the rows are fitted as a table "
+                     "(no time along the run).")
+        t_s = None
     dist = pd.to_numeric(df["distance_m"], errors="coerce").to_numpy(float)[keep] if "distance_m" in df.columns else None
     if dist is not None and not np.all(np.isfinite(dist)):
         notes.append("distance_m has NaN values; time is used as the drift coordinate instead.")
@@ -431,7 +447,7 @@ def _cv_groups(df, keep, run, kind, n_blocks):
 
     n = int(keep.sum())
     if "cycle" in df.columns:
-        cyc = np.asarray(df["cycle"].to_numpy(), dtype=float)[keep]
+        cyc = pd.to_numeric(df["cycle"], errors="coerce").to_numpy(float)[keep]  # a text cycle: none
         cyc = np.where(np.isfinite(cyc), cyc, -1).astype(int)
         key = run * 1_000_000 + cyc
         ok = cyc >= 0

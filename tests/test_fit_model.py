@@ -300,3 +300,22 @@ def test_noise_estimate_is_not_inflated_by_a_load_varying_under_one_percent():
     assert cells.sigma["torque_nm"] < 2.0 * expected
     # the motion the load gives the torque is far above that noise (the test can fail)
     assert np.std(f.torque_nm) > 0 and 0.007 * np.mean(f.torque_nm) / np.sqrt(2) > 10 * expected
+
+
+def test_a_table_with_implausible_or_unusable_values_is_refused_naming_the_row():
+    """A force of 1e30 N (a transcription or unit error) is refused naming column and row; a table
+    whose rows are all marked invalid says so; a text t_s is no time axis."""
+    import pandas as pd
+
+    from wheelsoil.model.fit import prepare_data
+
+    s = np.repeat(np.linspace(0.15, 0.8, 8), 3)
+    df = pd.DataFrame({"slip": s, "load_n": 1e4, "drawbar_pull_n": 3e3 * s, "torque_nm": 4e3 * s})
+    with pytest.raises(ValueError, match=r"t\.csv: torque_nm = 1e\+300 at row 5 is not a plausible"):
+        prepare_data(df.assign(torque_nm=np.where(np.arange(24) == 5, 1e300, df["torque_nm"])), source="t.csv")
+    with pytest.raises(ValueError, match=r"t\.csv: every row is marked invalid"):
+        prepare_data(df.assign(valid="no"), source="t.csv")
+    with pytest.raises(ValueError, match=r"no row has finite slip, load_n and drawbar_pull_n"):
+        prepare_data(df.assign(load_n="10 kN"), source="t.csv")
+    data = prepare_data(df.assign(t_s="abc"), source="t.csv")
+    assert data.kind == "table" and any("t_s has 24 non-numeric" in n for n in data.notes)

@@ -211,7 +211,7 @@ def _table_wheel(path: Path, df) -> tuple[list, list, str]:
     import pandas as pd
 
     def column(name):
-        return list(pd.to_numeric(df[name], errors="coerce").dropna().unique()) if name in df.columns else []
+        return [float(v) for v in pd.to_numeric(df[name], errors="coerce").dropna().unique()] if name in df.columns else []
 
     radii, widths = column("wheel_radius_m"), column("wheel_width_m")
     if radii or widths:
