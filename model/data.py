@@ -692,6 +692,11 @@ def _smooth_basis(slip, load_n, x, n_cells, interaction: bool = True):
     return np.column_stack(cols)
 
 
+#: No channel is measured better than this fraction of its RMS magnitude: the floor of a cell's noise
+#: (a column rounded to a constant, or exact, would otherwise weigh without limit in the fits).
+SIGMA_FLOOR_REL = 1e-4
+
+
 def cell_noise(channels: dict, slip, load_n, t_s, group, sbin, kind: str, x=None):
     """Noise std of one cell mean per channel, model-free (module doc).
 
@@ -743,10 +748,11 @@ def cell_noise(channels: dict, slip, load_n, t_s, group, sbin, kind: str, x=None
         if not np.isfinite(sd):
             sd = within[c]
             method = "three-point pseudo-residuals along slip"
+        yy = y[ok]
         if not (np.isfinite(sd) and sd > 0):
-            yy = y[ok]
-            sd = float(np.std(yy)) if yy.size > 1 and np.std(yy) > 0 else 1e-6 * max(float(np.max(np.abs(yy))) if yy.size else 1.0, 1e-9)
-        sigma[c] = float(sd)
+            sd = float(np.std(yy)) if yy.size > 1 and np.std(yy) > 0 else 0.0
+        floor = SIGMA_FLOOR_REL * (float(np.sqrt(np.mean(yy**2))) if yy.size else 0.0)
+        sigma[c] = float(max(sd, floor, 1e-12))
     return sigma, within, method
 
 

@@ -319,3 +319,16 @@ def test_a_table_with_implausible_or_unusable_values_is_refused_naming_the_row()
         prepare_data(df.assign(load_n="10 kN"), source="t.csv")
     data = prepare_data(df.assign(t_s="abc"), source="t.csv")
     assert data.kind == "table" and any("t_s has 24 non-numeric" in n for n in data.notes)
+
+
+def test_a_constant_channel_has_a_noise_floor():
+    """A column written to the same value in every row (rounded, or set rather than measured) has no
+    scatter; its noise is floored at SIGMA_FLOOR_REL of its magnitude, so it cannot outweigh every
+    other channel in a fit (a constant sinkage made a terrain re-fit miss Dp by 5 kN)."""
+    from wheelsoil.model.data import SIGMA_FLOOR_REL, cell_noise
+
+    s = np.linspace(0.15, 0.8, 12)
+    chans = {"sinkage_m": np.full(12, 0.2385), "drawbar_pull_n": 3e3 * s + 30.0 * np.sin(40 * s)}
+    sigma, _, _ = cell_noise(chans, s, np.full(12, 1e4), None, np.zeros(12, int), np.arange(12), "table")
+    assert sigma["sinkage_m"] == pytest.approx(SIGMA_FLOOR_REL * 0.2385)
+    assert sigma["drawbar_pull_n"] > 10 * SIGMA_FLOOR_REL * np.sqrt(np.mean(chans["drawbar_pull_n"] ** 2))
