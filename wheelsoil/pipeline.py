@@ -77,6 +77,8 @@ def load_inputs(inputs, *, progress: bool = False, rate_hz: float = 100.0, cutof
         path = Path(raw)
         if not path.exists():
             raise ValueError(f"{path}: no such file")
+        if path.is_dir():
+            raise ValueError(f"{path}: a directory; give the recordings or tables in it (e.g. {path}/*.mcap)")
         suffix = path.suffix.lower()
         if suffix in RECORDING_SUFFIXES:
             from wheelsoil.processing import process_recording
