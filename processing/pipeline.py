@@ -60,6 +60,8 @@ COLUMNS = ("t_s", "slip", "load_n", "drawbar_pull_n", "torque_nm", "speed_mps", 
            "phase", "valid", "distance_m", "fx_n", "my_nm")
 #: Plausible wheel radius [m] for ``wheel_radius_m`` (as ``daq.config.VEHICLE_RANGES``).
 RADIUS_RANGE_M = (0.05, 2.0)
+#: Plausible wheel widths [m] (a testbed's 2 cm wheel to twin tyres).
+WIDTH_RANGE_M = (0.02, 2.0)
 #: r*omega below this [m/s] leaves the slip undefined (NaN).
 MIN_WHEEL_SPEED_MPS = 0.1
 #: WFT Status bits that invalidate a sample (overload, bridge fault, encoder fault).
@@ -244,16 +246,27 @@ def check_wheel_radius(value, what: str = "wheel radius") -> float:
     """``value`` as a float radius [m], checked finite and within :data:`RADIUS_RANGE_M`.
 
     Raises ``ValueError`` naming ``what`` and the value (hint for millimetres)."""
+    return _check_length(value, what, "radius", RADIUS_RANGE_M)
+
+
+def check_wheel_width(value, what: str = "wheel width") -> float:
+    """``value`` as a float width [m], checked finite and within :data:`WIDTH_RANGE_M`.
+
+    Raises ``ValueError`` naming ``what`` and the value (hint for millimetres)."""
+    return _check_length(value, what, "width", WIDTH_RANGE_M)
+
+
+def _check_length(value, what: str, noun: str, bounds: tuple) -> float:
     try:
         if isinstance(value, bool):
             raise TypeError
         r = float(value)
     except (TypeError, ValueError):
         raise ValueError(f"{what} = {value!r}: must be a number in m") from None
-    lo, hi = RADIUS_RANGE_M
+    lo, hi = bounds
     if not (math.isfinite(r) and lo <= r <= hi):
         hint = "; did you give mm?" if math.isfinite(r) and lo * 1e3 <= r <= hi * 1e3 else ""
-        raise ValueError(f"{what} = {value!r}: not a plausible radius in m ({lo:g}-{hi:g}){hint}")
+        raise ValueError(f"{what} = {value!r}: not a plausible {noun} in m ({lo:g}-{hi:g}){hint}")
     return r
 
 

@@ -12,15 +12,12 @@ report).
 from __future__ import annotations
 
 import argparse
-import math
 from pathlib import Path
 
 __all__ = ["run_fit", "load_inputs", "build_provenance", "register", "RECORDING_SUFFIXES"]
 
 RECORDING_SUFFIXES = (".mcap", ".log", ".blf", ".asc", ".trc")
 TABLE_SUFFIXES = (".csv", ".txt", ".tsv")
-#: Plausible wheel widths [m] (a testbed's 2 cm wheel to twin tyres).
-WIDTH_RANGE_M = (0.02, 2.0)
 #: The columns read from a table (SI units; slip a fraction, Eq. 6): a steady-state table's, the
 #: wheel it states, and the time series ``wheelsoil process`` writes (``wheelsoil.processing.COLUMNS``).
 TABLE_COLUMNS = ("slip", "load_n", "drawbar_pull_n", "torque_nm", "sinkage_m", "wheel_radius_m", "wheel_width_m",
@@ -117,6 +114,8 @@ def load_inputs(inputs, *, progress: bool = False, rate_hz: float = 100.0, cutof
                 notes.append(f"{path.name}: column(s) not read: {', '.join(unused)} (a table's columns are "
                              f"{', '.join(TABLE_COLUMNS)}, in SI units; a channel in other units, e.g. "
                              "sinkage in mm, must be converted to be used)")
+            from wheelsoil.processing.pipeline import check_wheel_radius, check_wheel_width
+
             tr, tw, tsrc = _table_wheel(path, df)
             tr = [check_wheel_radius(v, f"{path.name}: wheel_radius_m ({tsrc})") for v in tr]
             tw = [check_wheel_width(v, f"{path.name}: wheel_width_m ({tsrc})") for v in tw]
@@ -160,29 +159,6 @@ def load_inputs(inputs, *, progress: bool = False, rate_hz: float = 100.0, cutof
     return df, {"kinds": kinds, "time_sync": sync, "wheel_radius_m": radius, "wheel_width_m": width,
                 "table_wheel_source": table_source, "notes": notes, "processing": processing, "results": results,
                 "tables": tables}
-
-
-def check_wheel_radius(value, what: str = "wheel radius") -> float:
-    """:func:`wheelsoil.processing.pipeline.check_wheel_radius` (imported when used: the CLI starts fast)."""
-    from wheelsoil.processing.pipeline import check_wheel_radius as check
-
-    return check(value, what)
-
-
-def check_wheel_width(value, what: str = "wheel width") -> float:
-    """``value`` as a float width [m], checked finite and within :data:`WIDTH_RANGE_M`.
-    Raises ``ValueError`` naming ``what`` and the value (hint for millimetres)."""
-    try:
-        if isinstance(value, bool):
-            raise TypeError
-        b = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{what} = {value!r}: must be a number in m") from None
-    lo, hi = WIDTH_RANGE_M
-    if not (math.isfinite(b) and lo <= b <= hi):
-        hint = "; did you give mm?" if math.isfinite(b) and lo * 1e3 <= b <= hi * 1e3 else ""
-        raise ValueError(f"{what} = {value!r}: not a plausible width in m ({lo:g}-{hi:g}){hint}")
-    return b
 
 
 def _check_distinct(inputs) -> None:
@@ -648,6 +624,8 @@ def run_fit(
         raise ValueError("no input given")
     if not 0.0 <= slip_min < 1.0:
         raise ValueError(f"--slip-min must be in [0, 1), got {slip_min}")
+    from wheelsoil.processing.pipeline import check_wheel_radius, check_wheel_width
+
     if wheel_radius is not None:  # the same plausibility check as the slip radius of processing
         wheel_radius = check_wheel_radius(wheel_radius, "--wheel-radius")
     if wheel_width is not None:

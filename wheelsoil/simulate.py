@@ -1158,7 +1158,7 @@ def _cmd_simulate(args) -> int:
     from wheelsoil.model.terrain import load_terrain  # the lab terrain's values (a dataclass)
 
     terrain = load_terrain(args.terrain)
-    from wheelsoil.pipeline import check_wheel_radius, check_wheel_width
+    from wheelsoil.processing.pipeline import check_wheel_radius, check_wheel_width
 
     wheel = (DEFAULT_RADIUS_M if args.wheel_radius is None else check_wheel_radius(args.wheel_radius, "--wheel-radius"),
              DEFAULT_WIDTH_M if args.wheel_width is None else check_wheel_width(args.wheel_width, "--wheel-width"))
