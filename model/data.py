@@ -301,9 +301,12 @@ def prepare_data(df, *, slip_min: float = 0.1, source: str = "data", n_blocks: i
         )
     keep &= ~bad
     if not keep.any():
-        raise ValueError(f"{source}: " + ("every row is marked invalid (column valid)" if "valid" in df.columns and not valid.any() else
-                                          "no row has finite slip, load_n and drawbar_pull_n (numbers without "
-                                          "units, a decimal point)"))
+        if "valid" in df.columns and not valid.any():
+            raise ValueError(f"{source}: every row is marked invalid (column valid)")
+        first = {c: str(df[c].iloc[0]) for c in ("slip", "load_n", "drawbar_pull_n")}
+        shown = ", ".join(f"{c} = {v!r}" for c, v in first.items())
+        raise ValueError(f"{source}: no row has finite slip, load_n and drawbar_pull_n (row 0: {shown}); "
+                         "give plain numbers with a decimal point, without units or per cent signs")
     n_pct = int(np.count_nonzero(s[keep] > 1.5))
     if n_pct > keep.sum() / 2:  # a driven wheel's slip (Eq. 6) is at most 1
         raise ValueError(f"{source}: the slip column looks like per cent ({n_pct} of {int(keep.sum())} values above "
