@@ -285,7 +285,8 @@ def prepare_data(df, *, slip_min: float = 0.1, source: str = "data", n_blocks: i
     keep = np.ones(n_input, bool)
     if "valid" in df.columns:
         v = df["valid"]
-        if not pd.api.types.is_bool_dtype(v) and not pd.api.types.is_numeric_dtype(v):  # a table's text: "no" / "false" / "0" is not valid
+        if not pd.api.types.is_bool_dtype(v) and not pd.api.types.is_numeric_dtype(v):
+            # a table's text: "no", "false", "0" are not valid
             v = v.astype(str).str.strip().str.lower().isin(("1", "1.0", "true", "yes", "y", "t"))
         valid = v.fillna(False).astype(bool).to_numpy()
         if (~valid).any():

@@ -864,20 +864,17 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
                 columns[f"status:{cref.message}"] = m.signals["Status"]
             elif sig[c].message == cref.message:
                 columns[c] = m.signals[sig[c].signal] * sig[c].scale_to_si
-        counter = m.signals[cref.signal]
+        ts, counter = m.timestamp_ns, m.signals[cref.signal]
         whole = np.isfinite(counter)
         for v in columns.values():
             whole &= np.isfinite(v)
         if not whole.all():  # a frame too short for its signals (DLC mismatch) decodes to NaN there
-            bad = int((~whole).sum())
-            warns.append(f"WFT: {bad} {cref.message} frame(s) on {cref.bus} without a value in the counter or a "
-                         f"signal (payload shorter than the DBC's layout: DLC mismatch) dropped as lost samples")
-            if whole.sum() < 2:
-                continue
-            columns = {k: v[whole] for k, v in columns.items()}
-            streams[cref.message] = (m.timestamp_ns[whole], counter[whole], columns)
-            continue
-        streams[cref.message] = (m.timestamp_ns, counter, columns)
+            warns.append(f"WFT: {int((~whole).sum())} {cref.message} frame(s) on {cref.bus} without a value in the "
+                         "counter or a signal (payload shorter than the DBC's layout: DLC mismatch) dropped as lost "
+                         "samples")
+            ts, counter, columns = ts[whole], counter[whole], {k: v[whole] for k, v in columns.items()}
+        if counter.size >= 2:
+            streams[cref.message] = (ts, counter, columns)
     force_msg = sig["wft_counter_force"].message
     if streams:
         ref_msg = force_msg if force_msg in streams else next(iter(streams))
@@ -1177,4 +1174,3 @@ def _foreign_channels(report) -> str:
     return (f" in the layout wheelsoil reads (channels of schema {SCHEMA_NAME}, docs/mcap-layout.md); it has "
             f"{listed}. Export such a recording's frames as a candump log, ASC, BLF or TRC file and run "
             "'wheelsoil import' on it")
-
