@@ -136,7 +136,10 @@ decides with this rule (constants below; none was tuned on a benchmark):
    evidence: the data do not exclude an off-list cause), (model W / measured W outside
    ``LOAD_RATIO_TOL`` in a slip bin, Eq. 7, or static sinkage above D/6, the
    limit of Eq. 10's small-angle form), when there are fewer than
-   ``MIN_UNITS_HIGH`` independent units, or when a fold could not be refitted;
+   ``MIN_UNITS_HIGH`` independent units, when a fold could not be refitted, or when causes on
+   no list that act on the measured channels like the named effect are not excluded by the data
+   (``not_excluded``: the posterior is over the causes tried, so "high" needs the look-alikes
+   ruled out, as measured sinkage growing with slip rules them out for slip sinkage);
    ``low`` when a hypothesis of the named effect that step 3 turned down has
    more than ``BF_ALTERNATIVE`` times the named model's evidence (the effect's
    probability then rests on it, not on the model named).
@@ -1674,6 +1677,10 @@ def _confidence(effect, model, fits, eprobs, consistency, data, tests_w, sink_ev
     if (fits[model].cv or {}).get("failed_folds"):
         cap = max(cap, 1)
         why.append("some cross-validation folds could not be refitted")
+    if _not_excluded(effect, sink_ev) is not None:  # the posterior is over the causes tried; these were not
+        cap = max(cap, 1)
+        why.append("causes on no list that act on the measured channels like it are not excluded by these data "
+                   "(listed under 'not excluded', with the measurement that would exclude them)")
     if effect == "slip_sinkage" and sink_ev is not None:
         if sink_ev["significant"]:
             why.append(f"direct evidence: the measured sinkage grows with slip (one-sided p = {sink_ev['p_positive']:.2g})")

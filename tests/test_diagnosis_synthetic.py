@@ -524,7 +524,29 @@ def test_a_named_model_outweighed_by_a_turned_down_sibling_is_low():
 
     word, why = conf(0.9, 0.9 / (2 * BF_ALTERNATIVE))
     assert word == "low" and any("not supported out of sample" in w for w in why)
-    assert conf(0.9, 0.9 / (0.5 * BF_ALTERNATIVE))[0] == "high"  # within the Bayes factor: as before
+    word, why = conf(0.9, 0.9 / (0.5 * BF_ALTERNATIVE))  # within the Bayes factor: as before
+    assert word == "medium" and not any("not supported out of sample" in w for w in why)
+
+
+def test_a_named_cause_is_high_only_when_its_look_alikes_are_excluded():
+    """The posterior is over the causes tried: a terrain mismatch (on Dp and T, look-alikes such as a
+    soil stiffer at the wheel's loading rate not excluded) is at most "medium" however probable; slip
+    sinkage with the measured sinkage growing with slip can be "high"."""
+    from types import SimpleNamespace
+
+    from wheelsoil.model.diagnosis import MIN_UNITS_HIGH, _confidence
+
+    def conf(effect, model, sink_ev):
+        fits = {model: SimpleNamespace(effect=effect, cv={})}
+        paired = {model: {"drawbar_pull_n": {"wong_cv_rmse": 46.0, "cv_rmse": 35.0, "p_improve": 0.003, "folds": 17}}}
+        return _confidence(effect, model, fits, {effect: 0.999}, {}, SimpleNamespace(n_units=MIN_UNITS_HIGH + 50),
+                           {}, sink_ev, [], [model], {model: 0.999}, paired, ["drawbar_pull_n"])
+
+    word, why = conf("terrain_mismatch", "terrain_k_eq", None)
+    assert word == "medium" and any("not excluded by these data" in w for w in why)
+    grows = {"significant": True, "p_positive": 1e-6}
+    assert conf("slip_sinkage", "lyasko", grows)[0] == "high"
+    assert conf("slip_sinkage", "lyasko", None)[0] == "medium"
 
 
 def test_none_is_not_high_when_the_cell_noise_reaches_the_relevance_floor():
