@@ -136,7 +136,7 @@ def load_inputs(inputs, *, progress: bool = False, rate_hz: float = 100.0, cutof
                              f"{', '.join(f'{float(x):g}' for x in tw)} m ({tsrc}); the fit uses one width")
             if len(tw) and width is None:
                 width = float(tw[0])
-            if (len(tr) or len(tw)) and table_source is None and "recording" not in kinds:
+            if (len(tr) or len(tw)) and table_source is None:
                 table_source = f"{path.name}: {tsrc}"
             sync.append({"input": str(path), "gnss_latency_s": None})
         else:
@@ -164,13 +164,17 @@ def load_inputs(inputs, *, progress: bool = False, rate_hz: float = 100.0, cutof
 def _check_distinct(inputs) -> None:
     """Refuse an input given twice (the same file, or the same bytes under two names): fitting it
     twice doubles its weight and makes the run look like two runs that agree.  Raises ValueError."""
+    from collections import Counter
+
     from wheelsoil.daq.provenance import file_sha256
 
+    paths = [Path(raw) for raw in inputs]
+    paths = [p for p in paths if p.is_file()]  # load_inputs names what is wrong with the others
+    sizes = Counter(p.stat().st_size for p in paths)
     seen: dict = {}
-    for raw in inputs:
-        path = Path(raw)
-        if not path.is_file():
-            continue  # load_inputs names what is wrong with it
+    for path in paths:
+        if sizes[path.stat().st_size] < 2:
+            continue  # no other input of its size: nothing to read (a field recording can be gigabytes)
         key = file_sha256(path)
         if key in seen:
             raise ValueError(f"{path}: the same data as {seen[key]} (sha256 {key[:12]}...); give each run once")
