@@ -404,8 +404,9 @@ _ID_DEC = re.compile(r"\d{1,10}x?", re.IGNORECASE)
 _TIME_MS = re.compile(r"\d+(?:\.\d*)?")
 
 
-#: An ASC line that looks like a CAN frame: time, channel number or CANFD, ..., Rx/Tx.
-_ASC_FRAMEISH = re.compile(r"\s*\d+\.\d+\s+(?:\d+|CANFD)\s+.*\b(?:Rx|Tx)\b", re.IGNORECASE).match
+#: An ASC line that looks like a CAN frame: a direction word Rx/Tx anywhere (the time may be garbled: python-can
+#: then passes the line over without a word), not a ``//`` comment.
+_ASC_FRAMEISH = re.compile(r"(?!\s*//).*\b(?:Rx|Tx)\b", re.IGNORECASE).match
 
 
 def _asc_frameish(line: str) -> bool:

@@ -150,6 +150,25 @@ def test_asc_invalid_frames_rejected_with_line_numbers(tmp_path):
     assert _metadata_lines(rec)[0] == {7, 8, 9, 10, 12, 15}
 
 
+def test_asc_frame_lines_with_a_garbled_time_are_rejected_not_passed_over(tmp_path):
+    """python-can's ASC reader skips a frame line whose time does not parse without a word; such a line
+    is a rejected frame with its number (a comment that mentions Rx is not)."""
+    head = ASC.split(" 0.001000")[0]
+    body = ("// a comment about Rx frames\n"
+            " 0.001000 1  120             Rx   d 2 01 02\n"
+            " 0.0x2000 1  121             Rx   d 2 01 02\n"
+            " O.003000 1  122             Rx   d 2 01 02\n"
+            " 0.004000 1  123             Rx   d 2 01 02\n"
+            " .005 1  124             Rx   d 2 01 02\n"
+            "End TriggerBlock\n")
+    src = tmp_path / "garbled.asc"
+    src.write_text(head + body)
+    first = head.count("\n") + 1
+    res = _import(src, tmp_path / "g.mcap")
+    assert _rejected_lines(res, str(src)) == {first + 2, first + 3, first + 5}
+    assert read_frames(tmp_path / "g.mcap")["can0"].arbitration_id.tolist() == [0x120, 0x123]
+
+
 TRC = """\
 ;$FILEVERSION=2.1
 ;$STARTTIME=45244.92592593
