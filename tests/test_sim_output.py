@@ -150,6 +150,14 @@ def test_cli_simulate_writes_recording_and_truth_only_when_asked(tmp_path):
     for word in ("vasilev", "H=0.05", "t2.json"):
         assert word not in flat, word
     assert prov["command"].count("<hidden>") == 3
+    # an existing output is kept unless --overwrite (checked before simulating)
+    before = mc.read_bytes()
+    again = subprocess.run(cmd[:-1] + [str(mc)], capture_output=True, text=True)
+    assert again.returncode == 2 and "exists" in again.stderr and str(mc) in again.stderr
+    assert mc.read_bytes() == before
+    again = subprocess.run(cmd[:-2] + ["--seed", "3", "-o", str(mc), "--overwrite"], capture_output=True, text=True)
+    assert again.returncode == 0, again.stderr
+    assert mc.read_bytes() != before
     bad = subprocess.run(cmd[:-2] + ["--param", "m1=2", "-o", str(tmp_path / "x.log")], capture_output=True, text=True)
     assert bad.returncode == 2 and "m1" in bad.stderr
     bad = subprocess.run(cmd[:-2] + ["-o", str(tmp_path / "x.txt")], capture_output=True, text=True)

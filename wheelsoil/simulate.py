@@ -38,6 +38,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -1106,6 +1107,8 @@ def register(subparsers) -> None:
                    help="also write the simulated wheel's vehicle configuration (for `wheelsoil import "
                    "run.log --vehicle TOML`; an .mcap output carries it already)")
     p.add_argument("-o", "--output", required=True, help="output: .mcap, or .log/.asc/.blf/.trc (then `wheelsoil import`)")
+    p.add_argument("--overwrite", action="store_true",
+                   help="replace OUTPUT (and the --truth, --vehicle-out files) if they exist (default: keep them, refuse)")
     p.set_defaults(func=_cmd_simulate)
 
 
@@ -1155,6 +1158,13 @@ def _cmd_simulate(args) -> int:
     if Path(args.output).suffix.lower() not in OUTPUT_SUFFIXES:
         raise ValueError(f"{args.output}: unknown output format {Path(args.output).suffix!r}; "
                          f"use {', '.join(OUTPUT_SUFFIXES)}")
+    from wheelsoil.daq.recording import check_output
+
+    outs = [args.output, *(o for o in (args.truth, args.vehicle_out) if o)]
+    if len(set(map(os.path.abspath, outs))) < len(outs):
+        raise ValueError(f"{', '.join(outs)}: the same file is given for two outputs")
+    for o in outs:  # before the simulation: a field file of the same name is never replaced unasked
+        check_output(o, overwrite=args.overwrite)
     from wheelsoil.model.terrain import load_terrain  # the lab terrain's values (a dataclass)
 
     terrain = load_terrain(args.terrain)
