@@ -535,7 +535,8 @@ class ReadReport:
             ``chunk``: chunk does not decompress/parse; ``record``: bad record header
             or size; ``unknown_record``: corrupted record type; ``batch``: a frame
             batch that does not decode; ``channel``: messages of a channel whose
-            definition was lost; ``truncated``: the file ends early), ``frames_lost``
+            definition was lost; ``truncated``: the file ends early; ``appended``: a
+            second recording joined after the first, not read), ``frames_lost``
             (int, or None = unknown), ``frames_lost_by_bus`` ({bus: int}), ``batches_lost``
             (MCAP messages, None = unknown), ``bytes_skipped``, ``t0_ns``/``t1_ns``
             (log-time span of the lost data where the chunk header gives it, else None)
@@ -691,6 +692,23 @@ def _chunk_records(buf) -> list:
             out.append((op, _parse(Schema, mv[s:e])))
         o = e
     return out
+
+
+def _appended_at(f, start: int, size: int) -> int | None:
+    """Byte offset of a second MCAP recording after the one whose data section ends before ``start``
+    (files joined end to end, e.g. with ``cat``): the first one's closing magic right before the second's
+    opening magic and header record. None if there is none."""
+    pat = _MAGIC + _MAGIC + bytes([_OP_HEADER])
+    block = 1 << 20
+    pos = start
+    while pos < size:
+        f.seek(pos)
+        buf = f.read(block + len(pat) - 1)
+        i = buf.find(pat)
+        if i >= 0:
+            return pos + i + len(_MAGIC)
+        pos += block
+    return None
 
 
 def _read_summary_channels(f, size: int) -> tuple[dict, dict]:
@@ -1035,11 +1053,14 @@ def _iter_records(path, state: ReadReport, *, recover: bool, with_status: bool =
             first = False
             if problem is None:
                 yield from out
-                if op == _OP_FOOTER:
-                    state.footer = True
-                    break
-                if op == _OP_DATA_END:
-                    if _footer_ok(f, size):
+                if op in (_OP_FOOTER, _OP_DATA_END):
+                    nxt = _appended_at(f, pos, size)
+                    if nxt is not None:
+                        damaged(f"{path}: a second MCAP recording starts at byte {nxt} of {size} (recordings "
+                                f"joined end to end, e.g. with cat); only the first one (bytes 0-{nxt}, "
+                                f"{state.frames} frames) was read; read the second on its own (tail -c "
+                                f"+{nxt + 1} {path} > second.mcap)", "appended", nxt, None, skipped=size - nxt)
+                    elif op == _OP_FOOTER or _footer_ok(f, size):
                         state.footer = True
                     else:
                         damaged(f"{path}: summary or footer after byte {pos} damaged (every frame was read; "

@@ -276,3 +276,22 @@ def test_crafted_zstd_frame_claiming_a_large_size_allocates_only_what_inflates(t
         tracemalloc.stop()
     assert peak < 64 * 2**20, f"peak {peak / 2**20:.0f} MiB"
     assert len(info.damage) >= 20 and all("crafted2.mcap" in d["message"] for d in info.damage)
+
+
+def test_recordings_joined_end_to_end_are_reported_not_read_as_the_first_only(tmp_path):
+    """Two recordings joined with cat: the first is read, and a warning names the byte where the second
+    starts (that tail is the second file, byte for byte); the file is not 'complete'."""
+    a, b, joined = tmp_path / "a.mcap", tmp_path / "b.mcap", tmp_path / "joined.mcap"
+    first = _recording(a, n_chunks=2, seed=1)
+    _recording(b, n_chunks=3, seed=2)
+    joined.write_bytes(a.read_bytes() + b.read_bytes())
+    got, rep, caught = _read(joined)
+    assert len(got["can0"]) == len(first)
+    assert not rep.complete and [d["kind"] for d in rep.damage] == ["appended"]
+    at = rep.damage[0]["offset"]
+    assert at == a.stat().st_size and str(at) in caught[0] and str(joined) in caught[0]
+    assert joined.read_bytes()[at:] == b.read_bytes()
+    _, rep_a, caught_a = _read(a)  # a single recording: no such warning
+    assert rep_a.complete and not caught_a
+    with pytest.raises(Exception, match="second MCAP recording"):
+        read_frames(joined, recover=False)
