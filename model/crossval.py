@@ -199,7 +199,8 @@ class _Problem:
     def forces(self, u, cells: Cells | None = None):
         """The model at the cells' mean slips (the spread terms are added by :meth:`fun`)."""
         c = self.cells if cells is None else cells
-        return self.hyp.predict(self.ctx, c.load_n, c.slip, c.x, self.values(u), inertia=c.inertia)
+        return self.hyp.predict(self.ctx, c.load_n, c.slip, c.x, self.values(u), inertia=c.inertia,
+                                speed_mps=c.speed_mps)
 
     def stack(self, f) -> np.ndarray:
         return np.concatenate([np.asarray(getattr(f, CHANNELS[c]), float) for c in self.chans])[self.ok]
@@ -241,13 +242,15 @@ def cell_forces(hyp: Hypothesis, ctx: Context, cells: Cells, params: dict) -> Wh
     the model, naming the element)."""
     sd = cells.slip_sd
     if sd is None or not np.any(sd > 0):
-        return hyp.predict(ctx, cells.load_n, cells.slip, cells.x, params, inertia=cells.inertia)
+        return hyp.predict(ctx, cells.load_n, cells.slip, cells.x, params, inertia=cells.inertia,
+                           speed_mps=cells.speed_mps)
     n = cells.n
     sd = np.minimum(sd, 0.999 * np.minimum(np.abs(cells.slip), np.abs(1.0 - cells.slip)))  # both points in (0, 1)
     two = np.concatenate
     f = hyp.predict(ctx, two([cells.load_n, cells.load_n]), two([cells.slip - sd, cells.slip + sd]),
                     None if cells.x is None else two([cells.x, cells.x]), params,
-                    inertia={c: two([v, v]) for c, v in cells.inertia.items()})
+                    inertia={c: two([v, v]) for c, v in cells.inertia.items()},
+                    speed_mps=None if cells.speed_mps is None else two([cells.speed_mps, cells.speed_mps]))
     return WheelForces(**{fl.name: 0.5 * (getattr(f, fl.name)[:n] + getattr(f, fl.name)[n:])
                           for fl in dataclasses.fields(WheelForces)})
 
@@ -261,7 +264,8 @@ def _spread_terms(hyp: Hypothesis, ctx: Context, cells: Cells, params: dict) -> 
     and every evaluation then costs one kernel call at the mean slips instead of two."""
     if cells.slip_sd is None or not np.any(cells.slip_sd > 0):
         return None
-    mean = hyp.predict(ctx, cells.load_n, cells.slip, cells.x, params, inertia=cells.inertia)
+    mean = hyp.predict(ctx, cells.load_n, cells.slip, cells.x, params, inertia=cells.inertia,
+                       speed_mps=cells.speed_mps)
     spread = cell_forces(hyp, ctx, cells, params)
     return {c: np.asarray(getattr(spread, a), float) - np.asarray(getattr(mean, a), float) for c, a in CHANNELS.items()}
 
@@ -471,7 +475,7 @@ def _lab_terrain_variance(prob: _Problem, u, Jd, ctx: Context) -> np.ndarray:
         try:
             ctx2 = dataclasses.replace(ctx, terrain=apply_terrain(t0, vals), fit_terrain=False)
             f = prob.hyp.predict(ctx2, prob.cells.load_n, prob.cells.slip, prob.cells.x, prob.values(u),
-                                 inertia=prob.cells.inertia)
+                                 inertia=prob.cells.inertia, speed_mps=prob.cells.speed_mps)
             col = (prob.stack(f) - base) / prob.sd / h
         except ValueError:
             continue
@@ -570,7 +574,8 @@ def sample_predictions(fit: HypFit, ctx: Context, data: FitData) -> dict:
     paper's metrics and the report's figures); NaN arrays when it cannot be evaluated."""
     x = data.cells.x_of(data.x_raw) if data.cells is not None else None
     try:
-        f = fit.hypothesis.predict(ctx, data.load_n, data.slip, x, fit.params, inertia=data.inertia)
+        f = fit.hypothesis.predict(ctx, data.load_n, data.slip, x, fit.params, inertia=data.inertia,
+                                   speed_mps=data.speed_mps)
         return {c: np.asarray(getattr(f, CHANNELS[c]), float) for c in CHANNELS}
     except (ValueError, FloatingPointError):
         return {c: np.full(data.n, np.nan) for c in CHANNELS}

@@ -167,6 +167,9 @@ class FitData:
         ``my_nm - torque_nm`` = I_w domega/dt [N m]; hardware.md), where the input has the
         readings (``fx_n``, ``my_nm``: processed recordings); empty otherwise.  A transducer
         gain error scales the reading, inertia included (``sensor_gain``).
+    speed_mps : (N,) the vehicle's forward speed V [m/s] (the input's ``speed_mps`` column:
+        processed recordings, or a table that gives it), or None; what the stand-in for a soil whose
+        response depends on the speed (``speed_k``) is a function of.
     """
 
     slip: np.ndarray
@@ -186,6 +189,7 @@ class FitData:
     cells: "Cells | None" = field(default=None, repr=False)
     load_static_n: float | None = None
     inertia: dict = field(default_factory=dict)
+    speed_mps: np.ndarray | None = None
 
     @property
     def n(self) -> int:
@@ -220,6 +224,7 @@ class FitData:
             distance_m=None if self.distance_m is None else self.distance_m[mask],
             cells=None,
             inertia={k: v[mask] for k, v in self.inertia.items()},
+            speed_mps=None if self.speed_mps is None else self.speed_mps[mask],
         )
 
 
@@ -390,6 +395,11 @@ def prepare_data(df, *, slip_min: float = 0.1, source: str = "data", n_blocks: i
     run_all = pd.to_numeric(df["run"], errors="coerce").fillna(0).to_numpy(int) if "run" in df.columns \
         else np.zeros(n_input, int)
     run = run_all[keep]
+    speed = pd.to_numeric(df["speed_mps"], errors="coerce").to_numpy(float)[keep] if "speed_mps" in df.columns else None
+    if speed is not None and not np.all(np.isfinite(speed)):
+        notes.append(f"speed_mps has {int((~np.isfinite(speed)).sum())} non-numeric value(s): the forward speed is not "
+                     "used.")
+        speed = None
     t_s = pd.to_numeric(df["t_s"], errors="coerce").to_numpy(float)[keep] if "t_s" in df.columns else None
     if t_s is not None and not np.isfinite(t_s).all():
         notes.append(f"t_s has {int((~np.isfinite(t_s)).sum())} non-numeric value(s): the rows are fitted as a table "
@@ -428,6 +438,7 @@ def prepare_data(df, *, slip_min: float = 0.1, source: str = "data", n_blocks: i
         distance_m=dist,
         load_static_n=_static_load(w, valid_load, run_all) if kind == "timeseries" else None,
         inertia=inertia,
+        speed_mps=speed,
     )
     return dataclasses_replace(data, cells=make_cells(data))
 
@@ -506,7 +517,8 @@ class Cells:
     ``index`` (N,) the cell of each sample, ``x_kind`` ("distance", "time" or None),
     ``bin`` (C,) slip-bin index (time series) or the row's slip rank, ``inertia`` (column ->
     (C,) cell means of :attr:`FitData.inertia`), ``slip_sd`` (C,) the standard deviation of
-    the slip within each cell (None for a table: one test point per cell).
+    the slip within each cell (None for a table: one test point per cell), ``speed_mps`` (C,) cell
+    means of :attr:`FitData.speed_mps` (None without it).
     """
 
     slip: np.ndarray
@@ -526,6 +538,7 @@ class Cells:
     x_ref: tuple = (0.0, 1.0)
     inertia: dict = field(default_factory=dict)
     slip_sd: np.ndarray | None = None
+    speed_mps: np.ndarray | None = None
 
     def x_of(self, raw) -> np.ndarray | None:
         """The normalised drift coordinate of raw distance/time values (N,), as for the cells."""
@@ -547,7 +560,8 @@ class Cells:
             channels={k: v[mask] for k, v in self.channels.items()},
             var={k: v[mask] for k, v in self.var.items()}, index=np.zeros(0, int), bin=self.bin[mask],
             inertia={k: v[mask] for k, v in self.inertia.items()},
-            slip_sd=None if self.slip_sd is None else self.slip_sd[mask])
+            slip_sd=None if self.slip_sd is None else self.slip_sd[mask],
+            speed_mps=None if self.speed_mps is None else self.speed_mps[mask])
 
 
 def make_cells(data: "FitData") -> Cells:
@@ -630,7 +644,8 @@ def make_cells(data: "FitData") -> Cells:
     return Cells(slip=slip_c, load_n=load_c, t_s=t_c, x=x, group=group, count=cnt[sel], channels=chans,
                  var=var, sigma=sigma, sigma_within=within, index=cells_idx, x_kind=x_kind, bin=sb,
                  noise_method=method, x_ref=x_ref,
-                 inertia={c: np.nan_to_num(mean(v)[sel]) for c, v in data.inertia.items()}, slip_sd=slip_sd)
+                 inertia={c: np.nan_to_num(mean(v)[sel]) for c, v in data.inertia.items()}, slip_sd=slip_sd,
+                 speed_mps=None if data.speed_mps is None else mean(data.speed_mps)[sel])
 
 
 #: Median of a chi-square variable with one degree of freedom: a robust variance from squares.

@@ -120,7 +120,12 @@ decides with this rule (constants below; none was tuned on a benchmark):
    more than one value or in a way no single value describes (a tyre-soil interface weaker
    than the soil at the higher stresses acts on Dp like a lower phi, and the
    five-value re-fit then predicts the torque better): ``unexplained``, with
-   the one-value re-fit as the candidate.
+   the one-value re-fit as the candidate.  Likewise a stand-in for causes on no list that
+   contains the candidate (``speed_k``: a k_eq that depends on the forward speed contains the
+   one-value k_eq re-fit) must not predict any measured channel better out of sample with its
+   own effect not null (:func:`_stand_in_better`): what it adds shows in data the fits did not
+   see, and the candidate is not the whole story (a soil stiffer at the wheel's loading rate
+   is, over one run's speeds, mostly a constant k_eq mismatch): ``unexplained``.
    No supported hypothesis -> ``unexplained``.
    Whatever the above gives, Wong's sample residuals are also compared on rising against
    falling slip within each accelerate cycle (:func:`_hysteresis_test`): every hypothesis is a
@@ -132,7 +137,7 @@ decides with this rule (constants below; none was tuned on a benchmark):
    ``P_HIGH``, ``medium`` >= ``P_NAME``), capped at ``medium`` when the
    named model is physically inconsistent, when one of the generic
    alternatives for causes on no list (effect ``unexplained``: ``dp_resistance``, ``dp_drift``, ``radius``,
-   ``speed_gain``, ``tyre``, ``width``, ``sensor_gain``, ``angle_offset``, ``zero_drift``, ``load_k``, ``rebound``, ``shear_slip``, ``envelope``, ``k_stress``, ``balance``) is also supported out of sample (with less
+   ``speed_gain``, ``tyre``, ``width``, ``sensor_gain``, ``angle_offset``, ``zero_drift``, ``load_k``, ``speed_k``, ``rebound``, ``shear_slip``, ``envelope``, ``k_stress``, ``balance``) is also supported out of sample (with less
    evidence: the data do not exclude an off-list cause), (model W / measured W outside
    ``LOAD_RATIO_TOL`` in a slip bin, Eq. 7, or static sinkage above D/6, the
    limit of Eq. 10's small-angle form), when there are fewer than
@@ -188,7 +193,7 @@ from scipy import stats
 from .crossval import FIT_MAX_ITER, MAX_FOLDS, HypFit, cross_validate, fit_hypothesis, inv_psd, sample_predictions
 from .data import CHANNELS, FitData, prepare_data
 from .hypotheses import EFFECTS, HYPOTHESES, Context, DriftStep, get_hypothesis, lab_prior
-from .hypotheses import LIBRARY_PRIOR_WIDEN
+from .hypotheses import LIBRARY_PRIOR_WIDEN, speed_reference
 
 __all__ = ["Diagnosis", "diagnose", "structure_test", "binned_residuals", "SLIP_SINKAGE_MODELS", "TITLES",
            "CHANNEL_TITLES", "THRESHOLDS"]
@@ -1134,7 +1139,7 @@ def diagnose(
     names = list(dict.fromkeys(names))
     prior = lab_prior(terrain, wheel, widen=LIBRARY_PRIOR_WIDEN if fit_terrain else 1.0)
     ctx = Context(terrain, wheel, sinkage, prior, fit_terrain, float(np.median(data.load_n)),
-                  w_static=data.load_static_n)
+                  w_static=data.load_static_n, v_ref=speed_reference(data.cells.speed_mps))
     if fit_terrain:
         dup = [n for n in names if HYPOTHESES[n].terrain_block and not n.startswith("drift_")]
         if dup:
@@ -1319,6 +1324,12 @@ def diagnose(
                            + f" better out of sample than {TITLES[best]}: the soil differs from the lab (or changes "
                            "along the run) in more than one value or in a way no single value describes, so the data "
                            "do not show which value is wrong (" + _LOOK_ALIKES[fits[best].effect][0] + ")")
+        elif ext := _stand_in_better(data, fits, fits[best]):
+            effect = "unexplained"
+            reasons.append(f"{TITLES[ext[0]]} predicts the " + " and ".join(CHANNEL_TITLES[c] for c in ext[1])
+                           + f" better out of sample than {TITLES[best]}, which it contains: what it adds shows in "
+                           "data the fits did not see, so the named cause is not the whole story ("
+                           + _LOOK_ALIKES[fits[best].effect][0] + ")")
         elif _catch_all(fits[best]):
             effect = "unexplained"
             reasons.append(f"only {TITLES[best]} explains the data, no re-fit of a single lab value does: Wong "
@@ -1526,12 +1537,33 @@ def _whole_better(data, fits, f: HypFit) -> list:
     predicts no channel better.  Source: a nested-model lack-of-fit test, out of sample (module
     doc, step 5)."""
     g = fits.get(f.hypothesis.whole) if f.hypothesis.whole else None
+    return _better_than(data, f, g)
+
+
+def _better_than(data, f: HypFit, g: HypFit | None) -> list:
+    """The measured channels that ``g`` predicts better out of sample than ``f`` by step 2's paired
+    test, when it worsens none; [] when it worsens one, or either fit is missing or did not converge."""
     if g is None or not g.success or g.cv is None or f.cv is None:
         return []
     pr = _paired(data, f, g)
     if any(r["worsens"] for r in pr.values()):
         return []
     return [c for c, r in pr.items() if r["improves"]]
+
+
+def _stand_in_better(data, fits, f: HypFit) -> tuple[str, list] | None:
+    """A stand-in for causes on no list (effect ``unexplained``) that contains ``f`` (``Hypothesis.nested``),
+    whose own effect is not null (:func:`_effective`) and that predicts a measured channel better out of
+    sample than ``f``, worsening none: ``(name, channels)``; None if there is none.  What it adds to
+    ``f`` then shows in data the fit did not see, and ``f``'s cause is not the whole story (a k_eq
+    mismatch and a k_eq that depends on the speed, ``speed_k``).  Source: a nested-model lack-of-fit
+    test, out of sample (as :func:`_whole_better`)."""
+    for k, g in fits.items():
+        if g.effect == "unexplained" and f.name in g.hypothesis.nested and _effective(g):
+            better = _better_than(data, f, g)
+            if better:
+                return k, better
+    return None
 
 
 def _prior_conflict(f: HypFit) -> bool:

@@ -53,6 +53,10 @@ The hypotheses (paper numbering for Eqs.; Wong = *Theory of Ground Vehicles*, 4t
 * ``angle_offset``: not a listed cause: the wheel-angle reading is off, so the
   hub-frame forces are turned by that angle (the load leaks into the drawbar
   pull, the drawbar pull into the measured load): effect ``unexplained``.
+* ``load_k``, ``speed_k``: not listed causes: a pressure-sinkage modulus that depends on the
+  load, or on the forward speed (a soil stiffer at a faster loading rate: k_eq (V/V_ref)^beta,
+  k_eq re-fitted): over one run each acts much as a constant k_eq mismatch: effect
+  ``unexplained``.
 * ``rebound``: not a listed cause: a soil that rebounds behind the wheel, so the
   contact runs on past the bottom to an exit angle theta2 = lambda theta1 (Wong's rear
   region with an exit angle; kernel ``wong_forces(..., exit_ratio=lambda)``).  The
@@ -158,8 +162,9 @@ class Context:
     (name -> (mean, sd, log)), ``fit_terrain`` (the terrain is fitted in every
     hypothesis, as a nuisance), ``w_ref`` a reference load of the data [N],
     ``x_step`` the change point along the normalised drift coordinate that the
-    diagnosis found in Wong's residuals (None: none found) and ``w_static`` the run's
-    static wheel load [N] (None: unknown, e.g. a table)."""
+    diagnosis found in Wong's residuals (None: none found), ``w_static`` the run's
+    static wheel load [N] (None: unknown, e.g. a table) and ``v_ref`` the data's median forward
+    speed [m/s] (None: no speed recorded, or one that hardly varies; :func:`speed_reference`)."""
 
     terrain: object
     wheel: object
@@ -169,6 +174,7 @@ class Context:
     w_ref: float | None = None
     x_step: float | None = None
     w_static: float | None = None
+    v_ref: float | None = None
 
 
 def lab_prior(terrain, wheel, *, widen: float = 1.0) -> dict:
@@ -301,12 +307,14 @@ class Hypothesis:
             return "needs a time series (time or distance along the run); a table has neither"
         return None
 
-    def predict(self, ctx: Context, load_n, slip, x, p: Mapping[str, float], inertia=None) -> WheelForces:
+    def predict(self, ctx: Context, load_n, slip, x, p: Mapping[str, float], inertia=None,
+                speed_mps=None) -> WheelForces:
         """Forces at each cell/sample: ``load_n`` W [N], ``slip`` s, ``x`` normalised drift
         coordinate (or None), all (N,); ``p`` parameter values by name (SI); ``inertia``
         (channel -> (N,) the wheel's inertial part of the transducer reading,
         :attr:`~wheelsoil.model.data.FitData.inertia`; None: none known) for the hypotheses that
-        act on the reading (:meth:`reading`).
+        act on the reading (:meth:`reading`); ``speed_mps`` (N,) the forward speed V [m/s] for the
+        hypotheses that depend on it (None: at the reference speed ``ctx.v_ref``).
         Returns ``WheelForces`` of (N,) arrays.  Raises ValueError outside the model's domain."""
         f = self.forces(ctx, self.terrain(ctx, p), np.asarray(load_n, float), np.asarray(slip, float), x, p)
         return self.reading(f, p, inertia) if inertia else f
@@ -485,7 +493,7 @@ class DriftLinear(Hypothesis):
             HParam("g_lnK", 0.0, -1.5, 1.5, "-", "change of ln K over the run (end - start)"),
         )
 
-    def predict(self, ctx, load_n, slip, x, p, inertia=None):
+    def predict(self, ctx, load_n, slip, x, p, inertia=None, speed_mps=None):
         base = dict(p)
         out = []
         if x is None:
@@ -588,7 +596,7 @@ class DriftOne(DriftLinear):
     def nulls(self, ctx):
         return {_SLOPE[self.param]: 0.0}
 
-    def predict(self, ctx, load_n, slip, x, p, inertia=None):
+    def predict(self, ctx, load_n, slip, x, p, inertia=None, speed_mps=None):
         t = ctx.terrain
         full = {"k_eq": t.k_eq(ctx.wheel.width), "n": t.n, "c": t.c, "phi": t.phi, "K": t.K}
         full.update({g: 0.0 for g in _SLOPE.values()})
@@ -866,7 +874,7 @@ class AngleOffset(Wong):
     def own_params(self, ctx):
         return (HParam("delta", 0.0, -0.2, 0.2, "rad", "offset of the wheel-angle reading"),)
 
-    def predict(self, ctx, load_n, slip, x, p, inertia=None):
+    def predict(self, ctx, load_n, slip, x, p, inertia=None, speed_mps=None):
         """Wong's forces as processing reports them with the wheel angle read ``delta`` off (class
         doc): ``load_n`` is the measured load W' (N,) [N]; shapes, units and errors as
         :meth:`Hypothesis.predict`; without ``inertia`` the reading is taken as Dp alone."""
@@ -913,6 +921,79 @@ class LoadStiffness(Hypothesis):
         k0 = terrain.k_eq(ctx.wheel.width)
         return _interpolated(np.log(load_n / float(ctx.w_static)), lambda v: wong_forces(
             apply_terrain(terrain, {"k_eq": k0 * math.exp(p["beta"] * v)}), ctx.wheel, load_n, slip,
+            sinkage=ctx.sinkage))
+
+
+#: Speeds below this [m/s] count as this in :class:`SpeedStiffness` (a wheel at a standstill loads the soil at
+#: a rate its power law cannot take to zero).
+SPEED_FLOOR_MPS = 0.05
+#: :func:`speed_reference`: the forward speed must vary by at least this factor between the 10th and 90th
+#: percentiles of the cells for a dependence on it to be told from a constant.
+SPEED_SPREAD_MIN = 1.25
+
+
+def speed_reference(speed_mps) -> float | None:
+    """The reference speed [m/s] of :class:`SpeedStiffness`: the median of ``speed_mps`` ((C,) the cells'
+    forward speeds, or None), or None when there is no speed, or it varies by less than
+    ``SPEED_SPREAD_MIN`` between its 10th and 90th percentiles (a dependence on it cannot then be
+    told from a constant)."""
+    if speed_mps is None:
+        return None
+    v = np.maximum(np.abs(np.asarray(speed_mps, float)), SPEED_FLOOR_MPS)
+    v = v[np.isfinite(v)]
+    if v.size < 3:
+        return None
+    lo, mid, hi = np.percentile(v, [10, 50, 90])
+    return float(mid) if hi >= SPEED_SPREAD_MIN * lo else None
+
+
+class SpeedStiffness(Hypothesis):
+    """A pressure-sinkage modulus that depends on the forward speed: k_eq(V) = k_eq (V / V_ref)^beta,
+    V_ref the run's median speed (:func:`speed_reference`), k_eq re-fitted against its lab prior.
+
+    Not a cause on our list: it stands for a soil whose response depends on the rate at which the
+    wheel loads it (a viscous or wet clay, a saturated soil; the lab's plate is pressed at one slow
+    rate: Wong 2008 ch. 2 on rate effects), which over one run's speeds acts much as a constant
+    k_eq mismatch.  A power of the speed is the usual form of a strain-rate dependence.  The
+    sibling of :class:`LoadStiffness` (a modulus that depends on the load).  With beta = 0 it is
+    the one-value mismatch ``terrain_k_eq`` it contains (``nested``); it counts only when it
+    predicts better than that out of sample, and a terrain mismatch it explains as well is not
+    named.  The forces are Wong's (Eqs. 1-10) at each cell's modulus, interpolated quadratically in
+    ln V (as :class:`LoadStiffness` in ln W).  Effect ``unexplained``.  Not tried without a
+    recorded speed that varies (``ctx.v_ref`` None).  With ``ctx.fit_terrain`` the terrain block
+    holds k_eq and beta is the only own parameter.
+    """
+
+    name, effect, title = "speed_k", "unexplained", "a pressure-sinkage modulus that depends on the speed (no listed cause)"
+    source = "generic alternative: rate (speed) dependent k_eq, power law in V (Wong 2008 ch. 2, rate effects)"
+    nested = ("terrain_k_eq", "wong")
+
+    def own_params(self, ctx):
+        beta = HParam("beta", 0.0, -1.0, 1.0, "-", "exponent of k_eq in V / V_ref")
+        if ctx.fit_terrain:
+            return (beta,)
+        return (beta, next(q for q in terrain_params(ctx) if q.name == "k_eq"))
+
+    def nulls(self, ctx):
+        return {"beta": 0.0}
+
+    def available(self, ctx, has_x):
+        if ctx.v_ref is None:
+            return (f"needs the forward speed (speed_mps), varying by a factor {SPEED_SPREAD_MIN:g} or more over "
+                    "the cells")
+        return super().available(ctx, has_x)
+
+    def predict(self, ctx, load_n, slip, x, p, inertia=None, speed_mps=None):
+        """Wong's forces with k_eq at each sample's speed (class doc): ``speed_mps`` (N,) [m/s], None = all
+        at ``ctx.v_ref`` (the report's curves); shapes, units and errors as :meth:`Hypothesis.predict`."""
+        terrain = apply_terrain(self.terrain(ctx, p), {"k_eq": p["k_eq"]})
+        load_n, slip = np.asarray(load_n, float), np.asarray(slip, float)
+        if speed_mps is None or ctx.v_ref is None:
+            u = np.zeros(load_n.size)
+        else:
+            u = np.log(np.maximum(np.abs(np.asarray(speed_mps, float)), SPEED_FLOOR_MPS) / ctx.v_ref)
+        return _interpolated(u, lambda v: wong_forces(
+            apply_terrain(terrain, {"k_eq": p["k_eq"] * math.exp(p["beta"] * v)}), ctx.wheel, load_n, slip,
             sinkage=ctx.sinkage))
 
 
@@ -1053,7 +1134,7 @@ HYPOTHESES: dict[str, Hypothesis] = {
               WongReece(), DriftLinear(), DriftStep(), *(_drift_one(n) for n in TERRAIN_NAMES),
               *(_drift_one(n, step=True) for n in TERRAIN_NAMES), DrawbarResistance(), DrawbarDrift(), ZeroDrift(),
               WheelRadius(), SpeedGain(), TyreRadius(), WheelWidth(), SensorGain(), AngleOffset(), LoadStiffness(),
-              Rebound(), ShearSlip(), CurvedEnvelope(), StressK(), VerticalBalance())
+              SpeedStiffness(), Rebound(), ShearSlip(), CurvedEnvelope(), StressK(), VerticalBalance())
 }
 
 

@@ -31,6 +31,9 @@ def test_every_hypothesis_has_an_effect_bounded_parameters_and_reduces_to_wong(n
     if name == "load_k":  # needs the run's static load
         assert h.available(CTX, True)
         ctx = dataclasses.replace(CTX, w_static=12000.0)
+    if name == "speed_k":  # needs a recorded speed that varies
+        assert h.available(CTX, True)
+        ctx = dataclasses.replace(CTX, v_ref=2.0)
     for q in h.parameters(ctx):
         assert q.lower <= q.default <= q.upper, q
         if q.prior:
@@ -99,6 +102,33 @@ def test_the_load_dependent_modulus_matches_the_kernel_at_each_load():
         change = np.max(np.abs(exact - getattr(wong_forces(SAND, DEFAULT_WHEEL, w, s), field)))
         assert change > 0
         np.testing.assert_allclose(getattr(f, field), exact, atol=0.01 * change)
+
+
+def test_the_speed_dependent_modulus_matches_the_kernel_at_each_speed_and_needs_a_varying_speed():
+    """speed_k interpolates the kernel's forces in ln V; against Wong's forces with k_eq (V / V_ref)^beta
+    taken at each sample's own speed (0.3-4 m/s, beta = 0.1: k_eq over -19 % .. +7 %); with beta = 0 it is
+    the one-value k_eq mismatch it contains; no speed, or one that hardly varies, and it is not tried."""
+    from wheelsoil.model.hypotheses import speed_reference
+
+    h = HYPOTHESES["speed_k"]
+    v = np.linspace(0.3, 4.0, 7)
+    ctx = dataclasses.replace(CTX, v_ref=speed_reference(v))
+    assert ctx.v_ref == pytest.approx(np.median(v)) and not h.available(ctx, True)
+    assert speed_reference(np.full(7, 2.0)) is None and speed_reference(None) is None
+    w = np.full(7, 12000.0)
+    s = np.linspace(0.15, 0.85, 7)
+    k0 = 1.3 * SAND.k_eq(DEFAULT_WHEEL.width)
+    f = h.predict(ctx, w, s, None, {"beta": 0.1, "k_eq": k0}, speed_mps=v)
+    ref = [wong_forces(SAND.replace(kc=0.0, kphi=k0 * (v[i] / ctx.v_ref) ** 0.1), DEFAULT_WHEEL, w[i], s[i])
+           for i in range(w.size)]
+    flat = h.predict(ctx, w, s, None, {"beta": 0.0, "k_eq": k0}, speed_mps=v)
+    one = HYPOTHESES["terrain_k_eq"].predict(ctx, w, s, None, {"k_eq": k0})
+    for field in ("drawbar_pull_n", "torque_nm", "sinkage_m"):
+        exact = np.array([getattr(r, field)[0] for r in ref])
+        change = np.max(np.abs(exact - getattr(one, field)))
+        assert change > 0
+        np.testing.assert_allclose(getattr(f, field), exact, atol=0.01 * change)
+        np.testing.assert_allclose(getattr(flat, field), getattr(one, field), rtol=1e-12)
 
 
 def test_the_torque_zero_drift_moves_the_torque_only():
