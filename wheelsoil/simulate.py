@@ -843,22 +843,27 @@ def write_simulation(run: SimulatedRun, path, *, config=None) -> Path:
     idx = np.concatenate([m[2] for m in merged])
     order = np.lexsort((chs, ts))
     buses = sorted(run.frames)
-    with can.Logger(str(path)) as logger:
-        for i in order:
-            bus = buses[chs[i]]
-            f = run.frames[bus]
-            j = idx[i]
-            dlc = int(f["dlc"][j])
-            channel: Any = bus if suffix == ".log" else int(bus.removeprefix("can") or 0)
-            logger.on_message_received(can.Message(
-                timestamp=int(f["timestamp_ns"][j]) / 1e9,
-                arbitration_id=int(f["arbitration_id"][j]),
-                is_extended_id=bool(f["is_extended"][j]),
-                dlc=dlc,
-                data=bytes(f["data"][j, :dlc]),
-                channel=channel,
-                is_rx=True,
-            ))
+    tmp = path.with_name(f".{path.stem}.partial{suffix}")  # renamed into place when complete
+    try:
+        with can.Logger(str(tmp)) as logger:
+            for i in order:
+                bus = buses[chs[i]]
+                f = run.frames[bus]
+                j = idx[i]
+                dlc = int(f["dlc"][j])
+                channel: Any = bus if suffix == ".log" else int(bus.removeprefix("can") or 0)
+                logger.on_message_received(can.Message(
+                    timestamp=int(f["timestamp_ns"][j]) / 1e9,
+                    arbitration_id=int(f["arbitration_id"][j]),
+                    is_extended_id=bool(f["is_extended"][j]),
+                    dlc=dlc,
+                    data=bytes(f["data"][j, :dlc]),
+                    channel=channel,
+                    is_rx=True,
+                ))
+        os.replace(tmp, path)
+    finally:
+        tmp.unlink(missing_ok=True)
     return path
 
 
