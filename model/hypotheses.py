@@ -986,7 +986,7 @@ class SpeedStiffness(Hypothesis):
     def predict(self, ctx, load_n, slip, x, p, inertia=None, speed_mps=None):
         """Wong's forces with k_eq at each sample's speed (class doc): ``speed_mps`` (N,) [m/s], None = all
         at ``ctx.v_ref`` (the report's curves); shapes, units and errors as :meth:`Hypothesis.predict`."""
-        terrain = apply_terrain(self.terrain(ctx, p), {"k_eq": p["k_eq"]})
+        terrain = self.terrain(ctx, p)  # k_eq is set below, at each speed
         load_n, slip = np.asarray(load_n, float), np.asarray(slip, float)
         if speed_mps is None or ctx.v_ref is None:
             u = np.zeros(load_n.size)
