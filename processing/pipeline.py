@@ -221,6 +221,21 @@ def _fmt(v, unit: str) -> str:
 
 
 # --------------------------------------------------------------------------- configuration
+#: ``_resolve_config``'s source name for the shipped default used in place of a recording's own configuration.
+ASSUMED_CONFIG = "the shipped default vehicle.toml"
+
+
+def _recorded_wheel(read_report) -> tuple[float, float] | None:
+    """The wheel (radius, width) [m] a recording's ``wheelsoil.recording`` metadata states (the writer's
+    copy of its configuration), from a reader's report; None when it states none or an implausible one."""
+    facts = (getattr(read_report, "metadata", None) or {}).get("wheelsoil.recording") or {}
+    try:
+        return (check_wheel_radius(float(facts["wheel_radius_m"]), "recorded wheel_radius_m"),
+                check_wheel_width(float(facts["wheel_width_m"]), "recorded wheel_width_m"))
+    except (KeyError, ValueError, TypeError):
+        return None
+
+
 def _resolve_config(path: Path, config: Any, warnings: list[str]):
     """VehicleConfig from an object, a TOML path, the recording's attachment, or the default.
 
@@ -235,11 +250,14 @@ def _resolve_config(path: Path, config: Any, warnings: list[str]):
         cfg = load_recording_config(path)
         if cfg is not None:
             return cfg, "the recording's vehicle configuration"
-        warnings.append(f"{path}: no vehicle configuration attached; using the shipped default")
+        why = "no usable vehicle configuration attached (none, or its attachments fail their CRC)"
     except ValueError as exc:  # not an MCAP file is reported by the reader; a bad attachment here
-        warnings.append(f"{path}: attached vehicle configuration not usable ({exc}); "
-                        "using the shipped default")
-    return load_vehicle_config(), "the shipped default vehicle.toml"
+        why = f"the attached vehicle configuration is not usable ({exc})"
+    cfg = load_vehicle_config()
+    warnings.append(f"VEHICLE CONFIGURATION ASSUMED: {path}: {why}; the shipped default vehicle.toml is used "
+                    f"(DBCs, signals, wheel mass and inertia; wheel {cfg.wheel_radius_m:g} x {cfg.wheel_width_m:g} m "
+                    "unless the recording's metadata states its wheel); give the right one with --vehicle TOML")
+    return cfg, ASSUMED_CONFIG
 
 
 def check_wheel_radius(value, what: str = "wheel radius") -> float:
@@ -827,6 +845,13 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
     t_grid = np.arange(n_grid) / rate_hz
     excluded: list[dict] = _time_base_excluded(tb_runs, tb_parts, dec, t0_ns)
     quality: dict = {"timestamps": {**tb_quality, "grid_rows": n_grid, "span_s": span_s}}
+    width = float(cfg.wheel_width_m)
+    recorded = _recorded_wheel(read_report) if cfg_where == ASSUMED_CONFIG else None
+    if recorded is not None and wheel_radius_m is None:  # the configuration is lost, the wheel is not
+        r, width = recorded
+        r_source = "from the recording's metadata (its attached configuration is not usable)"
+        warns.append(f"VEHICLE CONFIGURATION ASSUMED: the wheel is the recording's own, {r:g} x {width:g} m, from its "
+                     "metadata; the rest is the shipped default's")
     damage = list(getattr(read_report, "damage", None) or [])
     if damage:
         quality["damage"] = damage
@@ -1143,7 +1168,7 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
         gnss_latency_stderr_s=None if latency is None else latency.stderr_s,
         gps_time_mapping=gps_map, lost_frames=lost_frames, warnings=warns, cycle=cycle,
         t0_ns=t0_ns, rate_hz=float(rate_hz), cutoff_hz=cutoff, wheel_radius_m=r,
-        wheel_width_m=float(cfg.wheel_width_m),
+        wheel_width_m=width,
         latency_reference=lat_ref if latency is not None else "", latency_detail=latency,
         wheel_radius_source=r_source, inertia=inertia_info, excluded=excluded, quality=quality,
     )

@@ -204,3 +204,26 @@ def test_fit_refuses_a_table_mixed_with_a_recording(small_wheel, tmp_path):
     pd.DataFrame({"slip": [0.2, 0.3], "load_n": [1e4, 1e4], "drawbar_pull_n": [1e3, 2e3]}).to_csv(tab, index=False)
     with pytest.raises(ValueError, match="tables and recordings cannot be fitted jointly"):
         load_inputs([path, tab])
+
+
+def test_an_unusable_attached_configuration_is_loud_and_the_recorded_wheel_is_kept(tmp_path):
+    """One flipped byte in the attached vehicle.toml (its CRC fails): the shipped default configuration
+    is used with a loud 'VEHICLE CONFIGURATION ASSUMED', and the wheel stays the one the recording's
+    metadata states (0.55 x 0.40 m), not the default's 0.47 x 0.32 m, so slip and the fit are unchanged."""
+    from wheelsoil.model import load_terrain
+    from wheelsoil.simulate import simulate_run, write_simulation
+
+    run = simulate_run(load_terrain("clay"), wheel=(0.55, 0.40), added_load_n=3000.0, duration_s=30.0, seed=2,
+                       front_wheels="reference")
+    good = write_simulation(run, tmp_path / "good.mcap")
+    raw = bytearray(good.read_bytes())
+    k = raw.find(b"[signals.")
+    assert k > 0
+    raw[k + 3] ^= 0x20
+    bad = tmp_path / "bad.mcap"
+    bad.write_bytes(bytes(raw))
+    ref, res = process_recording(good), process_recording(bad)
+    loud = [w for w in res.warnings if w.startswith("VEHICLE CONFIGURATION ASSUMED")]
+    assert loud and str(bad) in loud[0] and not any("ASSUMED" in w for w in ref.warnings)
+    assert (res.wheel_radius_m, res.wheel_width_m) == (0.55, 0.40) == (ref.wheel_radius_m, ref.wheel_width_m)
+    np.testing.assert_allclose(res.signals["slip"], ref.signals["slip"], equal_nan=True)
