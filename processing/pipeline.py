@@ -225,6 +225,14 @@ def _fmt(v, unit: str) -> str:
 ASSUMED_CONFIG = "the shipped default vehicle.toml"
 
 
+def _validity_signal(names: list, signal: str) -> str | None:
+    """The receiver's validity flag of ``signal`` among a message's signal ``names``: ``Validity_<X>`` with
+    ``signal`` starting with ``X`` (the RT-Range/SpeedBox DBC convention: ``Validity_INS_Vel_Forwards`` for
+    ``INS_Vel_Forwards_2D``); None when the message has none."""
+    hits = [n for n in names if n.startswith("Validity_") and signal.startswith(n[len("Validity_"):])]
+    return max(hits, key=len) if hits else None
+
+
 def _recorded_wheel(read_report) -> tuple[float, float] | None:
     """The wheel (radius, width) [m] a recording's ``wheelsoil.recording`` metadata states (the writer's
     copy of its configuration), from a reader's report; None when it states none or an implausible one."""
@@ -763,6 +771,13 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
         msg = cfg.database(sig[key].bus).get_message_by_name(sig[key].message)
         if "Status" in [s.name for s in msg.signals]:
             select[sig[key].message].add("Status")
+    validity = {}  # GNSS velocity key -> the receiver's validity flag of it in the same message, if the DBC has one
+    for key in ("gnss_forward_velocity", "gnss_speed"):
+        msg = cfg.database(sig[key].bus).get_message_by_name(sig[key].message)
+        flag = _validity_signal([s.name for s in msg.signals], sig[key].signal)
+        if flag:
+            validity[key] = flag
+            select[sig[key].message].add(flag)
     decoder = Decoder({bus: [cfg.database(bus)] for bus in cfg.buses}, select=select)
 
     span = [None, None]
@@ -1020,6 +1035,7 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
             warns.append(f"only {g[0].shape[0]} frames of {label(key)}: not used")
     g_fwd = g_fwd if g_fwd is not None and g_fwd[0].shape[0] >= 3 else None
     g_spd = g_spd if g_spd is not None and g_spd[0].shape[0] >= 3 else None
+    g_key = "gnss_forward_velocity" if g_fwd is not None else "gnss_speed"
     if g_fwd is not None:
         g_t, g_v = g_fwd
         g_msg = sig["gnss_forward_velocity"].message
@@ -1044,6 +1060,12 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
             gps_map = fit_gps_time_mapping(gt[0], gw[1], gt[1], t0_ns=t0_ns)
         except ValueError as exc:
             warns.append(f"GPS time mapping not possible: {exc}")
+    flag = dec[g_msg].signals.get(validity[g_key]) if g_t is not None and g_key in validity else None
+    if flag is not None and np.any(flag == 0):  # the receiver says these values are not measured (no fix)
+        bad = flag == 0
+        g_v = np.where(bad, np.nan, g_v)
+        warns.append(f"GNSS: {int(bad.sum())} of {bad.size} {label(g_key)} frames flagged invalid by the receiver "
+                     f"({validity[g_key]} = 0, e.g. no fix): left out as lost, so speed and slip are NaN there")
     if g_t is not None:
         g_bus = dec[g_msg].bus
         rep, g_period = _time_gaps(g_msg, g_t, *cfg.cycle_time_s(g_bus, g_msg), parts=tb_parts.get(g_msg))

@@ -84,3 +84,50 @@ def test_cycle_loss_unit():
     # joined parts: the time between them is not loss
     t2 = np.concatenate([t[:500], t[500:] + 100 * 10 ** 9])
     assert cycle_loss(t2, 0.01, breaks=[(0, 500), (500, 1000)]) == (0, "")
+
+
+def test_gnss_velocity_the_receiver_flags_invalid_is_left_out(tmp_path):
+    """The receiver loses its fix for 6 s and keeps sending its last velocity with the validity bits
+    cleared (RT SpeedBox ``Validity_INS_Vel_Forwards`` / ``Validity_GPS_Speed_2D`` = 0): those frames are
+    lost samples (speed and slip NaN, said in a warning), not a stale speed that makes the slip wrong."""
+    from wheelsoil.daq.convert import import_log
+    from wheelsoil.model import load_terrain
+    from wheelsoil.simulate import simulate_run, write_simulation
+
+    run = simulate_run(load_terrain("sand"), duration_s=30.0, seed=3, front_wheels="reference")
+    log = write_simulation(run, tmp_path / "run.log")
+    lines = log.read_text().splitlines(keepends=True)
+    t0 = float(lines[0][1:lines[0].index(")")])
+    held, out = {}, []
+    for line in lines:
+        t = float(line[1:line.index(")")]) - t0
+        head, rest = line.split("#", 1)
+        data, tail = rest.split()[0], rest[len(rest.split()[0]):]
+        ident = head.split()[-1]
+        if ident in ("09567C22", "09588322"):  # RT_SB_GPS_Speed, RT_SB_INS_Vel_Body_Axes
+            if 12.0 <= t < 18.0:
+                frame = bytearray(held[ident])
+                frame[0] &= ~0x03  # validity bits cleared, the last value kept
+                line = f"{head}#{frame.hex().upper()}{tail}"
+            else:
+                held[ident] = bytes.fromhex(data)
+        out.append(line)
+    stale = tmp_path / "stale.log"
+    stale.write_text("".join(out))
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        good = process_recording(import_log(log, tmp_path / "good.mcap").output)
+        bad = process_recording(import_log(stale, tmp_path / "bad.mcap").output)
+    said = [w for w in bad.warnings if "flagged invalid by the receiver" in w]
+    assert said and "Validity_INS_Vel_Forwards" in said[0] and not any("flagged invalid" in w for w in good.warnings)
+    s_bad, s_good = bad.signals, good.signals
+    t = s_bad["t_s"].to_numpy()
+    inside = (t > 12.5) & (t < 17.5)
+    assert inside.any() and not s_bad["valid"].to_numpy()[inside].any()
+    assert np.isnan(s_bad["speed_mps"].to_numpy()[inside]).all()
+    outside = (t < 11.0) | (t > 19.0)
+    both = outside & s_bad["valid"].to_numpy() & s_good["valid"].to_numpy()
+    assert both.sum() > 100
+    np.testing.assert_allclose(s_bad["slip"].to_numpy()[both], s_good["slip"].to_numpy()[both], atol=0.02)
