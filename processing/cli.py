@@ -60,7 +60,7 @@ def register(subparsers) -> None:
     p.add_argument("--rate", type=float, default=100.0, metavar="HZ",
                    help="output sample rate [Hz] (default 100)")
     p.add_argument("--cutoff", type=float, default=None, metavar="HZ",
-                   help="low-pass cutoff [Hz] (default 5; at most 0.4 x rate)")
+                   help="low-pass cutoff [Hz] (default 5; at least 0.1, at most 0.4 x rate)")
     p.add_argument("--config", "--vehicle", dest="config", default=None, metavar="TOML",
                    help="vehicle configuration (default: the one stored in the recording, "
                    "else the shipped dbc/vehicle.toml)")

@@ -80,6 +80,8 @@ LATENCY_MAX_S = 0.5
 LATENCY_MIN_LOAD_N = 500.0
 #: Highest output rate [Hz] processing resamples to.
 MAX_RATE_HZ = 1000.0
+#: Lowest zero-phase low-pass cutoff [Hz] processing takes: 0.1 Hz averages over ~10 s, a whole accelerate cycle.
+MIN_CUTOFF_HZ = 0.1
 #: Systematic (model) uncertainty [s] of each latency estimator, added in quadrature to its
 #: statistical standard error: the wheel reference is exact for a free-rolling wheel; the
 #: slip-traction estimate is biased by up to ~15 ms where the torque is not a function of slip
@@ -731,8 +733,10 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
         raise ValueError(f"rate must be > 0 Hz and at most {MAX_RATE_HZ:g} Hz (the transducer's 500 Hz twice over: "
                          f"a finer grid adds rows, not information), not {rate_hz}")
     cutoff = DEFAULT_CUTOFF_HZ if cutoff_hz is None else float(cutoff_hz)
-    if not cutoff > 0:
-        raise ValueError(f"cutoff must be > 0 Hz, not {cutoff_hz}")
+    if not cutoff >= MIN_CUTOFF_HZ:
+        raise ValueError(f"cutoff must be at least {MIN_CUTOFF_HZ:g} Hz, not {cutoff_hz}: a lower one smooths over "
+                         "more than an accelerate cycle's seconds (and a filter that narrow is numerically unstable "
+                         "at the transducer's sample rate)")
     warns: list[str] = []
     if cutoff > 0.4 * rate_hz:
         warns.append(f"cutoff {cutoff:g} Hz lowered to {0.4 * rate_hz:g} Hz (0.4 x the output rate, anti-alias)")

@@ -165,6 +165,9 @@ def test_recording_without_configured_messages(tmp_path):
         process_recording(tmp_path / "missing.mcap")
     with pytest.raises(ValueError, match="at most 1000 Hz"):
         process_recording(path, rate_hz=1e5)
+    for cutoff in (0.001, 0.0, -1.0):  # a filter narrower than an accelerate cycle: refused, not unstable
+        with pytest.raises(ValueError, match="at least 0.1 Hz"):
+            process_recording(path, cutoff_hz=cutoff)
 
 
 
