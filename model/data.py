@@ -237,6 +237,9 @@ def dataclasses_replace(obj, **kw):
 
 #: Largest plausible magnitude of a wheel's load, drawbar pull [N] or torque [N m] in a table.
 MAX_FORCE = 1e6
+#: Most rows of a table (no ``t_s``): one steady-state test point per row, each fitted as a unit (a 2-million-row
+#: table took 21 s per hypothesis, 1.6 GB and rising, before cross-validation).
+MAX_TABLE_ROWS = 20000
 
 
 def prepare_data(df, *, slip_min: float = 0.1, source: str = "data", n_blocks: int | None = None,
@@ -267,7 +270,8 @@ def prepare_data(df, *, slip_min: float = 0.1, source: str = "data", n_blocks: i
         after the selection, only one distinct slip value (no slip
         dependence can be fitted), slip in per cent (most finite slips above 1.5:
         slip is the fraction of Eq. 6) or a sinkage deeper than the wheel's
-        diameter (millimetres in the ``sinkage_m`` column).
+        diameter (millimetres in the ``sinkage_m`` column), or a table (no ``t_s``) of more than
+        ``MAX_TABLE_ROWS`` used rows (each row is a test point the models are fitted to one by one).
     """
     import pandas as pd
 
@@ -410,6 +414,11 @@ def prepare_data(df, *, slip_min: float = 0.1, source: str = "data", n_blocks: i
         notes.append("distance_m has NaN values; time is used as the drift coordinate instead.")
         dist = None
     kind = "timeseries" if t_s is not None else "table"
+    if kind == "table" and int(keep.sum()) > MAX_TABLE_ROWS:
+        raise ValueError(f"{source}: a table of {int(keep.sum())} used rows, more than {MAX_TABLE_ROWS}: each row of "
+                         "a table is one test point fitted on its own (a steady-state result); samples of a run "
+                         "need their t_s column (then cycle x slip cells are fitted), or average the table's rows "
+                         "per test point first")
     groups, group_kind = _cv_groups(df, keep, run, kind, n_blocks)
     sigma = {
         c: estimate_noise(v, slip, w[keep], groups if kind == "timeseries" else None)

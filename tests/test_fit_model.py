@@ -332,3 +332,19 @@ def test_a_constant_channel_has_a_noise_floor():
     sigma, _, _ = cell_noise(chans, s, np.full(12, 1e4), None, np.zeros(12, int), np.arange(12), "table")
     assert sigma["sinkage_m"] == pytest.approx(SIGMA_FLOOR_REL * 0.2385)
     assert sigma["drawbar_pull_n"] > 10 * SIGMA_FLOOR_REL * np.sqrt(np.mean(chans["drawbar_pull_n"] ** 2))
+
+
+def test_a_table_too_long_to_be_test_points_is_refused_before_fitting():
+    """A table (no t_s) of more rows than MAX_TABLE_ROWS is refused with what to do, not fitted row by row
+    for hours; the same rows with their t_s are a time series and are read."""
+    import numpy as np
+    import pandas as pd
+
+    from wheelsoil.model.data import MAX_TABLE_ROWS, prepare_data
+
+    n = MAX_TABLE_ROWS + 1
+    s = np.linspace(0.15, 0.85, n)
+    df = pd.DataFrame({"slip": s, "load_n": 12000.0, "drawbar_pull_n": 2000.0 * s})
+    with pytest.raises(ValueError, match=f"more than {MAX_TABLE_ROWS}.*t_s"):
+        prepare_data(df, source="big.csv")
+    assert prepare_data(df.iloc[:MAX_TABLE_ROWS], source="ok.csv").kind == "table"
