@@ -348,3 +348,15 @@ def test_a_table_too_long_to_be_test_points_is_refused_before_fitting():
     with pytest.raises(ValueError, match=f"more than {MAX_TABLE_ROWS}.*t_s"):
         prepare_data(df, source="big.csv")
     assert prepare_data(df.iloc[:MAX_TABLE_ROWS], source="ok.csv").kind == "table"
+
+
+def test_a_report_directory_that_is_a_file_is_refused_before_the_fit(tmp_path, monkeypatch):
+    """fit -o naming an existing file fails at once, naming it (before: after the whole fit, [Errno 17])."""
+    import wheelsoil.pipeline as pl
+
+    out = tmp_path / "report"
+    out.write_text("keep me")
+    monkeypatch.setattr(pl, "load_inputs", lambda *a, **k: pytest.fail("the inputs were read first"))
+    with pytest.raises(ValueError, match="existing file"):
+        pl.run_fit([tmp_path / "run.mcap"], "sand", out)
+    assert out.read_text() == "keep me"

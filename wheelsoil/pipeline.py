@@ -613,8 +613,9 @@ def run_fit(
     Raises
     ------
     ValueError
-        Unreadable input, unknown terrain or a terrain file missing a key, or
-        data nothing can be fitted to (then a report saying so is still written).
+        Unreadable input, unknown terrain or a terrain file missing a key, an output that is an
+        existing file (checked first), or data nothing can be fitted to (then a report saying so is
+        still written).
     OSError
         The output directory cannot be written.
     """
@@ -641,6 +642,8 @@ def run_fit(
         if m not in CANDIDATES:
             raise ValueError(f"unknown model {m!r} in --models; choose from {', '.join(CANDIDATES)}")
     out = Path(out_dir)
+    if out.exists() and not out.is_dir():  # before the fit, not after it
+        raise ValueError(f"{out}: the report directory (-o) is an existing file; give a directory")
     if command is None:
         command = _equivalent_command(inputs, terrain, out_dir, wheel_radius=wheel_radius, wheel_width=wheel_width,
                                       slip_min=slip_min, models=models, fit_terrain=fit_terrain, sinkage=sinkage,
