@@ -1076,7 +1076,7 @@ def rewrite_recording(path, output, *, on_batch=None, note: tuple[str, dict] | N
 
     Raises:
         OSError: unreadable input/unwritable output. RecordingError: not an MCAP file.
-        ValueError: output is the input.
+        ValueError: output is the input; no frame could be read (nothing is written).
     """
     path, output = Path(path), Path(output)
     if output.exists() and path.resolve() == output.resolve():
@@ -1105,6 +1105,9 @@ def rewrite_recording(path, output, *, on_batch=None, note: tuple[str, dict] | N
                 w.write_batch(b)
                 if on_batch is not None:
                     on_batch(w, b)
+        if not any(w.frame_counts.values()):
+            raise ValueError(f"{path}: no CAN frame could be read ("
+                             + ("; ".join(state.warnings) or "the recording holds none") + "); nothing written")
         for st, t in zip(state.statuses, state.status_times):
             w.write_status(st, time_ns=t)
         if note is not None:
@@ -1131,5 +1134,6 @@ def recover_recording(path, output) -> ConvertResult:
 
     Raises:
         OSError: unreadable input/unwritable output. RecordingError: not an MCAP file.
+        ValueError: no frame could be read (nothing is written).
     """
     return rewrite_recording(path, output, note=("wheelsoil.recovered", {}))

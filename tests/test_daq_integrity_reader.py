@@ -295,3 +295,17 @@ def test_recordings_joined_end_to_end_are_reported_not_read_as_the_first_only(tm
     assert rep_a.complete and not caught_a
     with pytest.raises(Exception, match="second MCAP recording"):
         read_frames(joined, recover=False)
+
+
+def test_recover_with_no_frame_left_fails_and_writes_nothing(tmp_path):
+    """A recording cut inside its first records: recover says no frame could be read and writes no
+    output (before: 'recovered 0 frames', exit 0, an empty recording)."""
+    from wheelsoil.daq.convert import recover_recording
+
+    src = tmp_path / "run.mcap"
+    _recording(src, n_chunks=2)
+    cut = tmp_path / "cut.mcap"
+    cut.write_bytes(src.read_bytes()[:100])
+    with pytest.raises(ValueError, match="no CAN frame could be read"):
+        recover_recording(cut, tmp_path / "out.mcap")
+    assert not (tmp_path / "out.mcap").exists()
