@@ -291,7 +291,7 @@ def _cmd_replay(args) -> int:
     import signal
     import threading
 
-    from .replay import replay_recording
+    from .replay import MAX_REPLAY_GAP_S, replay_recording
 
     stop = threading.Event()
     old = signal.signal(signal.SIGTERM, lambda *_: stop.set())
@@ -299,6 +299,9 @@ def _cmd_replay(args) -> int:
         res = replay_recording(args.recording, args.bus, speed=args.speed, stop_event=stop)
     finally:
         signal.signal(signal.SIGTERM, old)
+    if res.gaps_skipped:
+        print(f"warning: {res.gaps_skipped} recorded gap(s) longer than {MAX_REPLAY_GAP_S:g} s "
+              f"({res.gap_skipped_s:.0f} s in all; a host clock step?) not waited for", file=sys.stderr)
     print(f"sent {sum(res.sent.values())} frames ({_counts(res.sent)}) "
           f"in {res.wall_s:.1f} s" + (f"; {res.send_failures} frames could not be sent" if res.send_failures else ""))
     return 1 if res.send_failures else 0

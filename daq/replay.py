@@ -10,14 +10,24 @@ from typing import Callable, Mapping
 from .convert import iter_merged_messages
 
 
+#: A recorded gap between two frames longer than this [s] is not waited for (a host clock that stepped, a
+#: logger paused): the replay goes on at once and counts it in ``ReplayResult.gaps_skipped``.
+MAX_REPLAY_GAP_S = 10.0
+#: Longest single sleep [s]: the stop event is checked at least this often.
+_SLEEP_SLICE_S = 0.1
+
+
 @dataclass
 class ReplayResult:
-    """Frames sent per recorded bus, send errors retried/given up, wall time [s]."""
+    """Frames sent per recorded bus, send errors retried/given up, wall time [s], recorded gaps longer than
+    :data:`MAX_REPLAY_GAP_S` not waited for (``gaps_skipped``, ``gap_skipped_s`` their total [s])."""
 
     sent: dict[str, int] = field(default_factory=dict)
     send_retries: int = 0
     send_failures: int = 0
     wall_s: float = 0.0
+    gaps_skipped: int = 0
+    gap_skipped_s: float = 0.0
 
 
 def map_replay_buses(recorded: list[str], specs) -> dict[str, object]:
@@ -55,14 +65,16 @@ def replay_messages(messages, targets: Mapping[str, object], *, speed: float = 1
                     on_progress: Callable[[dict], None] | None = None) -> ReplayResult:
     """Send python-can messages (``msg.channel`` = recorded bus name) to ``targets``
     (recorded bus -> open bus), keeping the recorded gaps divided by ``speed``
-    (``speed <= 0``: as fast as possible). A full transmit queue is retried
-    for up to 1 s per frame, then counted as a failure.
+    (``speed <= 0``: as fast as possible), except gaps longer than :data:`MAX_REPLAY_GAP_S`,
+    which are counted and not waited for. The waits are slept in slices that check
+    ``stop_event``. A full transmit queue is retried for up to 1 s per frame, then counted
+    as a failure.
     """
     import can
 
     res = ReplayResult()
     t_wall0 = time.monotonic()
-    t_rec0 = None
+    t_rec0 = t_prev = None
     last_progress = t_wall0
     for msg in messages:
         if stop_event is not None and stop_event.is_set():
@@ -72,10 +84,18 @@ def replay_messages(messages, targets: Mapping[str, object], *, speed: float = 1
             continue
         if speed > 0:
             if t_rec0 is None:
-                t_rec0 = msg.timestamp
+                t_rec0 = t_prev = msg.timestamp
+            if msg.timestamp - t_prev > MAX_REPLAY_GAP_S:  # not waited for: the replay's clock skips it
+                res.gaps_skipped += 1
+                res.gap_skipped_s += msg.timestamp - t_prev
+                t_rec0 += msg.timestamp - t_prev
+            t_prev = max(t_prev, msg.timestamp)
             delay = (msg.timestamp - t_rec0) / speed - (time.monotonic() - t_wall0)
-            if delay > 0.0005:
-                time.sleep(delay)
+            while delay > 0.0005 and not (stop_event is not None and stop_event.is_set()):
+                time.sleep(min(delay, _SLEEP_SLICE_S))
+                delay = (msg.timestamp - t_rec0) / speed - (time.monotonic() - t_wall0)
+            if stop_event is not None and stop_event.is_set():
+                break
         rec_bus = msg.channel
         msg.channel = None  # python-can's socketcan would send to the interface named here
         deadline = None

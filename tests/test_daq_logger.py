@@ -207,3 +207,35 @@ def test_cli_log_errors_are_clear(tmp_path, capsys):
     assert cli("log", "--bus", "nosuchinterface:x", "-o", tmp_path / "x.mcap", "--duration", "1") == 2
     err = capsys.readouterr().err
     assert "cannot open" in err and "nosuchinterface" in err
+
+
+def test_replay_skips_a_recorded_clock_step_and_stops_within_a_slice():
+    """A 1 h gap between two frames (a host clock that stepped) is not slept through: it is counted and
+    the replay goes on; a stop request during a wait ends the replay within a sleep slice."""
+    import threading
+    import time
+
+    import can
+
+    from wheelsoil.daq.replay import MAX_REPLAY_GAP_S, replay_messages
+
+    class Sink:
+        def __init__(self):
+            self.got = []
+
+        def send(self, msg):
+            self.got.append(msg.arbitration_id)
+
+    def msgs(times):
+        return [can.Message(timestamp=t, arbitration_id=i, data=b"\x00", channel="can0") for i, t in enumerate(times)]
+
+    sink = Sink()
+    t0 = time.monotonic()
+    res = replay_messages(msgs([0.0, 0.01, 3600.0, 3600.01]), {"can0": sink})
+    assert time.monotonic() - t0 < 2.0 and sink.got == [0, 1, 2, 3]
+    assert res.gaps_skipped == 1 and res.gap_skipped_s > 3000 and MAX_REPLAY_GAP_S < 3599
+    stop, sink = threading.Event(), Sink()
+    threading.Timer(0.3, stop.set).start()
+    t0 = time.monotonic()
+    replay_messages(msgs([0.0, 5.0]), {"can0": sink}, stop_event=stop)  # a 5 s wait, stopped after 0.3 s
+    assert time.monotonic() - t0 < 1.5 and sink.got == [0]
