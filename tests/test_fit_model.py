@@ -360,3 +360,23 @@ def test_a_report_directory_that_is_a_file_is_refused_before_the_fit(tmp_path, m
     with pytest.raises(ValueError, match="existing file"):
         pl.run_fit([tmp_path / "run.mcap"], "sand", out)
     assert out.read_text() == "keep me"
+
+
+def test_the_same_run_in_two_recordings_is_refused(tmp_path):
+    """A recording and its recovered copy (other bytes, the same frames) cover the same logging time: fitting
+    both would count every cycle twice, so it is refused naming both; two runs at other times are not."""
+    from wheelsoil.daq.convert import recover_recording
+    from wheelsoil.model import load_terrain
+    from wheelsoil.pipeline import load_inputs
+    from wheelsoil.simulate import simulate_run, write_simulation
+
+    sand = load_terrain("sand")
+    a = write_simulation(simulate_run(sand, duration_s=30.0, seed=5), tmp_path / "a.mcap")
+    b = write_simulation(simulate_run(sand, duration_s=30.0, seed=6), tmp_path / "b.mcap")
+    copy = recover_recording(a, tmp_path / "copy.mcap").output
+    assert copy.read_bytes() != a.read_bytes()
+    with pytest.raises(ValueError, match="same run in two files") as err:
+        load_inputs([a, copy])
+    assert "a.mcap" in str(err.value) and "copy.mcap" in str(err.value)
+    df, info = load_inputs([a, b])
+    assert sorted(df["run"].unique()) == [0, 1]

@@ -149,6 +149,7 @@ def load_inputs(inputs, *, progress: bool = False, rate_hz: float = 100.0, cutof
         frames.append(df)
     if not frames:
         raise ValueError("no input given")
+    _check_not_the_same_run(inputs, results)
     if len(set(kinds)) > 1:
         raise ValueError(f"{', '.join(map(str, inputs))}: tables and recordings cannot be fitted jointly (a table's "
                          "rows have no accelerate cycles, time base or processing validity); fit them separately, "
@@ -159,6 +160,27 @@ def load_inputs(inputs, *, progress: bool = False, rate_hz: float = 100.0, cutof
     return df, {"kinds": kinds, "time_sync": sync, "wheel_radius_m": radius, "wheel_width_m": width,
                 "table_wheel_source": table_source, "notes": notes, "processing": processing, "results": results,
                 "tables": tables}
+
+
+def _check_not_the_same_run(inputs, results) -> None:
+    """Refuse two recordings whose processed spans (host time, ``ProcessResult.t0_ns`` and ``t_s``) overlap
+    by more than half the shorter: the same run in two files (a recovered copy, an import of the same log),
+    which would count every cycle twice.  ``results`` (None for tables) in the order of ``inputs``.
+    Raises ValueError naming both files and the overlap."""
+    spans = []
+    for raw, res in zip(inputs, results):
+        if res is None or res.signals is None or not len(res.signals):
+            continue
+        t = res.signals["t_s"]
+        spans.append((Path(raw), res.t0_ns * 1e-9 + float(t.min()), res.t0_ns * 1e-9 + float(t.max())))
+    for i, (pa, a0, a1) in enumerate(spans):
+        for pb, b0, b1 in spans[i + 1:]:
+            overlap = min(a1, b1) - max(a0, b0)
+            if overlap > 0.5 * min(a1 - a0, b1 - b0) and overlap > 0:
+                raise ValueError(f"{pa} and {pb}: they cover the same {overlap:.0f} s of logging time: the same run "
+                                 "in two files (a recovered copy, or an import of the same log?) would count every "
+                                 "cycle twice; give it once (two runs logged at the same time, by two vehicles: fit "
+                                 "them separately)")
 
 
 def _check_distinct(inputs) -> None:
