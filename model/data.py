@@ -488,7 +488,7 @@ def _cv_groups(df, keep, run, kind, n_blocks):
     if kind == "table" and n_blocks is None:
         k = n if n <= 20 else 10
         rank = np.empty(n, int)
-        rank[np.argsort(np.asarray(df["slip"], dtype=float)[keep], kind="stable")] = np.arange(n)
+        rank[np.argsort(pd.to_numeric(df["slip"], errors="coerce").to_numpy(float)[keep], kind="stable")] = np.arange(n)
         return rank % k, "leave-one-out" if k == n else f"{k} interleaved slip-rank folds"
     k = n_blocks or (max(2, min(5, n // 3)) if kind == "table" else 5)
     k = max(1, min(k, n))

@@ -380,3 +380,19 @@ def test_the_same_run_in_two_recordings_is_refused(tmp_path):
     assert "a.mcap" in str(err.value) and "copy.mcap" in str(err.value)
     df, info = load_inputs([a, b])
     assert sorted(df["run"].unique()) == [0, 1]
+
+
+def test_a_table_with_its_header_repeated_mid_file_is_read_and_the_row_named(tmp_path):
+    """Two tables joined with cat (the header line repeated in the middle): that row is excluded as
+    non-numeric with a note, the rest is fitted (before: 'could not convert string to float', no file)."""
+    import numpy as np
+    import pandas as pd
+
+    from wheelsoil.model.data import prepare_data
+
+    s = np.linspace(0.15, 0.85, 30)
+    part = pd.DataFrame({"slip": s, "load_n": 12000.0, "drawbar_pull_n": 2000.0 * s})
+    path = tmp_path / "joined.csv"
+    path.write_text(part.to_csv(index=False) + part.to_csv(index=False))
+    data = prepare_data(pd.read_csv(path), source=str(path))
+    assert data.n == 60 and any("non-numeric" in n for n in data.notes)
