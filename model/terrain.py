@@ -488,6 +488,9 @@ def _read_toml(path: Path) -> dict[str, Any]:
             return tomllib.load(fh)
     except tomllib.TOMLDecodeError as exc:
         raise ValueError(f"{path}: not valid TOML: {exc}") from None
+    except UnicodeDecodeError as exc:
+        raise ValueError(f"{path}: not UTF-8 text, as TOML must be ({exc.reason} at byte {exc.start}); save it as "
+                         "UTF-8") from None
 
 
 def load_terrain_file(path: str | Path) -> dict[str, Terrain]:

@@ -96,6 +96,9 @@ def test_bad_values_are_named(tmp_path):
     path.write_text("c_kpa = [")
     with pytest.raises(ValueError, match="not valid TOML"):
         load_terrain(path)
+    path.write_bytes(GOOD.encode("utf-16"))  # saved by an editor in UTF-16: named, not a bare codec error
+    with pytest.raises(ValueError, match="bad.toml: not UTF-8"):
+        load_terrain(path)
 
 
 def test_unknown_name_and_missing_file():
