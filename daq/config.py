@@ -222,7 +222,7 @@ def load_vehicle_config(path: str | Path | None = None, *, check_dbc: bool = Tru
 
     Raises:
         OSError: the TOML or a DBC cannot be read.
-        ValueError: bad TOML, a missing/invalid key, an unknown unit without
+        ValueError: bad TOML, a missing/invalid key, a DBC path that is not a file, an unknown unit without
             ``scale_to_si``, an unparsable DBC, or a message/signal not in the
             bus's DBCs; the message names the file and the TOML key.
     """
@@ -276,6 +276,10 @@ def vehicle_config_from_dict(doc: Mapping, *, source: Path | None = None, text: 
         if not isinstance(dbcs, list) or not all(isinstance(d, str) for d in dbcs):
             raise ValueError(f"{where}: [buses.{name}] dbc must be a list of file names")
         buses[name] = [(base / d).resolve() for d in dbcs]
+        missing = [str(p) for p in buses[name] if check_dbc and not p.is_file()]
+        if missing:
+            raise ValueError(f"{where}: [buses.{name}] dbc names {', '.join(missing)}, which is not a file (DBC paths "
+                             "are relative to the vehicle TOML)")
         bus_options[name] = {k: v for k, v in tab.items() if k != "dbc"}
 
     signals: dict[str, SignalRef] = {}

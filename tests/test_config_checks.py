@@ -16,6 +16,8 @@ _copy_default = copy_default_vehicle
 
 
 @pytest.mark.parametrize("edit, match", [
+    (('dbc = ["wft.dbc"]', 'dbc = ["wft_missing.dbc"]'), r"vehicle.toml: \[buses.can0\] dbc names .*wft_missing.dbc"),
+    (('dbc = ["wft.dbc"]', 'dbc = ["."]'), r"\[buses.can0\] dbc names .*which is not a file"),
     (("wheel_radius_m = 0.47", "wheel_radius_m = 470"),
      r"\[vehicle\] wheel_radius_m = 470: not a plausible radius in m \(0.05-2\); did you give mm\?"),
     (("wheel_radius_m = 0.47", "wheel_radius_m = inf"), r"\[vehicle\] wheel_radius_m = inf"),
