@@ -557,6 +557,68 @@ class _ReadWatch:
         pass
 
 
+def _next_blf_container(raw, start: int, size: int) -> int | None:
+    """Byte offset of the next BLF log container (an object header ``LOBJ`` of type 10 whose size fits the
+    file) at or after ``start`` in the binary file ``raw``; None if there is none (read in 1 MiB blocks)."""
+    import struct
+
+    pos, block = start, 1 << 20
+    while pos < size:
+        raw.seek(pos)
+        buf = raw.read(block + 15)
+        i = buf.find(b"LOBJ")
+        while i >= 0:
+            if i + 16 <= len(buf):
+                _sig, hsize, _ver, osize, otype = struct.unpack_from("<4sHHLL", buf, i)
+                if otype == 10 and hsize >= 16 and 16 < osize <= size - (pos + i):
+                    return pos + i
+            i = buf.find(b"LOBJ", i + 1)
+        pos += block
+    return None
+
+
+def _resumed(reader):
+    """python-can's BLF ``reader`` started at a container that follows a damaged one: the object split across
+    the two is lost, so the first container's data is read from its first whole object (``LOBJ``) on,
+    where python-can would stop at the split object's remainder ("Could not find next object")."""
+    parse, first = reader._parse_container, [True]
+
+    def parse_from_first_object(data):
+        if first[0]:
+            first[0] = False
+            i = data.find(b"LOBJ")
+            data = data[i:] if i >= 0 else b""
+        return parse(data)
+
+    reader._parse_container = parse_from_first_object
+    return reader
+
+
+class _Spliced:
+    """A binary file read as its first bytes ``head`` (a BLF file header) followed by ``raw`` from byte
+    ``start`` on: python-can's BLF reader, which reads the header first, resumes at a later container."""
+
+    def __init__(self, head: bytes, raw, start: int):
+        self._head, self._raw, self._at = head, raw, start
+
+    def read(self, n: int = -1) -> bytes:
+        out = b""
+        if self._head:
+            out, self._head = (self._head, b"") if n is None or n < 0 or n >= len(self._head) else \
+                (self._head[:n], self._head[n:])
+            if n is not None and n >= 0:
+                n -= len(out)
+            if n == 0:
+                return out
+        self._raw.seek(self._at)
+        data = self._raw.read(n)
+        self._at += len(data)
+        return out + data
+
+    def close(self) -> None:
+        pass
+
+
 @contextlib.contextmanager
 def _quiet_logger(name: str):
     """Raise a python-can logger's level to ERROR for the duration (restored after)."""
@@ -738,19 +800,34 @@ class LogSource:
             except Exception as exc:  # BLFParseError, struct.error on a short header
                 self.notes.append(f"{path}: not a readable BLF file ({type(exc).__name__}: {exc})")
                 return
-            n = 0
-            try:
-                for msg in reader:
-                    n += 1
-                    self.pos = n
-                    yield msg
-            except Exception as exc:  # BLFParseError, zlib.error, struct.error, ...
-                self.truncated = True
-                self.notes.append(f"{path}: damaged after CAN object {n} at byte {f.offset} of {size} "
-                                  f"({type(exc).__name__}: {exc}); kept the {n} objects before it")
-                return
             head_size = int(getattr(reader, "file_size", 0) or 0)
             head_objects = int(getattr(reader, "object_count", 0) or 0)
+            head_len = f.offset  # the file header python-can read
+            shift = 0  # file offset = f.offset + shift (a resumed reader sees the header, then the file from a container)
+            n = damaged = 0
+            while True:
+                try:
+                    for msg in reader:
+                        n += 1
+                        self.pos = n
+                        yield msg
+                    break
+                except Exception as exc:  # BLFParseError, zlib.error, struct.error, ...
+                    bad = f.offset + shift
+                    nxt = _next_blf_container(raw, bad, size)
+                    if nxt is None:
+                        self.truncated = True
+                        self.notes.append(f"{path}: damaged after CAN object {n} at byte {bad} of {size} "
+                                          f"({type(exc).__name__}: {exc}); kept the {n} objects before it")
+                        return
+                    damaged += 1
+                    self.notes.append(f"{path}: damaged object container before byte {bad} ({type(exc).__name__}: "
+                                      f"{exc}), after CAN object {n}: its objects are lost; reading goes on at the "
+                                      f"next container, byte {nxt}" + (f" ({nxt - bad} bytes skipped)" if nxt > bad else ""))
+                    raw.seek(0)
+                    f = _ReadWatch(_Spliced(raw.read(head_len), raw, nxt), size - nxt + head_len)
+                    shift = nxt - head_len
+                    reader = _resumed(self.cls(f))
             tail = getattr(reader, "_tail", b"")
             cut = []
             if head_size > size:
@@ -765,9 +842,12 @@ class LogSource:
                 self.truncated = True
                 self.notes.append(f"{path}: truncated: {'; '.join(cut)}; the header lists {head_objects} "
                                   f"objects, {n} CAN frame objects were read")
-            elif head_objects > n:
+            elif head_objects > n and not damaged:
                 self.notes.append(f"{path}: the header lists {head_objects} objects, {n} are CAN frames "
                                   "(python-can skips the other object types)")
+            elif damaged:
+                self.notes.append(f"{path}: the header lists {head_objects} objects; {n} CAN frames were read around "
+                                  f"{damaged} damaged container(s)")
 
 
 def _candump_error_frame(msg, line: str):

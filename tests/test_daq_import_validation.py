@@ -260,6 +260,32 @@ def test_truncated_files_are_reported_and_keep_the_complete_frames(tmp_path, suf
     np.testing.assert_array_equal(a.timestamp_ns[:n], b.timestamp_ns)
 
 
+def test_a_damaged_blf_container_loses_its_frames_only(tmp_path):
+    """16 zeroed bytes inside one compressed container of a BLF file: that container's frames are lost
+    (and said), every later container is read (before: nothing after the damage was kept)."""
+    import re
+
+    msgs = random_messages(40000, seed=12, channel=0, fd=False, remote=False)
+    full = tmp_path / "full.blf"
+    with can.Logger(str(full)) as w:
+        for m in msgs:
+            w.on_message_received(m)
+    data = bytearray(full.read_bytes())
+    starts = [m.start() for m in re.finditer(b"LOBJ", bytes(data))]
+    assert len(starts) >= 5  # python-can writes several compressed containers
+    k = len(starts) // 3
+    at = (starts[k] + starts[k + 1]) // 2
+    data[at:at + 16] = bytes(16)
+    bad = tmp_path / "bad.blf"
+    bad.write_bytes(bytes(data))
+    res = _import(bad, tmp_path / "bad.mcap")
+    assert any("damaged object container" in w and "reading goes on" in w for w in res.warnings)
+    a, b = read_frames(_import(full, tmp_path / "full.mcap").output)["can0"], read_frames(tmp_path / "bad.mcap")["can0"]
+    lost = len(a) - len(b)
+    assert 0 < lost < len(a) / len(starts) * 1.5  # about one container
+    np.testing.assert_array_equal(a.timestamp_ns[-1000:], b.timestamp_ns[-1000:])  # the end is kept
+
+
 def test_non_finite_timestamps_from_a_reader_are_rejected(tmp_path):
     """The frame rules also hold for what a reader hands over (BLF: a huge time offset)."""
     from wheelsoil.daq.frames import checked_batch_from_messages
