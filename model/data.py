@@ -240,6 +240,9 @@ MAX_FORCE = 1e6
 #: Most rows of a table (no ``t_s``): one steady-state test point per row, each fitted as a unit (a 2-million-row
 #: table took 21 s per hypothesis, 1.6 GB and rising, before cross-validation).
 MAX_TABLE_ROWS = 20000
+#: Largest plausible median |Dp| / W of the fitted rows: a wheel in soil pulls at most about its load (Wong 2008
+#: ch. 4: drawbar pull coefficients up to ~0.8), so twice it is a unit error (a load in kN).
+MAX_DP_OVER_W = 2.0
 
 
 def prepare_data(df, *, slip_min: float = 0.1, source: str = "data", n_blocks: int | None = None,
@@ -271,7 +274,9 @@ def prepare_data(df, *, slip_min: float = 0.1, source: str = "data", n_blocks: i
         dependence can be fitted), slip in per cent (most finite slips above 1.5:
         slip is the fraction of Eq. 6) or a sinkage deeper than the wheel's
         diameter (millimetres in the ``sinkage_m`` column), or a table (no ``t_s``) of more than
-        ``MAX_TABLE_ROWS`` used rows (each row is a test point the models are fitted to one by one).
+        ``MAX_TABLE_ROWS`` used rows (each row is a test point the models are fitted to one by one),
+        a median |Dp| / W above ``MAX_DP_OVER_W`` (a load in kN), or a table whose torque is negative
+        in most driving rows (the other sign convention).
     """
     import pandas as pd
 
@@ -390,6 +395,16 @@ def prepare_data(df, *, slip_min: float = 0.1, source: str = "data", n_blocks: i
             i = int(np.flatnonzero(big)[0])
             raise ValueError(f"{source}: {col} = {v[i]:.4g} at row {int(np.flatnonzero(keep)[i])} is not a plausible "
                              f"wheel force or torque (|value| > {MAX_FORCE:.0e} in N or N m)")
+    ratio = float(np.nanmedian(np.abs(channels["drawbar_pull_n"]) / np.abs(w[keep]))) if keep.any() else 0.0
+    if ratio > MAX_DP_OVER_W:  # no wheel in soil pulls twice its load
+        raise ValueError(f"{source}: the drawbar pull is {ratio:.3g} times the load in the median row: not a wheel in "
+                         f"soil (|Dp| / W above {MAX_DP_OVER_W:g}); load_n must be in N (kN given?)")
+    if "torque_nm" in channels and "t_s" not in df.columns:
+        tq = channels["torque_nm"]
+        if np.isfinite(tq).sum() >= 3 and np.nanmedian(tq) < 0:
+            raise ValueError(f"{source}: the torque is negative in most rows with slip > {slip_min:g}: a driven wheel's "
+                             "torque is positive (paper Eq. 8, slip of Eq. 6 positive when driving); flip the sign "
+                             "of torque_nm (and check drawbar_pull_n's)")
     inertia = {}
     for col, reading in (("drawbar_pull_n", "fx_n"), ("torque_nm", "my_nm")):
         if col in channels and reading in df.columns:

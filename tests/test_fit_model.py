@@ -396,3 +396,21 @@ def test_a_table_with_its_header_repeated_mid_file_is_read_and_the_row_named(tmp
     path.write_text(part.to_csv(index=False) + part.to_csv(index=False))
     data = prepare_data(pd.read_csv(path), source=str(path))
     assert data.n == 60 and any("non-numeric" in n for n in data.notes)
+
+
+@pytest.mark.parametrize("change, match", [
+    (lambda df: df.assign(load_n=df["load_n"] / 1000.0), "times the load.*kN"),
+    (lambda df: df.assign(torque_nm=-df["torque_nm"], drawbar_pull_n=-df["drawbar_pull_n"]), "torque is negative"),
+])
+def test_a_table_in_other_units_or_signs_is_refused(change, match):
+    """A table's load in kN (|Dp| / W of 50) or its torque with the other sign convention is an error saying
+    which, not a verdict (before: `unexplained` at "medium")."""
+    import numpy as np
+
+    from wheelsoil.model import DEFAULT_WHEEL, load_terrain
+    from wheelsoil.model.data import prepare_data, synthetic_data
+
+    df = synthetic_data(load_terrain("sand"), DEFAULT_WHEEL, kind="table", n_rows=60, load_n=13000.0, seed=3)
+    assert np.median(df["drawbar_pull_n"] / df["load_n"]) < 2 and prepare_data(df).n > 0
+    with pytest.raises(ValueError, match=match):
+        prepare_data(change(df), source="t.csv")
