@@ -240,8 +240,8 @@ MAX_FORCE = 1e6
 #: Most rows of a table (no ``t_s``): one steady-state test point per row, each fitted as a unit (a 2-million-row
 #: table took 21 s per hypothesis, 1.6 GB and rising, before cross-validation).
 MAX_TABLE_ROWS = 20000
-#: Largest plausible median |Dp| / W of the fitted rows: a wheel in soil pulls at most about its load (Wong 2008
-#: ch. 4: drawbar pull coefficients up to ~0.8), so twice it is a unit error (a load in kN).
+#: Largest plausible median |Dp| / W of the fitted rows: a wheel in soil pulls less than its load (its drawbar pull
+#: coefficient stays below about 1), so twice it is a unit error (a load in kN).
 MAX_DP_OVER_W = 2.0
 
 
