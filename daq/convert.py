@@ -559,18 +559,19 @@ class _ReadWatch:
 
 def _next_blf_container(raw, start: int, size: int) -> int | None:
     """Byte offset of the next BLF log container (an object header ``LOBJ`` of type 10 whose size fits the
-    file) at or after ``start`` in the binary file ``raw``; None if there is none (read in 1 MiB blocks)."""
-    import struct
+    file) at or after ``start`` in the binary file ``raw``; None if there is none (read in 1 MiB blocks).
+    The header layout and the container type are python-can's (``can.io.blf``)."""
+    from can.io.blf import LOG_CONTAINER, OBJ_HEADER_BASE_STRUCT as HEADER
 
     pos, block = start, 1 << 20
     while pos < size:
         raw.seek(pos)
-        buf = raw.read(block + 15)
+        buf = raw.read(block + HEADER.size - 1)
         i = buf.find(b"LOBJ")
         while i >= 0:
-            if i + 16 <= len(buf):
-                _sig, hsize, _ver, osize, otype = struct.unpack_from("<4sHHLL", buf, i)
-                if otype == 10 and hsize >= 16 and 16 < osize <= size - (pos + i):
+            if i + HEADER.size <= len(buf):
+                _sig, hsize, _ver, osize, otype = HEADER.unpack_from(buf, i)
+                if otype == LOG_CONTAINER and hsize >= HEADER.size and HEADER.size < osize <= size - (pos + i):
                     return pos + i
             i = buf.find(b"LOBJ", i + 1)
         pos += block
@@ -602,12 +603,10 @@ class _Spliced:
         self._head, self._raw, self._at = head, raw, start
 
     def read(self, n: int = -1) -> bytes:
-        out = b""
-        if self._head:
-            out, self._head = (self._head, b"") if n is None or n < 0 or n >= len(self._head) else \
-                (self._head[:n], self._head[n:])
-            if n is not None and n >= 0:
-                n -= len(out)
+        k = len(self._head) if n is None or n < 0 else min(n, len(self._head))
+        out, self._head = self._head[:k], self._head[k:]
+        if n is not None and n >= 0:
+            n -= k
             if n == 0:
                 return out
         self._raw.seek(self._at)
@@ -842,12 +841,12 @@ class LogSource:
                 self.truncated = True
                 self.notes.append(f"{path}: truncated: {'; '.join(cut)}; the header lists {head_objects} "
                                   f"objects, {n} CAN frame objects were read")
-            elif head_objects > n and not damaged:
-                self.notes.append(f"{path}: the header lists {head_objects} objects, {n} are CAN frames "
-                                  "(python-can skips the other object types)")
             elif damaged:
                 self.notes.append(f"{path}: the header lists {head_objects} objects; {n} CAN frames were read around "
                                   f"{damaged} damaged container(s)")
+            elif head_objects > n:
+                self.notes.append(f"{path}: the header lists {head_objects} objects, {n} are CAN frames "
+                                  "(python-can skips the other object types)")
 
 
 def _candump_error_frame(msg, line: str):

@@ -953,7 +953,7 @@ class SpeedStiffness(Hypothesis):
 
     Not a cause on our list: it stands for a soil whose response depends on the rate at which the
     wheel loads it (a viscous or wet clay, a saturated soil; the lab's plate is pressed at one slow
-    rate: Wong 2008 ch. 2 on rate effects), which over one run's speeds acts much as a constant
+    rate), which over one run's speeds acts much as a constant
     k_eq mismatch.  A power of the speed is the usual form of a strain-rate dependence.  The
     sibling of :class:`LoadStiffness` (a modulus that depends on the load).  With beta = 0 it is
     the one-value mismatch ``terrain_k_eq`` it contains (``nested``); it counts only when it
@@ -965,7 +965,7 @@ class SpeedStiffness(Hypothesis):
     """
 
     name, effect, title = "speed_k", "unexplained", "a pressure-sinkage modulus that depends on the speed (no listed cause)"
-    source = "generic alternative: rate (speed) dependent k_eq, power law in V (Wong 2008 ch. 2, rate effects)"
+    source = "generic alternative: a rate (speed) dependent k_eq, a power law in V; paper Eqs. (1)-(10) at each speed"
     nested = ("terrain_k_eq", "wong")
 
     def own_params(self, ctx):
