@@ -83,6 +83,17 @@ TERRAIN_KEYS: dict[str, str] = {
 }
 
 
+#: Largest plausible value of a terrain file's key, in the file's unit, and the unit mix-up a
+#: larger value most likely is.  The built-in library (Wong's tables) reaches c = 69 kPa and
+#: K = 0.03 m; the limits are ~7x and ~17x beyond, so a soil is not refused for being firm,
+#: while c in Pa (any soil with c >= 0.5 kPa) and K in mm (any K >= 0.5 mm) are.  A friction
+#: angle in (0, 1) deg is the angle in radians (the library's smallest is 6 deg).
+FIELD_UNIT_LIMITS: dict[str, tuple[float, str]] = {
+    "c_kpa": (500.0, "cohesion in Pa instead of kPa"),
+    "K_m": (0.5, "K in mm instead of m"),
+}
+
+
 #: The soil values of a :class:`Terrain` (SI): what the constructor and ``with_values`` check.
 SOIL_VALUES: tuple[str, ...] = ("c", "phi", "K", "n", "kc", "kphi")
 #: Names of the identifiable terrain parameters that carry a lab prior (SI units in ``prior_sd``).
@@ -410,6 +421,14 @@ def terrain_from_mapping(data: Mapping[str, Any], *, name: str, where: str) -> T
         if isinstance(value, bool) or not isinstance(value, (int, float)):
             raise ValueError(f"{where}: key {key} must be a number [{TERRAIN_KEYS[key]}], got {value!r}")
         values[key] = float(value)
+    for key, (limit, mixup) in FIELD_UNIT_LIMITS.items():
+        if values[key] > limit:
+            raise ValueError(f"{where}: {key} = {values[key]:g} [{TERRAIN_KEYS[key]}] is beyond any published "
+                             f"soil (limit {limit:g}): {mixup}? Terrain files are in field units: "
+                             + ", ".join(f"{k} [{u}]" for k, u in TERRAIN_KEYS.items()))
+    if 0.0 < values["phi_deg"] < 1.0:
+        raise ValueError(f"{where}: phi_deg = {values['phi_deg']:g} deg is the friction angle in radians? "
+                         f"({math.degrees(values['phi_deg']):.1f} deg); terrain files give phi_deg in degrees")
     uncertainty, uncertainty_source = None, ""
     if "uncertainty" in data:
         uncertainty = uncertainty_from_mapping(data["uncertainty"], values, where=f"{where} [uncertainty]")

@@ -295,3 +295,20 @@ def test_with_values_is_replace_checked_the_same_way():
         sand.with_values(K=float("nan"))
     with pytest.raises(TypeError, match="not a soil value"):
         sand.with_values(name="other")
+
+
+@pytest.mark.parametrize("key, value, message", [
+    ("c_kpa", 5000.0, r"loam\.toml: c_kpa = 5000 \[kPa\] is beyond any published soil .*cohesion in Pa"),
+    ("K_m", 20.0, r"loam\.toml: K_m = 20 \[m\] .*K in mm instead of m"),
+    ("phi_deg", 0.35, r"loam\.toml: phi_deg = 0\.35 deg is the friction angle in radians\? \(20\.1 deg\)"),
+])
+def test_a_terrain_file_in_the_wrong_unit_is_refused_naming_the_likely_mixup(tmp_path, key, value, message):
+    path = tmp_path / "loam.toml"
+    path.write_text(GOOD)
+    assert load_terrain(path).c == pytest.approx(5000.0)  # the good file loads
+    line = next(ln for ln in GOOD.splitlines() if ln.startswith(key + " "))
+    path.write_text(GOOD.replace(line, f"{key} = {value}"))
+    with pytest.raises(ValueError, match=message):
+        load_terrain(path)
+    # every built-in terrain is within the limits (they are loaded from the same TOML path)
+    assert len(TERRAINS) > 10
