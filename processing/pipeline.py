@@ -46,7 +46,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from .decode import DecodedMessage, Decoder, decode_batches
+from .decode import DecodedMessage, Decoder, decode_batches, frame_key
 from .filters import DEFAULT_CUTOFF_HZ, MAX_FILL_SAMPLES, filter_to_grid, segments
 from .slip import PHASES, accel_cycles, classify_phases, slip_ratio
 from .timebase import MAX_GRID_ROWS, cycle_loss, find_time_outliers, robust_period, split_joined_parts
@@ -783,6 +783,7 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
             validity[key] = flag
             select[sig[key].message].add(flag)
     decoder = Decoder({bus: [cfg.database(bus)] for bus in cfg.buses}, select=select)
+    screen = _FrameScreen({bus: [m for m in cfg.database(bus).messages if m.name in select] for bus in cfg.buses})
 
     span = [None, None]
     n_frames = [0]
@@ -814,7 +815,7 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
                     buses_seen[b.bus] = buses_seen.get(b.bus, 0) + len(b)
                     if bar is not None:
                         bar.update(len(b))
-                yield b
+                yield screen(b)
         finally:
             if bar is not None:
                 bar.close()
@@ -831,6 +832,7 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
     if span[0] is None:
         raise ValueError(f"{path}: the recording holds no CAN frames" + _foreign_channels(read_report)
                          + "".join(f"; {w}" for w in warns))
+    warns += screen.warnings(found={m.name for m in dec.values() if len(m)})
 
     def get(key_or_ref) -> tuple[np.ndarray, np.ndarray] | None:
         ref = sig[key_or_ref] if isinstance(key_or_ref, str) else key_or_ref
@@ -846,7 +848,8 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
         looked = ", ".join(sorted({f"{sig[k].message} on {sig[k].bus}" for k in refs}))
         seen = ", ".join(f"{b}: {n}" for b, n in buses_seen.items())
         raise ValueError(f"{path}: none of the configured messages found in {n_frames[0]} frames ({seen}) "
-                         f"(looked for {looked}); wrong vehicle configuration or bus names?")
+                         f"(looked for {looked}); wrong vehicle configuration or bus names?"
+                         + "".join(f"; {w}" for w in screen.warnings(found=set())))
 
     # ---- 1b. time base: outlier timestamps set aside, joined parts sorted ------------------
     dec, tb_runs, tb_parts, tb_quality = _clean_time_base(dec, path, warns)
@@ -1209,6 +1212,76 @@ def _distance(speed: np.ndarray, dt: float) -> np.ndarray:
     d = np.concatenate([[0.0], np.cumsum(inc)])
     d[~fin] = np.nan
     return d
+
+
+#: Payload lengths of CAN FD frames (ISO 11898-1:2015): a message of L bytes is sent in the
+#: smallest of them >= L, padded.
+_FD_LENGTHS = (0, 1, 2, 3, 4, 5, 6, 7, 8, 12, 16, 20, 24, 32, 48, 64)
+
+
+class _FrameScreen:
+    """Screens each frame batch before decoding, for frames that look like a used message but
+    are not what its DBC describes (``__call__`` returns the batch without them; ``warnings``
+    says what was found, per bus and message).
+
+    - A frame on a used message's id whose payload is *longer* than the DBC's message (beyond the
+      CAN FD padding of that length) comes from another layout (a CAN FD variant of the device,
+      another device on the id): not decoded, so its samples are lost, not misread.  (A shorter
+      payload decodes to NaN where the signals are missing: lost samples downstream.)
+    - A frame with a used message's id number but the other identifier format (29-bit where the
+      DBC says 11-bit, as foreign loggers that mark every id extended write) is not the message;
+      it is counted so that "no frames of X" can say where they went.
+    """
+
+    def __init__(self, messages: dict[str, list]):
+        self._len: dict[str, dict[int, tuple[str, int]]] = {}
+        self._twin: dict[str, dict[int, str]] = {}
+        for bus, msgs in messages.items():
+            self._len[bus] = {int(frame_key(m.frame_id, m.is_extended_frame)):
+                              (m.name, next(n for n in _FD_LENGTHS if n >= m.length) if m.length <= 64 else m.length)
+                              for m in msgs}
+            self._twin[bus] = {int(frame_key(m.frame_id, not m.is_extended_frame)): m.name for m in msgs}
+        self._msg = {(bus, m.name): m for bus, msgs in messages.items() for m in msgs}
+        self.too_long: dict[tuple[str, str], list[int]] = {}  # (bus, message) -> [frames, longest payload]
+        self.twins: dict[tuple[str, str], int] = {}
+
+    def __call__(self, b):
+        lengths, twins = self._len.get(b.bus), self._twin.get(b.bus)
+        if not lengths or not len(b):
+            return b
+        keys = frame_key(np.asarray(b.arbitration_id), np.asarray(b.is_extended))
+        drop = None
+        for key, (name, longest) in lengths.items():
+            bad = (keys == key) & (np.asarray(b.dlc) > longest)
+            if bad.any():
+                entry = self.too_long.setdefault((b.bus, name), [0, 0])
+                entry[0] += int(bad.sum())
+                entry[1] = max(entry[1], int(np.asarray(b.dlc)[bad].max()))
+                drop = bad if drop is None else drop | bad
+        for key, name in twins.items():
+            n = int(np.count_nonzero(keys == key))
+            if n:
+                self.twins[(b.bus, name)] = self.twins.get((b.bus, name), 0) + n
+        if drop is None:
+            return b
+        keep = ~drop
+        return type(b)(**{f: (v[keep] if isinstance(v, np.ndarray) and v.shape[:1] == keep.shape else v)
+                          for f, v in vars(b).items()})
+
+    def warnings(self, found: set[str]) -> list[str]:
+        """What the screen found; a message with a twin is named only when it is missing (``found``:
+        the messages that decoded at least one frame)."""
+        out = [f"{n} frame(s) of {name} on {bus} have a payload of up to {longest} bytes where its DBC says "
+               f"{self._msg[bus, name].length} (a CAN FD variant of the device, or another device on the id?): "
+               "not decoded, their samples are lost" for (bus, name), (n, longest) in self.too_long.items()]
+        for (bus, name), n in self.twins.items():
+            if name not in found:
+                dbc, logged = ("29", "11") if self._msg[bus, name].is_extended_frame else ("11", "29")
+                out.append(f"no frames of {name} on {bus}, but {n} frame(s) with its id number "
+                           f"0x{self._msg[bus, name].frame_id:X} as a {logged}-bit identifier where the DBC says "
+                           f"{dbc}-bit (a logger that marks every id extended?): not decoded; re-log with the "
+                           "DBC's identifier format or give a DBC with the logged one")
+        return out
 
 
 def _foreign_channels(report) -> str:

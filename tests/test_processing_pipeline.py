@@ -212,6 +212,39 @@ def test_short_wft_frames_are_dropped_not_decoded_into_forces(tmp_path, short_tr
     err = b.signals["drawbar_pull_n"].to_numpy()[ok] - a.signals["drawbar_pull_n"].to_numpy()[ok]
     assert np.sqrt(np.mean(err**2)) < 3 * FORCE_NOISE_N
 
+def test_long_wft_frames_are_not_decoded_and_29_bit_twins_are_named(tmp_path, short_truth):
+    """A frame on a WFT id with a payload longer than its DBC message (12 bytes where the DBC says
+    8: a CAN FD variant with another layout) is not decoded into forces but lost, with a warning;
+    ids logged as 29-bit where the DBC says 11-bit are named when their message is missing."""
+    from wheelsoil.daq.convert import export_recording
+
+    info = write_recording(tmp_path / "r.mcap", short_truth, latency_s=0.1)
+    export_recording(info["path"], tmp_path / "r.log")
+    lines = (tmp_path / "r.log").read_text().splitlines()
+    force = [i for i, ln in enumerate(lines) if " 120#" in ln]
+    long_lines = list(lines)
+    for i in force[::7]:  # every 7th force frame as a 12-byte FD frame of another layout
+        head = long_lines[i].split("#", 1)[0]
+        long_lines[i] = f"{head}##0{'7F' * 12}"
+    (tmp_path / "long.log").write_text("\n".join(long_lines) + "\n")
+    a = process_recording(tmp_path / "r.log")
+    b = process_recording(tmp_path / "long.log")
+    assert any(f"{len(force[::7])} frame(s) of WFT_RL_Force on can0 have a payload of up to 12 bytes where its "
+               "DBC says 8" in w for w in b.warnings)
+    ok = a.signals["valid"].to_numpy() & b.signals["valid"].to_numpy()
+    assert ok.mean() > 0.5
+    err = b.signals["drawbar_pull_n"].to_numpy()[ok] - a.signals["drawbar_pull_n"].to_numpy()[ok]
+    assert np.sqrt(np.mean(err**2)) < 3 * FORCE_NOISE_N
+
+    ext = [ln.replace(" 121#", " 00000121#") for ln in lines]
+    (tmp_path / "ext.log").write_text("\n".join(ext) + "\n")
+    c = process_recording(tmp_path / "ext.log")
+    assert any("no frames of WFT_RL_Moment on can0, but" in w and "0x121 as a 29-bit identifier where the DBC "
+               "says 11-bit" in w for w in c.warnings)
+    assert not any("WFT_RL_Force" in w and "identifier" in w for w in c.warnings)
+    assert c.signals["torque_nm"].isna().all()
+
+
 # --------------------------------------------------------------------------- CLI
 def test_cli_writes_csv_and_parquet(tmp_path, short_truth, capsys):
     from wheelsoil.cli import main
