@@ -38,6 +38,7 @@ numbers.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -49,7 +50,8 @@ import pandas as pd
 from .decode import DecodedMessage, Decoder, decode_batches, frame_key
 from .filters import DEFAULT_CUTOFF_HZ, MAX_FILL_SAMPLES, filter_to_grid, segments
 from .slip import PHASES, accel_cycles, classify_phases, slip_ratio
-from .timebase import MAX_GRID_ROWS, cycle_loss, find_time_outliers, robust_period, split_joined_parts
+from .timebase import (MAX_GRID_ROWS, cycle_loss, find_clock_steps, find_time_outliers, robust_period,
+                       split_joined_parts)
 from .timesync import LatencyEstimate, estimate_latency, estimate_latency_traction, fit_gps_time_mapping
 from .wft import assemble_wft_samples, rotate_to_hub
 
@@ -544,6 +546,73 @@ def _time_gaps(name: str, ts_ns: np.ndarray, nominal_s: float | None = None, nom
 MAX_EXCLUDED_LISTED = 50
 
 
+#: Where each message's frames jump with a host clock step: within this [s] of the GPS-time
+#: frames' jump (transport and buffering delays of one bus against another are far smaller).
+CLOCK_STEP_TOL_S = 0.5
+
+
+def _undo_clock_steps(dec: dict, week_ref, tow_ref, path: Path, warns: list[str]) -> tuple[dict, list[dict]]:
+    """Undo steps of the host clock that the GPS time in the frames shows
+    (:func:`.timebase.find_clock_steps`): every frame logged after a step gets its host time
+    moved by minus the step, so a forward step is neither a gap of lost frames nor a span of
+    empty grid, and a step back is not two logs of the same time.  Each message's frames jump
+    by the same step at one place in file order, next to the GPS-time frames' jump (within
+    ``CLOCK_STEP_TOL_S``); a message that has frames near the step but no such jump, or more
+    than one, means it is not a clock step: reported and left.
+
+    ``dec`` message name -> :class:`DecodedMessage` in file order; ``week_ref``/``tow_ref`` the
+    configured GPS week and time-of-week signals.  Returns ``(dec, steps)``: the messages with
+    corrected times, and one dict per step found (``at_s`` host time since the first GPS frame,
+    ``step_s``, ``undone``).
+    """
+    m = dec.get(tow_ref.message)
+    if m is None or week_ref.message != tow_ref.message or len(m) < 2:
+        return dec, []
+    week = m.signals[week_ref.signal] * week_ref.scale_to_si
+    tow = m.signals[tow_ref.signal] * tow_ref.scale_to_si
+    gps_s = np.where((week > 0) | (tow > 0), week * 604800.0 + tow, np.nan)  # week 0, time 0: no fix
+    tol = int(CLOCK_STEP_TOL_S * 1e9)
+    steps, cuts = [], []
+    for j, step_ns in find_clock_steps(m.timestamp_ns, gps_s):
+        before, after = int(m.timestamp_ns[j]), int(m.timestamp_ns[j + 1])
+        gap_ns = max(after - before - step_ns, 0)  # what GPS time says passed between the two frames
+        at = {}  # message -> index of its first frame after the step
+        odd = []
+        for name, msg in dec.items():
+            ts = msg.timestamp_ns
+            jump = np.flatnonzero((np.abs(np.diff(ts) - step_ns) <= gap_ns + tol)
+                                  & (ts[:-1] >= before - tol) & (ts[:-1] <= before + gap_ns + tol))
+            near = np.count_nonzero(np.abs(ts - before) <= gap_ns + tol) + np.count_nonzero(np.abs(ts - after) <= gap_ns + tol)
+            if jump.size == 1:
+                at[name] = int(jump[0]) + 1
+            elif jump.size or near:
+                odd.append(name)
+            elif step_ns > 0:  # no frame near a forward step: the later frames are those after it
+                at[name] = int(np.searchsorted(ts, after - gap_ns))
+            else:
+                odd.append(name)
+        at_s = (before - int(m.timestamp_ns[0])) * 1e-9
+        steps.append({"at_s": at_s, "step_s": step_ns * 1e-9, "undone": not odd})
+        if odd:
+            warns.append(f"{path}: the host time jumps {_fmt_duration(step_ns * 1e-9)} against GPS time "
+                         f"({tow_ref.message}) {at_s:.3f} s after its first frame, but {', '.join(odd)} do(es) not "
+                         "jump with it: not a clock step, left as it is")
+            continue
+        cuts.append((step_ns, at))
+        warns.append(f"{path}: the host clock stepped {_fmt_duration(step_ns * 1e-9)} {at_s:.3f} s after the first "
+                     f"{tow_ref.message} frame while GPS time ran on (a clock sync during logging): every later "
+                     "timestamp moved by minus the step; no frames were lost in it")
+    if not cuts:
+        return dec, steps
+    out = {}
+    for name, msg in dec.items():
+        ts = msg.timestamp_ns.copy()
+        for step_ns, at in cuts:
+            ts[at[name]:] -= step_ns
+        out[name] = dataclasses.replace(msg, timestamp_ns=ts)
+    return out, steps
+
+
 def _clean_time_base(dec: dict, path: Path, warns: list[str]):
     """Set aside outlier timestamps and sort joined parts of every decoded message.
 
@@ -852,7 +921,9 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
                          + "".join(f"; {w}" for w in screen.warnings(found=set())))
 
     # ---- 1b. time base: outlier timestamps set aside, joined parts sorted ------------------
+    dec, clock_steps = _undo_clock_steps(dec, sig["gnss_time_week"], sig["gnss_time_tow"], path, warns)
     dec, tb_runs, tb_parts, tb_quality = _clean_time_base(dec, path, warns)
+    tb_quality["clock_steps"] = clock_steps
     if not dec:
         raise ValueError(f"{path}: no frame of the configured messages has a usable timestamp")
     t0_ns = min(int(m.timestamp_ns[0]) for m in dec.values())

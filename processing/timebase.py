@@ -16,6 +16,10 @@ reader delivers them, ``wheelsoil.daq.iter_frame_batches``):
   (two logs joined out of order), checks that the parts do not overlap in time
   (then sorting them is safe) and raises ``ValueError`` naming the parts when
   they do (two recordings of the same time: nothing sensible can be made);
+* :func:`find_clock_steps` finds where the host clock stepped forward during logging
+  (NTP or GPS sync after boot, an RTC starting at 1970) from the receiver's GPS time in the
+  frames, which runs on: every message's host times jump there by the same amount, and nothing
+  was lost in the jump;
 * :func:`cycle_loss` counts the frames of a message without a counter against
   its nominal cycle time (DBC ``GenMsgCycleTime`` or ``cycle_time_s`` in
   vehicle.toml): ``lost = round(span / period) + 1 - received`` per part, or
@@ -29,7 +33,7 @@ import math
 
 import numpy as np
 
-__all__ = ["find_time_outliers", "split_joined_parts", "cycle_loss", "robust_period",
+__all__ = ["find_time_outliers", "split_joined_parts", "find_clock_steps", "cycle_loss", "robust_period",
            "OUTLIER_MIN_S", "CLUSTER_GAP_S", "CLUSTER_MAX_SHARE", "BACKWARD_MIN_S", "MAX_GRID_ROWS"]
 
 #: A frame is an outlier when it is this far [s] (at least; or 50 typical frame spacings)
@@ -182,6 +186,56 @@ def split_joined_parts(ts_ns: np.ndarray) -> list[tuple[int, int]]:
         if hi2 > hi1:
             lo1, hi1, a1, b1 = lo2, hi2, a2, b2
     return parts
+
+
+#: A host clock step [s] is at least this large (smaller offsets between host and GPS time
+#: are latency jitter and bursty delivery) ...
+CLOCK_STEP_MIN_S = 1.0
+#: ... and the host-minus-GPS offset stays within this [s] of its median on each side of it,
+#: over ``CLOCK_STEP_FRAMES`` frames (a step, not one frame with a wrong time).
+CLOCK_STEP_SPREAD_S = 0.25
+CLOCK_STEP_FRAMES = 5
+#: ... while GPS time runs on: between the two frames it advances by at least 0 and at most
+#: this [s] (a few lost fixes); logs joined out of order jump in GPS time too.
+CLOCK_STEP_GPS_GAP_S = 10.0
+
+
+def find_clock_steps(host_ns: np.ndarray, gps_s: np.ndarray) -> list[tuple[int, int]]:
+    """Steps of the host clock, found against GPS time carried in the frames.
+
+    ``host_ns`` int64 (n,) host receive times of the GPS-time message in file order;
+    ``gps_s`` float (n,) the GPS time each frame carries [s] (week * 604800 + time of week).
+    The offset host - GPS is constant up to latency jitter; where it changes by at least
+    :data:`CLOCK_STEP_MIN_S` between frames ``j`` and ``j + 1`` and stays there (the
+    ``CLOCK_STEP_FRAMES`` frames on each side within :data:`CLOCK_STEP_SPREAD_S` of their
+    median) while GPS time runs on (it advances by 0 to :data:`CLOCK_STEP_GPS_GAP_S`), the
+    host clock stepped, forward or back.  A real pause of the logger moves both clocks and is
+    no step; nor are logs joined out of order (GPS time jumps with host time).
+
+    Returns ``[(j, step_ns)]``: ``j`` the last frame before each step (file order),
+    ``step_ns`` the step, > 0 forward (the difference of the two medians).  Non-finite GPS
+    times are skipped.  Source: this project's robust-statistics convention (medians, no
+    distribution assumed).
+    """
+    host = np.asarray(host_ns, dtype=np.int64)
+    gps = np.asarray(gps_s, dtype=np.float64)
+    ok = np.flatnonzero(np.isfinite(gps))
+    k = CLOCK_STEP_FRAMES
+    if ok.size < 2 * k:
+        return []
+    g = gps[ok] - gps[ok[0]]
+    off = (host[ok] - host[ok[0]]) * 1e-9 - g
+    dg = np.diff(g)
+    steps = []
+    for i in np.flatnonzero((np.abs(np.diff(off)) >= CLOCK_STEP_MIN_S) & (dg >= 0) & (dg <= CLOCK_STEP_GPS_GAP_S)):
+        before, after = off[max(0, i + 1 - k):i + 1], off[i + 1:i + 1 + k]
+        if before.size < k or after.size < k:
+            continue
+        mb, ma = float(np.median(before)), float(np.median(after))
+        if (abs(ma - mb) >= CLOCK_STEP_MIN_S and np.all(np.abs(before - mb) <= CLOCK_STEP_SPREAD_S)
+                and np.all(np.abs(after - ma) <= CLOCK_STEP_SPREAD_S)):
+            steps.append((int(ok[i]), int(round((ma - mb) * 1e9))))
+    return steps
 
 
 def robust_period(ts_sorted_ns: np.ndarray) -> float:

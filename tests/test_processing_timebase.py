@@ -111,13 +111,51 @@ def test_overlapping_joined_logs_are_refused(tmp_path):
         process_recording(info["path"])
 
 
-def test_grid_size_is_capped_with_a_clear_error(tmp_path):
-    def edit(bus, ts):  # the second half 40 days later: two real parts, a grid of 346 million rows
-        ts[ts.size // 2:] += 40 * DAY
+def _later(shift_ns, buses=("can0", "can1")):
+    def edit(bus, ts):  # the second half of each bus's frames later by shift_ns
+        if bus in buses:
+            ts[ts.size // 2:] += shift_ns
         return ts
-    info = write_recording(tmp_path / "far.mcap", truth_profile(1), ts_edit=edit)
+    return edit
+
+
+def test_grid_size_is_capped_with_a_clear_error(tmp_path):
+    # the second half 40 days later and no GPS time to tell a clock step: a grid of 346 million rows
+    info = write_recording(tmp_path / "far.mcap", truth_profile(1), ts_edit=_later(40 * DAY), no_gnss=True)
     with pytest.raises(ValueError, match=r"far.mcap: the run spans .* grid rows .* split the recording"):
         process_recording(info["path"])
+
+
+@pytest.mark.parametrize("shift_s", [3600.0, 40 * 86400.0, -30.0])
+def test_a_host_clock_step_that_gps_time_shows_is_undone(tmp_path, clean, truth, shift_s):
+    """The host clock stepping forward (NTP sync, an RTC that started at 1970) or back while the
+    receiver's GPS time runs on: before, the step was a gap of millions of lost frames (or, back,
+    two logs of the same time, refused).  Now every later timestamp moves by minus the step and
+    the run is processed as the clean one, with a warning; no frames are counted lost in it."""
+    info = write_recording(tmp_path / "step.mcap", truth, ts_edit=_later(int(shift_s * S)))
+    res = process_recording(info["path"])
+    steps = res.quality["timestamps"]["clock_steps"]
+    assert len(steps) == 1 and steps[0]["undone"] and steps[0]["step_s"] == pytest.approx(shift_s, abs=0.01)
+    assert any("the host clock stepped" in w and "no frames were lost" in w for w in res.warnings)
+    assert len(res.signals) == pytest.approx(len(clean.signals), abs=2)
+    for name in ("WFT_RL_Force", "WFT_RL_Moment", "WFT_RL_Angle"):
+        assert res.lost_frames[name]["lost"] == clean.lost_frames[name]["lost"]
+    n = min(len(res.signals), len(clean.signals))
+    ok = res.signals["valid"].to_numpy()[:n] & clean.signals["valid"].to_numpy()[:n]
+    assert ok.mean() > 0.5
+    err = res.signals["drawbar_pull_n"].to_numpy()[:n][ok] - clean.signals["drawbar_pull_n"].to_numpy()[:n][ok]
+    assert np.sqrt(np.mean(err ** 2)) < 5.0
+
+
+def test_a_gps_time_jump_that_the_other_bus_does_not_share_is_not_undone(tmp_path, truth):
+    """Only the GNSS bus's host times jump (can1): not a clock step (the WFT's frames do not jump
+    with it); it is reported and left as it is, not 'repaired' into something else."""
+    info = write_recording(tmp_path / "one.mcap", truth, ts_edit=_later(3600 * S, buses=("can1",)))
+    res = process_recording(info["path"])
+    steps = res.quality["timestamps"]["clock_steps"]
+    assert steps and not any(st["undone"] for st in steps)
+    assert any("WFT_RL_Force, WFT_RL_Moment, WFT_RL_Angle do(es) not jump with it: not a clock step, left as it "
+               "is" in w for w in res.warnings)
 
 
 def test_find_time_outliers_keeps_real_pauses():
