@@ -1480,6 +1480,15 @@ def _fit_rows(data, signals, run: int):
 FIGURE_FILES = ("overview.png", "dp_vs_slip.png", "residuals.png", "sinkage_vs_slip.png")
 
 
+def foreign_files(out_dir: Path) -> list[str]:
+    """Names of the entries in the existing directory ``out_dir`` that no report writes
+    (``report.json``, ``report.html``, ``FIGURE_FILES``, ``overview*.png``): a report is not
+    written into a directory of other files.  Raises OSError."""
+    own = {"report.json", "report.html", *FIGURE_FILES}
+    return sorted(p.name for p in out_dir.iterdir()
+                  if p.name not in own and not (p.name.startswith("overview") and p.suffix == ".png"))
+
+
 def clear_figures(out_dir: Path) -> None:
     """Create ``out_dir`` and remove the figures an earlier report left there (``FIGURE_FILES``,
     ``overview*.png``), so a report never sits next to another run's plots.  Raises OSError."""

@@ -70,6 +70,7 @@ def register(subparsers) -> None:
     p.add_argument("--no-inertia", action="store_true",
                    help="do not compensate the wheel's inertia (drawbar_pull_n = Fx, torque_nm = My as measured)")
     p.add_argument("--progress", action="store_true", help="show a progress bar while decoding")
+    p.add_argument("--overwrite", action="store_true", help="replace OUTPUT if it exists (default: keep it, refuse)")
     p.set_defaults(func=_cmd_process)
 
 
@@ -82,13 +83,20 @@ def _cmd_process(args) -> int:
     suffix = out.suffix.lower()
     if suffix not in (".csv", ".parquet"):
         raise ValueError(f"output {out}: use a .csv or .parquet file name")
+    if out.exists() and not args.overwrite:  # before the work, not after it
+        raise ValueError(f"output {out} exists (--overwrite replaces it)")
     res = process_recording(args.recording, config=args.config, rate_hz=args.rate,
                             cutoff_hz=args.cutoff, progress=args.progress,
                             wheel_radius_m=args.wheel_radius, inertia=not args.no_inertia)
-    if suffix == ".csv":
-        res.signals.to_csv(out, index=False, float_format="%.6g")
-    else:
-        res.signals.to_parquet(out, index=False)
+    tmp = out.with_name(f".{out.name}.part")  # a table is complete or absent, never half-written
+    try:
+        if suffix == ".csv":
+            res.signals.to_csv(tmp, index=False, float_format="%.6g")
+        else:
+            res.signals.to_parquet(tmp, index=False)
+        tmp.replace(out)
+    finally:
+        tmp.unlink(missing_ok=True)
     print(res.summary())
     print(f"wrote {out}: {len(res.signals)} rows")
     return 0

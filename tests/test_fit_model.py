@@ -350,7 +350,7 @@ def test_a_table_too_long_to_be_test_points_is_refused_before_fitting():
     assert prepare_data(df.iloc[:MAX_TABLE_ROWS], source="ok.csv").kind == "table"
 
 
-def test_a_report_directory_that_is_a_file_is_refused_before_the_fit(tmp_path, monkeypatch):
+def test_a_report_directory_that_is_a_file_or_holds_other_files_is_refused_before_the_fit(tmp_path, monkeypatch):
     """fit -o naming an existing file fails at once, naming it (before: after the whole fit, [Errno 17])."""
     import wheelsoil.pipeline as pl
 
@@ -360,6 +360,14 @@ def test_a_report_directory_that_is_a_file_is_refused_before_the_fit(tmp_path, m
     with pytest.raises(ValueError, match="existing file"):
         pl.run_fit([tmp_path / "run.mcap"], "sand", out)
     assert out.read_text() == "keep me"
+    # a directory of other files (none a report writes) is not written into
+    mine = tmp_path / "mine"
+    mine.mkdir()
+    (mine / "notes.txt").write_text("keep me")
+    with pytest.raises(ValueError, match=r"mine: the report directory \(-o\) holds files no wheelsoil report "
+                       r"writes \(notes.txt\)"):
+        pl.run_fit([tmp_path / "run.mcap"], "sand", mine)
+    assert [p.name for p in mine.iterdir()] == ["notes.txt"]
 
 
 def test_the_same_run_in_two_recordings_is_refused(tmp_path):

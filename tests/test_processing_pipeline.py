@@ -261,6 +261,14 @@ def test_cli_writes_csv_and_parquet(tmp_path, short_truth, capsys):
     assert tuple(pq.columns) == COLUMNS and np.allclose(np.diff(pq["t_s"]), 0.02)
     assert main(["process", str(info["path"]), "-o", str(tmp_path / "s.txt")]) == 2
     assert "csv" in capsys.readouterr().err
+    # an existing table is kept (refused before processing) unless --overwrite
+    (tmp_path / "s.csv").write_text("kept\n")
+    assert main(["process", str(info["path"]), "-o", str(tmp_path / "s.csv")]) == 2
+    assert "s.csv exists (--overwrite replaces it)" in capsys.readouterr().err
+    assert (tmp_path / "s.csv").read_text() == "kept\n"
+    assert main(["process", str(info["path"]), "-o", str(tmp_path / "s.csv"), "--overwrite"]) == 0
+    assert tuple(pd.read_csv(tmp_path / "s.csv").columns) == COLUMNS
+    assert not list(tmp_path.glob(".*.part"))
 
 
 def test_log_file_input_is_imported_first(tmp_path, short_truth):

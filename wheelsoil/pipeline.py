@@ -636,7 +636,7 @@ def run_fit(
     ------
     ValueError
         Unreadable input, unknown terrain or a terrain file missing a key, an output that is an
-        existing file (checked first), or data nothing can be fitted to (then a report saying so is
+        existing file or a directory of files no report writes (checked first), or data nothing can be fitted to (then a report saying so is
         still written).
     OSError
         The output directory cannot be written.
@@ -644,7 +644,7 @@ def run_fit(
     from wheelsoil.model import DEFAULT_WHEEL, Terrain, Wheel, load_terrain
     from wheelsoil.model.diagnosis import diagnose
     from wheelsoil.model.fit import CANDIDATES, prepare_data
-    from wheelsoil.model.report import write_report
+    from wheelsoil.model.report import foreign_files, write_report
 
     inputs = [str(i) for i in inputs]
     if not inputs:
@@ -666,6 +666,11 @@ def run_fit(
     out = Path(out_dir)
     if out.exists() and not out.is_dir():  # before the fit, not after it
         raise ValueError(f"{out}: the report directory (-o) is an existing file; give a directory")
+    foreign = foreign_files(out) if out.is_dir() else []
+    if foreign:
+        raise ValueError(f"{out}: the report directory (-o) holds files no wheelsoil report writes ("
+                         + ", ".join(foreign[:5]) + (", ..." if len(foreign) > 5 else "")
+                         + "); give a new or empty directory (an earlier report there is replaced)")
     if command is None:
         command = _equivalent_command(inputs, terrain, out_dir, wheel_radius=wheel_radius, wheel_width=wheel_width,
                                       slip_min=slip_min, models=models, fit_terrain=fit_terrain, sinkage=sinkage,
@@ -834,7 +839,8 @@ def register(subparsers) -> None:
     p.add_argument("inputs", nargs="+", metavar="INPUT", help="table CSV(s) or recording(s) (.mcap)")
     p.add_argument("--terrain", required=True,
                    help="built-in terrain slug (see 'wheelsoil terrains') or a terrain TOML file")
-    p.add_argument("-o", "--output", required=True, metavar="DIR", help="report directory (created)")
+    p.add_argument("-o", "--output", required=True, metavar="DIR", help="report directory (created; an earlier report there is replaced, a directory of other files "
+                   "refused)")
     p.add_argument("--wheel-radius", type=float, default=None, metavar="R",
                    help="wheel radius [m] (default: the vehicle config for recordings, 0.47; for tables what the "
                    "table or its sidecar JSON states, else 0.47)")
