@@ -340,7 +340,9 @@ def format_info(info) -> str:
                    "not counted in the first/last time and duration")
     if info.time.get("gaps_s"):
         out.append("  gaps of more than an hour inside the run: "
-                   + ", ".join(f"{g / 3600:.2f} h" for g in info.time["gaps_s"]))
+                   + ", ".join(f"{g / 3600:.2f} h" for g in info.time["gaps_s"])
+                   + " (a pause of the logger, or a step of the host clock that 'wheelsoil process' finds with "
+                   "GPS time and undoes: the lost frames below then count frames that were never missing)")
     for bus, n in sorted(info.non_monotonic.items()):
         back = info.time.get("max_backward_s", {}).get(bus, 0.0)
         out.append(f"  NON-MONOTONIC TIME on {bus}: {n} backward step(s), largest {back:.6g} s "

@@ -137,6 +137,12 @@ def test_a_host_clock_step_that_gps_time_shows_is_undone(tmp_path, clean, truth,
     steps = res.quality["timestamps"]["clock_steps"]
     assert len(steps) == 1 and steps[0]["undone"] and steps[0]["step_s"] == pytest.approx(shift_s, abs=0.01)
     assert any("the host clock stepped" in w and "no frames were lost" in w for w in res.warnings)
+    if shift_s >= 3600:  # 'info' reads no GPS time: it lists the gap and says what process makes of it
+        from wheelsoil.daq.cli import format_info
+        from wheelsoil.daq.info import read_recording_info
+
+        assert "a step of the host clock that 'wheelsoil process' finds with GPS time" in format_info(
+            read_recording_info(info["path"]))
     assert len(res.signals) == pytest.approx(len(clean.signals), abs=2)
     for name in ("WFT_RL_Force", "WFT_RL_Moment", "WFT_RL_Angle"):
         assert res.lost_frames[name]["lost"] == clean.lost_frames[name]["lost"]
