@@ -115,8 +115,10 @@ decides with this rule (constants below; none was tuned on a benchmark):
    single lab value (a lab error the data point at), and only when that
    claim holds on new data: its whole (``Hypothesis.whole``, the same re-fit
    or drift of all five values) must not predict any measured channel better
-   out of sample (step 2's paired test: improves it, worsens none;
-   :func:`_whole_better`).  When it does, the soil differs (or changes) in
+   out of sample (step 2's paired test, worsening none, at the level at which
+   step 2 judges a worsening: one-sided p < ``WORSEN_ALPHA``, a gain of at least
+   ``MIN_GAIN``; a named model must be no worse on new data than the model
+   containing it, as it must be no worse than Wong's; :func:`_whole_better`).  When it does, the soil differs (or changes) in
    more than one value or in a way no single value describes (a tyre-soil interface weaker
    than the soil at the higher stresses acts on Dp like a lower phi, and the
    five-value re-fit then predicts the torque better): ``unexplained``, with
@@ -1541,14 +1543,19 @@ def _whole_better(data, fits, f: HypFit) -> list:
 
 
 def _better_than(data, f: HypFit, g: HypFit | None) -> list:
-    """The measured channels that ``g`` predicts better out of sample than ``f`` by step 2's paired
-    test, when it worsens none; [] when it worsens one, or either fit is missing or did not converge."""
+    """The measured channels that ``g``, a model containing the named ``f``, predicts better out of
+    sample by step 2's paired test at the level at which step 2 judges a worsening (one-sided
+    p < ``WORSEN_ALPHA``, a gain of at least ``MIN_GAIN`` noise variances per cell), when ``g``
+    worsens none; [] when it worsens one, or either fit is missing or did not converge.  The level
+    is the lenient one because this test protects a named cause: a named model must be no worse on
+    new data than the model that contains it, as it must be no worse than Wong's (a wrong named
+    cause is the worst outcome)."""
     if g is None or not g.success or g.cv is None or f.cv is None:
         return []
     pr = _paired(data, f, g)
     if any(r["worsens"] for r in pr.values()):
         return []
-    return [c for c, r in pr.items() if r["improves"]]
+    return [c for c, r in pr.items() if r["p_improve"] < WORSEN_ALPHA and r["gain_noise_var"] >= MIN_GAIN]
 
 
 def _stand_in_better(data, fits, f: HypFit) -> tuple[str, list] | None:
