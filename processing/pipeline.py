@@ -582,7 +582,7 @@ def _undo_clock_steps(dec: dict, week_ref, tow_ref, path: Path, warns: list[str]
             ts = msg.timestamp_ns
             jump = np.flatnonzero((np.abs(np.diff(ts) - step_ns) <= gap_ns + tol)
                                   & (ts[:-1] >= before - tol) & (ts[:-1] <= before + gap_ns + tol))
-            near = np.count_nonzero(np.abs(ts - before) <= gap_ns + tol) + np.count_nonzero(np.abs(ts - after) <= gap_ns + tol)
+            near = np.count_nonzero((np.abs(ts - before) <= gap_ns + tol) | (np.abs(ts - after) <= gap_ns + tol))
             if jump.size == 1:
                 at[name] = int(jump[0]) + 1
             elif jump.size or near:
@@ -1305,13 +1305,13 @@ class _FrameScreen:
     """
 
     def __init__(self, messages: dict[str, list]):
-        self._len: dict[str, dict[int, tuple[str, int]]] = {}
-        self._twin: dict[str, dict[int, str]] = {}
-        for bus, msgs in messages.items():
-            self._len[bus] = {int(frame_key(m.frame_id, m.is_extended_frame)):
-                              (m.name, next(n for n in _FD_LENGTHS if n >= m.length) if m.length <= 64 else m.length)
-                              for m in msgs}
-            self._twin[bus] = {int(frame_key(m.frame_id, not m.is_extended_frame)): m.name for m in msgs}
+        def longest(n: int) -> int:  # the message's length, padded to the next CAN FD length
+            return next((k for k in _FD_LENGTHS if k >= n), n)
+
+        self._len = {bus: {int(frame_key(m.frame_id, m.is_extended_frame)): (m.name, longest(m.length)) for m in msgs}
+                     for bus, msgs in messages.items()}
+        self._twin = {bus: {int(frame_key(m.frame_id, not m.is_extended_frame)): m.name for m in msgs}
+                      for bus, msgs in messages.items()}
         self._msg = {(bus, m.name): m for bus, msgs in messages.items() for m in msgs}
         self.too_long: dict[tuple[str, str], list[int]] = {}  # (bus, message) -> [frames, longest payload]
         self.twins: dict[tuple[str, str], int] = {}
@@ -1321,13 +1321,14 @@ class _FrameScreen:
         if not lengths or not len(b):
             return b
         keys = frame_key(np.asarray(b.arbitration_id), np.asarray(b.is_extended))
+        dlc = np.asarray(b.dlc)
         drop = None
         for key, (name, longest) in lengths.items():
-            bad = (keys == key) & (np.asarray(b.dlc) > longest)
+            bad = (keys == key) & (dlc > longest)
             if bad.any():
                 entry = self.too_long.setdefault((b.bus, name), [0, 0])
                 entry[0] += int(bad.sum())
-                entry[1] = max(entry[1], int(np.asarray(b.dlc)[bad].max()))
+                entry[1] = max(entry[1], int(dlc[bad].max()))
                 drop = bad if drop is None else drop | bad
         for key, name in twins.items():
             n = int(np.count_nonzero(keys == key))
@@ -1336,8 +1337,8 @@ class _FrameScreen:
         if drop is None:
             return b
         keep = ~drop
-        return type(b)(**{f: (v[keep] if isinstance(v, np.ndarray) and v.shape[:1] == keep.shape else v)
-                          for f, v in vars(b).items()})
+        return dataclasses.replace(b, **{f.name: getattr(b, f.name)[keep] for f in dataclasses.fields(b)
+                                         if isinstance(getattr(b, f.name), np.ndarray)})
 
     def warnings(self, found: set[str]) -> list[str]:
         """What the screen found; a message with a twin is named only when it is missing (``found``:
