@@ -142,21 +142,27 @@ def test_a_load_dependent_soil_is_not_named_a_terrain_mismatch(tmp_path):
     assert p.get("load_k", 0.0) >= p.get("terrain", 0.0), p
 
 
+def _held_out_seed(tmp_path, seed: int, batch: str, effect: str):
+    """A held-out benchmark seed as ``bench_diagnosis.py --effects BATCH --seed SEED`` runs it
+    (180 s, free-rolling reference front wheels) through ``run_fit``: ``(run, diagnosis)``."""
+    from wheelsoil.simulate import HELD_OUT_BATCHES
+
+    case = draw_case(seed, effects=HELD_OUT_BATCHES[batch])
+    terrain = case.pop("terrain")
+    assert case["effect"] == effect
+    run = simulate_run(terrain, duration_s=180.0, front_wheels="reference", **case)
+    report = run_fit([write_simulation(run, tmp_path / "run.mcap")], terrain, tmp_path / "report")
+    assert not judge(run.info, report)["wrong_cause"], report["diagnosis"]["summary"]
+    return run, report["diagnosis"]
+
+
 def test_a_soil_stiffer_at_the_wheels_loading_rate_is_not_named_a_k_eq_mismatch(tmp_path):
     """Held-out benchmark seed 14470 (``--effects held-out-10``): a clay whose moduli grow with the
     loading rate, kc and kphi x (1 + 0.065 ln(1 + V / 25 mm/s)), was named a k_eq mismatch at
     "medium" (as 22 of 33 such soils in two fresh rounds were): over the run's speeds it is mostly a constant
     k_eq 15-30 % above the lab's.  The speed-dependence stand-in (``speed_k``, k_eq (V/V_ref)^beta)
     contains that mismatch and predicts the torque better out of sample, so no listed cause is named."""
-    from wheelsoil.simulate import HELD_OUT_BATCHES
-
-    case = draw_case(14470, effects=HELD_OUT_BATCHES["held-out-10"])
-    terrain = case.pop("terrain")
-    assert case["effect"] == "rate_sinkage"
-    run = simulate_run(terrain, duration_s=180.0, front_wheels="reference", **case)
-    report = run_fit([write_simulation(run, tmp_path / "run.mcap")], terrain, tmp_path / "report")
-    d = report["diagnosis"]
-    assert not judge(run.info, report)["wrong_cause"], d["summary"]
+    _, d = _held_out_seed(tmp_path, 14470, "held-out-10", "rate_sinkage")
     assert d["effect"] == "unexplained" and "depends on the speed" in d["summary"], d["summary"]
 
 
@@ -166,15 +172,7 @@ def test_a_weaker_tyre_soil_interface_is_not_named_a_phi_mismatch(tmp_path):
     was named at "medium".  The five-value re-fit that contains it predicts a channel better out of
     sample at the level at which a named model's worsening is judged (p < WORSEN_ALPHA), so no listed
     cause is named."""
-    from wheelsoil.simulate import HELD_OUT_BATCHES
-
-    case = draw_case(12481, effects=HELD_OUT_BATCHES["held-out-8"])
-    terrain = case.pop("terrain")
-    assert case["effect"] == "interface"
-    run = simulate_run(terrain, duration_s=180.0, front_wheels="reference", **case)
-    report = run_fit([write_simulation(run, tmp_path / "run.mcap")], terrain, tmp_path / "report")
-    d = report["diagnosis"]
-    assert not judge(run.info, report)["wrong_cause"], d["summary"]
+    _, d = _held_out_seed(tmp_path, 12481, "held-out-8", "interface")
     assert d["effect"] == "unexplained" and "better out of sample than" in d["summary"], d["summary"]
 
 
