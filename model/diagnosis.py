@@ -118,8 +118,8 @@ decides with this rule (constants below; none was tuned on a benchmark):
    out of sample (step 2's paired test, worsening none, at the level at which
    step 2 judges a worsening: one-sided p < ``WORSEN_ALPHA``, a gain of at least
    ``MIN_GAIN``; a named model must be no worse on new data than the model
-   containing it, as it must be no worse than Wong's; :func:`_whole_better`).  When it does, the soil differs (or changes) in
-   more than one value or in a way no single value describes (a tyre-soil interface weaker
+   containing it, as it must be no worse than Wong's; :func:`_whole_better`).
+   When it does, the soil differs (or changes) in more than one value or in a way no single value describes (a tyre-soil interface weaker
    than the soil at the higher stresses acts on Dp like a lower phi, and the
    five-value re-fit then predicts the torque better): ``unexplained``, with
    the one-value re-fit as the candidate.  Likewise a stand-in for causes on no list that

@@ -423,8 +423,8 @@ def terrain_from_mapping(data: Mapping[str, Any], *, name: str, where: str) -> T
         values[key] = float(value)
     for key, (limit, mixup) in FIELD_UNIT_LIMITS.items():
         if values[key] > limit:
-            raise ValueError(f"{where}: {key} = {values[key]:g} [{TERRAIN_KEYS[key]}] is beyond any published "
-                             f"soil (limit {limit:g}): {mixup}? Terrain files are in field units: "
+            raise ValueError(f"{where}: {key} = {values[key]:g} [{TERRAIN_KEYS[key]}] is far beyond the built-in "
+                             f"library's soils (limit {limit:g}): {mixup}? Terrain files are in field units: "
                              + ", ".join(f"{k} [{u}]" for k, u in TERRAIN_KEYS.items()))
     if 0.0 < values["phi_deg"] < 1.0:
         raise ValueError(f"{where}: phi_deg = {values['phi_deg']:g} deg is the friction angle in radians? "

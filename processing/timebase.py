@@ -16,10 +16,10 @@ reader delivers them, ``wheelsoil.daq.iter_frame_batches``):
   (two logs joined out of order), checks that the parts do not overlap in time
   (then sorting them is safe) and raises ``ValueError`` naming the parts when
   they do (two recordings of the same time: nothing sensible can be made);
-* :func:`find_clock_steps` finds where the host clock stepped forward during logging
-  (NTP or GPS sync after boot, an RTC starting at 1970) from the receiver's GPS time in the
-  frames, which runs on: every message's host times jump there by the same amount, and nothing
-  was lost in the jump;
+* :func:`find_clock_steps` finds where the host clock stepped (forward or back) during
+  logging (NTP or GPS sync after boot, an RTC starting at 1970) from the receiver's GPS time in
+  the frames, which runs on: every message's host times jump there by the same amount, and
+  nothing was lost in the jump;
 * :func:`cycle_loss` counts the frames of a message without a counter against
   its nominal cycle time (DBC ``GenMsgCycleTime`` or ``cycle_time_s`` in
   vehicle.toml): ``lost = round(span / period) + 1 - received`` per part, or

@@ -298,7 +298,7 @@ def test_with_values_is_replace_checked_the_same_way():
 
 
 @pytest.mark.parametrize("key, value, message", [
-    ("c_kpa", 5000.0, r"loam\.toml: c_kpa = 5000 \[kPa\] is beyond any published soil .*cohesion in Pa"),
+    ("c_kpa", 5000.0, r"loam\.toml: c_kpa = 5000 \[kPa\] is far beyond the built-in library's soils .*cohesion in Pa"),
     ("K_m", 20.0, r"loam\.toml: K_m = 20 \[m\] .*K in mm instead of m"),
     ("phi_deg", 0.35, r"loam\.toml: phi_deg = 0\.35 deg is the friction angle in radians\? \(20\.1 deg\)"),
 ])

@@ -636,8 +636,8 @@ def run_fit(
     ------
     ValueError
         Unreadable input, unknown terrain or a terrain file missing a key, an output that is an
-        existing file or a directory of files no report writes (checked first), or data nothing can be fitted to (then a report saying so is
-        still written).
+        existing file or a directory of files no report writes (checked first), or data nothing
+        can be fitted to (then a report saying so is still written).
     OSError
         The output directory cannot be written.
     """
@@ -839,8 +839,9 @@ def register(subparsers) -> None:
     p.add_argument("inputs", nargs="+", metavar="INPUT", help="table CSV(s) or recording(s) (.mcap)")
     p.add_argument("--terrain", required=True,
                    help="built-in terrain slug (see 'wheelsoil terrains') or a terrain TOML file")
-    p.add_argument("-o", "--output", required=True, metavar="DIR", help="report directory (created; an earlier report there is replaced, a directory of other files "
-                   "refused)")
+    p.add_argument("-o", "--output", required=True, metavar="DIR",
+                   help="report directory (created; an earlier report there is replaced, a directory of other "
+                   "files refused)")
     p.add_argument("--wheel-radius", type=float, default=None, metavar="R",
                    help="wheel radius [m] (default: the vehicle config for recordings, 0.47; for tables what the "
                    "table or its sidecar JSON states, else 0.47)")
