@@ -1480,21 +1480,25 @@ def _fit_rows(data, signals, run: int):
 FIGURE_FILES = ("overview.png", "dp_vs_slip.png", "residuals.png", "sinkage_vs_slip.png")
 
 
+def _is_figure(path: Path) -> bool:
+    """A figure a report writes: ``FIGURE_FILES`` or ``overview*.png`` (one per run)."""
+    return path.name in FIGURE_FILES or (path.name.startswith("overview") and path.suffix == ".png")
+
+
 def foreign_files(out_dir: Path) -> list[str]:
     """Names of the entries in the existing directory ``out_dir`` that no report writes
-    (``report.json``, ``report.html``, ``FIGURE_FILES``, ``overview*.png``): a report is not
-    written into a directory of other files.  Raises OSError."""
-    own = {"report.json", "report.html", *FIGURE_FILES}
-    return sorted(p.name for p in out_dir.iterdir()
-                  if p.name not in own and not (p.name.startswith("overview") and p.suffix == ".png"))
+    (``report.json``, ``report.html``, its figures): a report is not written into a directory of
+    other files.  Raises OSError."""
+    return sorted(p.name for p in out_dir.iterdir() if p.name not in ("report.json", "report.html") and not _is_figure(p))
 
 
 def clear_figures(out_dir: Path) -> None:
     """Create ``out_dir`` and remove the figures an earlier report left there (``FIGURE_FILES``,
     ``overview*.png``), so a report never sits next to another run's plots.  Raises OSError."""
     out_dir.mkdir(parents=True, exist_ok=True)
-    for f in {*FIGURE_FILES, *(p.name for p in out_dir.glob("overview*.png"))}:
-        (out_dir / f).unlink(missing_ok=True)
+    for p in out_dir.iterdir():
+        if _is_figure(p) and p.is_file():
+            p.unlink(missing_ok=True)
 
 
 def write_report(diag, out_dir, *, terrain, wheel, inputs, time_sync: dict | None = None,

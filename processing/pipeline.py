@@ -1285,11 +1285,6 @@ def _distance(speed: np.ndarray, dt: float) -> np.ndarray:
     return d
 
 
-#: Payload lengths of CAN FD frames (ISO 11898-1:2015): a message of L bytes is sent in the
-#: smallest of them >= L, padded.
-_FD_LENGTHS = (0, 1, 2, 3, 4, 5, 6, 7, 8, 12, 16, 20, 24, 32, 48, 64)
-
-
 class _FrameScreen:
     """Screens each frame batch before decoding, for frames that look like a used message but
     are not what its DBC describes (``__call__`` returns the batch without them; ``warnings``
@@ -1305,8 +1300,10 @@ class _FrameScreen:
     """
 
     def __init__(self, messages: dict[str, list]):
-        def longest(n: int) -> int:  # the message's length, padded to the next CAN FD length
-            return next((k for k in _FD_LENGTHS if k >= n), n)
+        from can.util import dlc2len, len2dlc
+
+        def longest(n: int) -> int:  # the message's length, padded to the next CAN FD length (ISO 11898-1)
+            return max(dlc2len(len2dlc(n)), n)
 
         self._len = {bus: {int(frame_key(m.frame_id, m.is_extended_frame)): (m.name, longest(m.length)) for m in msgs}
                      for bus, msgs in messages.items()}
