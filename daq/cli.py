@@ -321,6 +321,8 @@ def _cmd_info(args) -> int:
 def format_info(info) -> str:
     """Human-readable text of a :class:`~wheelsoil.daq.info.RecordingInfo` (control
     characters and terminal escape sequences from the file are shown escaped, never raw)."""
+    from .stats import LONG_GAP_NS
+
     d = info.to_dict()
     if info.complete:
         state = "complete"
@@ -342,7 +344,7 @@ def format_info(info) -> str:
         out.append("  gaps of more than an hour inside the run: "
                    + ", ".join(f"{g / 3600:.2f} h" for g in info.time["gaps_s"])
                    + " (a pause of the logger, or a step of the host clock that 'wheelsoil process' finds with "
-                   "GPS time and undoes: the lost frames below then count frames that were never missing)")
+                   "GPS time and undoes; the lost frames below do not count the frames across them)")
     for bus, n in sorted(info.non_monotonic.items()):
         back = info.time.get("max_backward_s", {}).get(bus, 0.0)
         out.append(f"  NON-MONOTONIC TIME on {bus}: {n} backward step(s), largest {back:.6g} s "
@@ -387,6 +389,10 @@ def format_info(info) -> str:
     if s.lost_frames_estimated:
         out.append(f"  frames missing by nominal cycle time (estimate): {s.total('lost_frames_estimated')} ("
                    + ", ".join(f"{k} {v}" for k, v in sorted(s.lost_frames_estimated.items())) + ")")
+    if s.long_gaps:
+        out.append(f"  not counted as lost: {s.total('long_gaps')} interval(s) longer than {LONG_GAP_NS / 3.6e12:g} h "
+                   "between frames of one message (" + ", ".join(f"{k} {v}" for k, v in sorted(s.long_gaps.items()))
+                   + "): a pause of the logger or a step of the host clock")
     out.append(f"  unknown-id frames: {s.total('unknown_ids')}, DLC mismatches: {s.total('dlc_mismatch')}, "
                f"error frames: {s.total('error_frames')}")
     if info.damage:

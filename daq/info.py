@@ -131,7 +131,7 @@ class RecordingInfo:
                 "rx_dropped": self.rx_dropped().get(bus),
             } for bus in self.buses},
             "lost_frames": s.lost_frames, "counter_duplicates": s.counter_duplicates,
-            "lost_frames_estimated": s.lost_frames_estimated,
+            "lost_frames_estimated": s.lost_frames_estimated, "long_gaps": s.long_gaps,
             "logger_status": self.status,
         }
 

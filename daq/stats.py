@@ -33,6 +33,10 @@ class FrameStats:
             (DBC ``GenMsgCycleTime``), for messages without a counter: sum over gaps
             dt > 1.5 cycles of round(dt / cycle) - 1 (an estimate: host receive times jitter).
         counter_duplicates: DBC message name -> frames repeating the previous counter value.
+        long_gaps: DBC message name -> intervals between its frames longer than
+            :data:`LONG_GAP_NS` (a pause of the logger, or a step of the host clock), which
+            ``lost_frames`` and ``lost_frames_estimated`` do not count: no frame a bus dropped
+            makes an hour-long hole, and a clock step drops none.
         names: bus -> {(id, is_extended): DBC message name}.
     """
 
@@ -48,6 +52,7 @@ class FrameStats:
     counter_duplicates: dict = field(default_factory=dict)
     names: dict = field(default_factory=dict)
     lost_frames_estimated: dict = field(default_factory=dict)
+    long_gaps: dict = field(default_factory=dict)
 
     def total(self, what: str) -> int:
         """Sum over buses/messages of one counter (e.g. ``"lost_frames"``, ``"unknown_ids"``)."""
@@ -156,6 +161,10 @@ class StatsAccumulator:
             else:
                 k_steps = step
             lost = np.where(step == 0, 0, k_steps - 1)
+            long = dt > LONG_GAP_NS
+            if long.any():
+                lost = np.where(long, 0, lost)
+                s.long_gaps[name] = s.long_gaps.get(name, 0) + int(long.sum())
             s.lost_frames[name] = s.lost_frames.get(name, 0) + int(lost.sum())
             s.counter_duplicates[name] = s.counter_duplicates.get(name, 0) + int((step == 0).sum())
             s.lost_frames.setdefault(name, 0)
@@ -182,7 +191,10 @@ class StatsAccumulator:
             if prev is not None:
                 t = np.concatenate(([prev], t))
             dt = np.diff(t).astype(np.float64)
-            big = dt > 1.5 * cycle
+            long = dt > LONG_GAP_NS
+            if long.any():
+                s.long_gaps[name] = s.long_gaps.get(name, 0) + int(long.sum())
+            big = (dt > 1.5 * cycle) & ~long
             n = int((np.round(dt[big] / cycle) - 1).sum()) if big.any() else 0
             s.lost_frames_estimated[name] = s.lost_frames_estimated.get(name, 0) + n
             self._last_t[(bus, k)] = int(t[-1])
@@ -207,12 +219,16 @@ def frame_stats(batches, config=None) -> FrameStats:
     return acc.stats
 
 
+#: An interval between two frames of one message longer than this [ns] is a pause of the logger or a
+#: step of the host clock, not frames lost on the bus (:attr:`FrameStats.long_gaps`); the same hour
+#: that separates a recording's time clusters (:data:`OUTLIER_GAP_NS`).
+LONG_GAP_NS = 3600 * 10**9
 #: A frame further than this from the median of its batch is an outlier [ns] (a batch
 #: spans <= 0.5 s from the logger, <= 2000 consecutive frames of one bus from an import).
 OUTLIER_IN_BATCH_NS = 60 * 10**9
 #: Batches whose times are more than this apart belong to separate clusters; the
 #: cluster holding most frames is the run, the others are outliers [ns].
-OUTLIER_GAP_NS = 3600 * 10**9
+OUTLIER_GAP_NS = LONG_GAP_NS
 #: ... and when that cluster holds less than this share of all frames.
 OUTLIER_SHARE = 0.01
 

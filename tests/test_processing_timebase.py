@@ -141,8 +141,13 @@ def test_a_host_clock_step_that_gps_time_shows_is_undone(tmp_path, clean, truth,
         from wheelsoil.daq.cli import format_info
         from wheelsoil.daq.info import read_recording_info
 
-        assert "a step of the host clock that 'wheelsoil process' finds with GPS time" in format_info(
-            read_recording_info(info["path"]))
+        rinfo = read_recording_info(info["path"])
+        assert "a step of the host clock that 'wheelsoil process' finds with GPS time" in format_info(rinfo)
+        # ... and counts no frame lost across it: each message has one interval > 1 h, not counted
+        clean_info = read_recording_info(write_recording(tmp_path / "clean.mcap", truth)["path"])
+        assert rinfo.stats.lost_frames == clean_info.stats.lost_frames
+        assert rinfo.stats.lost_frames_estimated == clean_info.stats.lost_frames_estimated
+        assert rinfo.stats.long_gaps and set(rinfo.stats.long_gaps.values()) == {1}
     assert len(res.signals) == pytest.approx(len(clean.signals), abs=2)
     for name in ("WFT_RL_Force", "WFT_RL_Moment", "WFT_RL_Angle"):
         assert res.lost_frames[name]["lost"] == clean.lost_frames[name]["lost"]
