@@ -284,10 +284,13 @@ def prepare_data(df, *, slip_min: float = 0.1, source: str = "data", n_blocks: i
         raise ValueError(f"{source}: expected a pandas DataFrame, got {type(df).__name__}")
     missing = [c for c in ("slip", "load_n", "drawbar_pull_n") if c not in df.columns]
     if missing:
+        has = [str(c) for c in df.columns if c != "run"]  # "run": the input's index, added by the caller
+        case = [f"{c!r} for {m!r}" for m in missing for c in has if c.strip().lower() == m]
         raise ValueError(
             f"{source}: missing column(s) {', '.join(missing)}; a table needs slip, load_n, "
             "drawbar_pull_n (optional torque_nm, sinkage_m) in SI units (slip a fraction); it has "
-            + (", ".join(map(str, df.columns[:20])) + (" ..." if len(df.columns) > 20 else "") or "no columns")
+            + (", ".join(has[:20]) + (" ..." if len(has) > 20 else "") or "no columns")
+            + (f" (names are case-sensitive: {', '.join(case)}?)" if case else "")
         )
     n_input = len(df)
     if n_input == 0:

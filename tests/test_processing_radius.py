@@ -159,6 +159,10 @@ def test_a_table_names_the_columns_it_does_not_read(tmp_path):
     assert any(n.startswith("mm.csv: column(s) not read: sinkage_mm") for n in info["notes"])
     with pytest.raises(ValueError, match=r"missing column\(s\) load_n.*it has slip, load_kn"):
         prepare_data(df.rename(columns={"load_n": "load_kn"}), source="mm.csv")
+    # a column named in another case is pointed at; the caller's own "run" column is not listed
+    with pytest.raises(ValueError, match=r"missing column\(s\) slip;.*it has Slip, load_n, drawbar_pull_n, "
+                                         r"sinkage_mm \(names are case-sensitive: 'Slip' for 'slip'\?\)"):
+        prepare_data(df.rename(columns={"slip": "Slip"}).assign(run=0), source="mm.csv")
 
 
 def test_fit_refuses_inputs_it_cannot_fit_as_given(tmp_path):
