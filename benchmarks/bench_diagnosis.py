@@ -400,7 +400,9 @@ def main(argv=None) -> int:
                     "(a resistance growing with the forward speed, a soil stiffer at the loading rate, a lagging "
                     "torque channel); 'held-out-11' an eleventh (a soil value drifting in shapes no drifting form "
                     "follows: a saturating compaction, a gradual patch, alternating ground; terrain_drift or "
-                    "unexplained acceptable)")
+                    "unexplained acceptable); 'held-out-12' a twelfth (the wheel in the front wheel's rut, a tyre "
+                    "losing pressure along the run, the soil's moisture changing k_eq, c and phi together "
+                    "along the run: terrain_drift or unexplained acceptable)")
     ap.add_argument("--json", default=None, metavar="FILE", help="also write the rows as JSON")
     ap.add_argument("--keep", default=None, metavar="DIR", help="keep recordings, truths and reports here")
     args = ap.parse_args(argv)

@@ -48,13 +48,15 @@ import numpy as np
 
 from wheelsoil.sim.effects import (ACCEPTABLE, ALL_HELD_OUT, EFFECTS, HELD_OUT, HELD_OUT_2, HELD_OUT_3,
                                    HELD_OUT_4, HELD_OUT_5, HELD_OUT_6, HELD_OUT_7, HELD_OUT_8, HELD_OUT_9,
-                                   HELD_OUT_10, HELD_OUT_11, HELD_OUT_BATCHES, IN_FAMILY, OUT_OF_FAMILY, PARAM_NAMES, SENSOR_EFFECTS, VERDICTS, TruthModel, draw_effect, family_of)
+                                   HELD_OUT_10, HELD_OUT_11, HELD_OUT_12, HELD_OUT_BATCHES, IN_FAMILY, OUT_OF_FAMILY,
+                                   PARAM_NAMES, SENSOR_EFFECTS, VERDICTS, TruthModel, draw_effect, family_of)
 from wheelsoil.sim.physics import bandlimited as _bandlimited
 from wheelsoil.sim.terra import soil_dict
 from wheelsoil.sim.vehicle import PROCEDURES
 
 __all__ = ["EFFECTS", "IN_FAMILY", "OUT_OF_FAMILY", "HELD_OUT", "HELD_OUT_2", "HELD_OUT_3", "HELD_OUT_4",
            "HELD_OUT_5", "HELD_OUT_6", "HELD_OUT_7", "HELD_OUT_8", "HELD_OUT_9", "HELD_OUT_10", "HELD_OUT_11",
+           "HELD_OUT_12",
            "HELD_OUT_BATCHES", "ALL_HELD_OUT", "ACCEPTABLE", "VERDICTS",
            "SimulatedRun", "simulate_run", "write_simulation", "write_truth", "write_vehicle_config", "judge",
            "draw_case", "pack_signals", "vehicle_config_for", "SIMULATOR"]
@@ -1046,6 +1048,10 @@ effects (--effect; parameters with --param NAME=VALUE, the others drawn at --siz
     saturating_drift     a soil value drifting fast, then slowly (1 - exp(-x/length)) -> terrain_drift or unexplained
     gradual_patch        another patch of ground over a transition of width x the run -> terrain_drift or unexplained
     patchy_ground        a soil value alternating along the track, cycles periods -> terrain_drift or unexplained
+    rut                  the wheel in the rut of a front wheel at load_ratio x the static load, the soil
+                         below reloading R x stiffer
+    tyre_pressure_loss   the tyre's deflection growing along the run to r (1 + kappa W/W_static)
+    moisture             k_eq, c and phi falling (rising) together along the run -> terrain_drift or unexplained
 
 The recording holds only what a logger would record plus a provenance record
 (kind "simulated", the seed): the effect and its parameters go to --truth FILE
@@ -1133,7 +1139,8 @@ def _parse_params(items) -> dict[str, float]:
 #: Parameters each effect takes on the command line: the drawn ones, but a terrain change as its soil values.
 SOIL_VALUES = ("k_eq", "n", "c", "phi", "K")
 CLI_PARAMS = {**PARAM_NAMES, "terrain_mismatch": SOIL_VALUES, "terrain_drift": SOIL_VALUES,
-              **{e: SOIL_VALUES + tuple(k for k in PARAM_NAMES[e] if k != "changes") for e in HELD_OUT_11}}
+              **{e: SOIL_VALUES + tuple(k for k in PARAM_NAMES[e] if k != "changes") for e in HELD_OUT_11},
+              "moisture": SOIL_VALUES}
 
 OUTPUT_SUFFIXES = (".mcap", ".log", ".asc", ".blf", ".trc")
 
@@ -1143,7 +1150,7 @@ def _cli_params(effect: str, given: dict[str, float]) -> dict[str, Any]:
     bad = set(given) - set(allowed)
     if bad:
         raise ValueError(f"effect {effect!r} has no parameter(s) {sorted(bad)}; known: {list(allowed) or 'none'}")
-    if effect in ("terrain_mismatch", "terrain_drift") + HELD_OUT_11 and set(given) & set(SOIL_VALUES):
+    if effect in ("terrain_mismatch", "terrain_drift", "moisture") + HELD_OUT_11 and set(given) & set(SOIL_VALUES):
         # k_eq, c, K as factors on the lab value; n, phi as deltas (phi in degrees); a drift's shape as given
         changes, shape = {}, {k: v for k, v in given.items() if k not in SOIL_VALUES}
         for k, v in given.items():

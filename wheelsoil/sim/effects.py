@@ -183,6 +183,25 @@ fraction in [-1/2, 1/2] at the distance fraction x:
   ``patchy_ground``    two kinds of ground alternating along the track: g = sin(2 pi (k x + p)) / 2,
                        k 1-2 periods over the run, p a random phase.
 
+Held out, twelfth batch (``--effects held-out-12``; added with the rule of ``354913b`` unchanged, scored
+once)
+  ``rut``              the instrumented left-rear wheel runs in the rut of the left-front wheel, which
+                       sank its Eq. (10) sinkage z_f at ``load_ratio`` 0.15-1 x the static load (the
+                       rut's depth sets the effect's size): the soil below the rut's bottom reloads
+                       on a line R = 3-20 times stiffer than the virgin curve's secant up to the
+                       front wheel's peak pressure, then follows the virgin curve; the
+                       sinkage from the vertical balance (``wheelsoil.sim.terra``, Wong ch. 2,
+                       repetitive loading).  The vehicle's dynamics see the same forces on all wheels.
+  ``tyre_pressure_loss`` a tyre losing pressure along the run (a slow puncture): its deflection grows
+                       from none to Wong's equivalent rigid wheel r (1 + kappa W / W_static) at the
+                       end, kappa 0.04-0.4 (``tyre_deflection`` growing with the distance fraction x).
+  ``moisture``         the soil wetter (or drier) along the run (rain, a wetter stretch, drying in the
+                       sun): k_eq, c and phi fall (rise) together, linear in the distance, each by half
+                       of ``terrain_drift``'s range at the size (the lab values mid-run; three values
+                       at once leave the wheel less margin): a terrain drift in three values, which no
+                       one-value drifting form follows, so ``terrain_drift`` or ``unexplained`` are
+                       acceptable.
+
 Sensor effects (``fx_gain``, ``my_gain``, ``load_gain``, ``angle_offset``, ``zero_drift``) change only
 what the transducer reports; the soil forces (and the vehicle) are Wong's.
 """
@@ -199,6 +218,7 @@ from .terra import sinkage_eq10, wheel_forces
 
 __all__ = ["EFFECTS", "IN_FAMILY", "OUT_OF_FAMILY", "HELD_OUT", "HELD_OUT_2", "HELD_OUT_3", "HELD_OUT_4",
            "HELD_OUT_5", "HELD_OUT_6", "HELD_OUT_7", "HELD_OUT_8", "HELD_OUT_9", "HELD_OUT_10", "HELD_OUT_11",
+           "HELD_OUT_12",
            "HELD_OUT_BATCHES", "ALONG_RUN",
            "ALL_HELD_OUT", "ACCEPTABLE", "VERDICTS", "SENSOR_EFFECTS", "draw_effect", "TruthModel", "family_of"]
 
@@ -231,17 +251,21 @@ HELD_OUT_9 = ("fx_saturation", "tyre_compliance", "slip_sinkage_lag")
 HELD_OUT_10 = ("speed_resistance", "rate_sinkage", "my_lag")
 #: the eleventh, scored once with the rule of 9cc7f4a (a soil drifting in shapes no drifting form follows)
 HELD_OUT_11 = ("saturating_drift", "gradual_patch", "patchy_ground")
+#: the twelfth, scored once with the rule of 354913b (the wheel in the front wheel's rut, a tyre losing
+#: pressure along the run, the soil's moisture changing along the run in three values at once)
+HELD_OUT_12 = ("rut", "tyre_pressure_loss", "moisture")
 #: the batches by their ``bench_diagnosis.py --effects`` name, and all held-out effects
 HELD_OUT_BATCHES = {"held-out": HELD_OUT, "held-out-2": HELD_OUT_2, "held-out-3": HELD_OUT_3,
                     "held-out-4": HELD_OUT_4, "held-out-5": HELD_OUT_5, "held-out-6": HELD_OUT_6,
                     "held-out-7": HELD_OUT_7, "held-out-8": HELD_OUT_8, "held-out-9": HELD_OUT_9,
-                    "held-out-10": HELD_OUT_10, "held-out-11": HELD_OUT_11}
+                    "held-out-10": HELD_OUT_10, "held-out-11": HELD_OUT_11,
+                    "held-out-12": HELD_OUT_12}
 ALL_HELD_OUT = tuple(e for batch in HELD_OUT_BATCHES.values() for e in batch)
 SENSOR_EFFECTS = ("fx_gain", "my_gain", "load_gain", "angle_offset", "zero_drift", "gnss_gain", "inertia_error",
                   "fz_crosstalk", "load_radius", "wheel_latency", "fx_gain_drift", "load_lag",
                   "fz_zero_drift", "my_crosstalk", "fx_saturation", "my_lag")
 #: effects whose truth changes along the run (the simulator tabulates their forces against distance too)
-ALONG_RUN = ("terrain_drift", "mud_buildup") + HELD_OUT_11
+ALONG_RUN = ("terrain_drift", "mud_buildup", "tyre_pressure_loss", "moisture") + HELD_OUT_11
 
 #: ``rate_shear``'s reference slip: the strength is the lab's at slips well below it
 RATE_SLIP_REF = 0.02
@@ -301,6 +325,9 @@ ACCEPTABLE: dict[str, tuple[str, ...]] = {
     "rate_sinkage": ("unexplained",),
     "my_lag": ("unexplained",),
     **{e: ("terrain_drift", "unexplained") for e in HELD_OUT_11},
+    "rut": ("unexplained",),
+    "tyre_pressure_loss": ("unexplained",),
+    "moisture": ("terrain_drift", "unexplained"),
 }
 
 #: Terrain parameters a mismatch / drift may change, with the relative (or absolute) range
@@ -355,6 +382,7 @@ _ONE_PARAM: dict[str, tuple[str, float, float, bool, str]] = {
     "speed_resistance": ("e", 0.003, 0.05, True, "plain"),
     "rate_sinkage": ("e", 0.005, 0.10, True, "plain"),
     "my_lag": ("tau_s", 0.03, 0.5, True, "plain"),
+    "tyre_pressure_loss": ("kappa", 0.04, 0.40, True, "plain"),
 }
 
 
@@ -364,7 +392,8 @@ PARAM_NAMES: dict[str, tuple[str, ...]] = {
     "terrain_mismatch": ("changes",), "terrain_drift": ("changes", "mode", "change_at"),
     "stress_distribution": ("a1", "a2"), "vertical_balance": (), "slip_sinkage_lag": ("H", "tau_s"),
     "saturating_drift": ("changes", "length"), "gradual_patch": ("changes", "change_at", "width"),
-    "patchy_ground": ("changes", "cycles", "phase"),
+    "patchy_ground": ("changes", "cycles", "phase"), "moisture": ("changes",),
+    "rut": ("load_ratio", "R"),
     **{e: (v[0],) for e, v in _ONE_PARAM.items()},
 }
 
@@ -443,6 +472,13 @@ def draw_effect(effect: str, rng: np.random.Generator, *, size: float | None = N
         p = {"a1": _mag(u, 0.08, 0.45), "a2": float(rng.uniform(0.0, 0.3))}
     elif effect == "vertical_balance":
         p = {}
+    elif effect == "rut":  # the rut's depth grows with the front wheel's load; its reloading stiffness drawn
+        p = {"load_ratio": _mag(u, 0.15, 1.0), "R": float(rng.uniform(3.0, 20.0))}
+    elif effect == "moisture":  # k_eq, c and phi falling (wetter) or rising (drier) together along the run
+        m = {k: 0.5 * _mag(u, *_MISMATCH[k][1:]) for k in ("k_eq", "c", "phi")}
+        p = {"changes": {"k_eq": {"kind": "factor", "value": (1.0 + m["k_eq"]) ** sign},
+                         "c": {"kind": "factor", "value": (1.0 + m["c"]) ** sign},
+                         "phi": {"kind": "delta_deg", "value": sign * m["phi"]}}}
     elif effect == "slip_sinkage_lag":
         p = {"H": _mag(u, 0.01, 0.10, log=True), "tau_s": float(rng.uniform(0.3, 2.0))}
     else:  # one parameter: _ONE_PARAM's range at size u
@@ -463,7 +499,7 @@ def _drift_fraction(effect: str, p: Mapping[str, Any], x: np.ndarray) -> np.ndar
         return 0.5 * np.tanh((x - float(p["change_at"])) / float(p["width"]))
     if effect == "patchy_ground":
         return 0.5 * np.sin(2.0 * math.pi * (float(p["cycles"]) * x + float(p["phase"])))
-    if p["mode"] == "compaction":  # terrain_drift: linear in distance, centred: the lab value mid-run
+    if effect == "moisture" or p["mode"] == "compaction":  # linear in distance, centred: the lab value mid-run
         return x - 0.5
     return 0.5 * np.tanh((x - float(p["change_at"])) / 0.02)  # another patch (2 % of the run transition)
 
@@ -529,7 +565,7 @@ class TruthModel:
         if self.effect == "terrain_mismatch":
             for name, ch in self.params["changes"].items():
                 soil = _apply_change(soil, self.width_m, name, ch["kind"], ch["value"])
-        elif self.effect == "terrain_drift" or self.effect in HELD_OUT_11:
+        elif self.effect in ("terrain_drift", "moisture") or self.effect in HELD_OUT_11:
             g = _drift_fraction(self.effect, self.params, np.asarray(frac, float))
             for name, ch in self.params["changes"].items():
                 soil = _apply_change(soil, self.width_m, name, ch["kind"], ch["value"], frac=2.0 * g)
@@ -594,6 +630,10 @@ class TruthModel:
             g = 1.0 + p["e"] * (np.asarray(frac, float) if e == "mud_buildup" else 1.0)
             r = self.radius_m * g
             s = np.maximum(1.0 - (1.0 - s) / g, 0.0)  # a smaller wheel at the lowest slips: rolling, s = 0
+        elif e == "rut":  # the front wheel's rut, of its Eq. (10) sinkage at the static load on this soil
+            kw["rut"] = (sinkage_eq10(soil, r, b, p["load_ratio"] * self.static_load_n), p["R"])
+        elif e == "tyre_pressure_loss":  # the tyre deflects more along the run: a larger equivalent wheel
+            r = self.radius_m * (1.0 + p["kappa"] * np.asarray(frac, float) * w / self.static_load_n)
         elif e == "hard_layer":
             kw["z_cap"] = p["depth_ratio"] * float(self.static_sinkage(self.static_load_n))
         elif e == "width_error":

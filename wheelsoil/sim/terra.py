@@ -46,7 +46,14 @@ interface, friction f tan phi, is weaker than the soil above the normal stress s
 on a frictional soil; Wong, ch. 2, on the tyre-soil interface): the strength c + sigma tan phi -
 (1 - f) tan phi [softplus(sigma - sigma_x) - softplus(-sigma_x)], softplus(x) = k ln(1 + e^(x/k)),
 k = sigma_x / 4: the soil's line below sigma_x, the interface's c + (1 - f) tan phi sigma_x + f tan phi
-sigma above it, joined smoothly over about sigma_x / 4.
+sigma above it, joined smoothly over about sigma_x / 4. ``rut`` ``(z_f, R)``: the wheel runs in the rut of
+a wheel ahead (the front wheel of its side) that sank z_f into the soil at its peak pressure sigma_f =
+(kc/b + kphi) z_f^n (Eq. 2); the rut rebounded by z_r = z_f / R when it passed, so its bottom lies z_f - z_r
+below the surface.  Below the bottom the soil reloads on the stiff line sigma = k_u d, k_u = sigma_f /
+z_r, up to sigma_f at depth z_r, and then follows the virgin curve (kc/b + kphi) (d + z_f - z_r)^n
+(Wong, *Theory of Ground Vehicles*, 4th ed., ch. 2, response to repetitive loading: unloading and
+reloading follow a line far stiffer than the virgin curve).  The contact and the shear displacement
+(Eq. 5) start at the rut's bottom; the sinkage below it comes from the vertical balance (Eq. 7 = W).
 
 Quadrature. ``scipy.integrate.quad_vec`` (adaptive Gauss-Kronrod 21, all
 samples and the five integrals of one call in one vector) over a normalised
@@ -118,14 +125,16 @@ def _shear_factor(j, K, hump):
 
 
 def _integrals(soil, r, b, z, s, n, theta_m_frac, epsrel, exit_frac=0.0, hump=None, tau_scale=1.0,
-               slip_angle=0.0, grouser=0.0, envelope=None, k_pressure=None, depth_power=None, interface=None):
+               slip_angle=0.0, grouser=0.0, envelope=None, k_pressure=None, depth_power=None, interface=None,
+               rut=None):
     """The five integrals of Eqs. (7)-(9) for each sample: returns W, Dp, T, theta1 (all (N,)).
 
     ``exit_frac``: the soil's rebound behind the wheel, exit angle theta2 = exit_frac theta1 (the
     rear region runs from theta_m to -theta2); ``hump``: see :func:`_shear_factor`; ``tau_scale``
     (N,) or scalar multiplies the shear strength; ``slip_angle`` [rad], ``grouser`` (lug height h
     [m]), ``envelope`` ``(sigma0 [Pa], beta)``, ``k_pressure`` ``(sigma0 [Pa], gamma)``,
-    ``depth_power`` ``(d0 [m], a)`` and ``interface`` ``(sigma_x [Pa], f)``: see the module doc."""
+    ``depth_power`` ``(d0 [m], a)``, ``interface`` ``(sigma_x [Pa], f)`` and ``rut`` ``(z_f (N,) [m], R)``
+    (``z`` is then the sinkage below the rut's bottom): see the module doc."""
     from scipy.integrate import quad_vec
 
     size = len(z)
@@ -140,21 +149,40 @@ def _integrals(soil, r, b, z, s, n, theta_m_frac, epsrel, exit_frac=0.0, hump=No
     th2 = np.clip(_bc(exit_frac, size), 0.0, 1.0) * th1  # exit angle (rebound), 0 in the paper
     r_g = r + float(grouser)  # radius at which the soil is sheared (lug tips; r without lugs)
     tan_a = math.tan(float(slip_angle))
+    if rut is not None:  # the front wheel's rut: reloading line up to its pressure, then the virgin curve
+        z_f = _bc(rut[0], size)
+        z_r = z_f / float(rut[1])  # the rut's elastic rebound
+        k_u = k * z_f ** n / z_r  # reloading stiffness: the front wheel's peak pressure at depth z_r
+
+    def pressure(zt):  # Eq. (2), or with a rut the pressure at depth zt below its bottom
+        with np.errstate(divide="ignore", invalid="ignore"):
+            virgin = k * np.where(zt > 0, zt + (0.0 if rut is None else z_f - z_r), 1.0) ** n * (zt > 0)
+        return virgin if rut is None else np.where(zt <= z_r, k_u * np.maximum(zt, 0.0), virgin)
+
     # scales: the largest normal stress and shear stress (for relative error control)
-    sig_max = k * np.maximum(z, 1e-300) ** n
+    sig_max = np.maximum(pressure(z), 1e-300)
     tau_max = c + sig_max * tanphi
     s_sig = np.maximum(sig_max * th1, 1e-300)
     s_tau = np.maximum(tau_max * th1, 1e-300)
 
+    # a rut's kink (the reloading line meets the virgin curve at depth z_r): the front region is split
+    # there, at u = 1 (u in [1, 2] runs on linearly to theta_m; the rear region is then u in [2, 3])
+    thk = thm if rut is None else np.maximum(np.arccos(np.clip(np.cos(th1) + z_r / r, -1.0, 1.0)), thm)
+    u_rear = 1.0 if rut is None else 2.0
+
     def integrand(u):
-        if u <= 1.0:  # front region: theta1 - theta = (theta1 - theta_m) u^2
-            d = (th1 - thm) * u * u
-            jac = 2.0 * (th1 - thm) * u
+        if u <= 1.0:  # front region: theta1 - theta = (theta1 - theta_k) u^2 (theta_k = theta_m without a rut)
+            d = (th1 - thk) * u * u
+            jac = 2.0 * (th1 - thk) * u
+        elif u <= u_rear:  # a rut's virgin part of the front region, linear from theta_k to theta_m
+            d = (th1 - thk) + (thk - thm) * (u - 1.0)
+            jac = thk - thm
+        if u <= u_rear:
             theta = th1 - d
             # cos theta - cos theta1 = 2 sin((theta1 + theta)/2) sin(d/2)   (Eq. 3)
             zt = 2.0 * r * np.sin(th1 - 0.5 * d) * np.sin(0.5 * d)
         else:  # rear region: theta = -theta2 + (theta_m + theta2) v^2, stress of the mirrored front profile
-            v = u - 1.0
+            v = u - u_rear
             span = thm + th2
             theta = -th2 + span * v * v
             jac = 2.0 * span * v
@@ -163,9 +191,7 @@ def _integrals(soil, r, b, z, s, n, theta_m_frac, epsrel, exit_frac=0.0, hump=No
                 de = np.where(span > 0, ((theta + th2) / np.where(span > 0, span, 1.0)) * (th1 - thm), 0.0)
             d = th1 - theta  # for the shear displacement
             zt = 2.0 * r * np.sin(th1 - 0.5 * de) * np.sin(0.5 * de)
-        zt = np.maximum(zt, 0.0)
-        with np.errstate(divide="ignore"):
-            sigma = k * np.where(zt > 0, zt, 1.0) ** n * (zt > 0)  # Eq. (2)
+        sigma = pressure(np.maximum(zt, 0.0))  # Eq. (2)
         # Eq. (5): sin theta1 - sin theta = 2 cos((theta1 + theta)/2) sin(d/2)
         j = r_g * d - r * (1.0 - s) * 2.0 * np.cos(th1 - 0.5 * d) * np.sin(0.5 * d)
         if envelope is not None:  # curved failure envelope: the normal stress's share of the strength
@@ -196,7 +222,7 @@ def _integrals(soil, r, b, z, s, n, theta_m_frac, epsrel, exit_frac=0.0, hump=No
             jac * sigma * st / s_sig, jac * tau / s_tau,
         ])
 
-    res, _err = quad_vec(integrand, 0.0, 2.0, points=[1.0], epsabs=epsrel * 1e-3, epsrel=epsrel,
+    res, _err = quad_vec(integrand, 0.0, u_rear + 1.0, points=[1.0, u_rear][:int(u_rear)], epsabs=epsrel * 1e-3, epsrel=epsrel,
                          norm="max", limit=4000)
     i_sc, i_ts, i_tc, i_ss, i_t = res.reshape(5, size)
     w = r * b * i_sc * s_sig + r_g * b * i_ts * s_tau  # Eq. (7)
@@ -205,9 +231,10 @@ def _integrals(soil, r, b, z, s, n, theta_m_frac, epsrel, exit_frac=0.0, hump=No
     return w, dp, t, th1
 
 
-def balance_sinkage(soil, radius_m, width_m, load_n, slip, *, n=None, theta_m_frac=0.0,
+def balance_sinkage(soil, radius_m, width_m, load_n, slip, *, n=None, theta_m_frac=0.0, rut=None,
                     epsrel: float = 1e-9, tol: float = 1e-10) -> np.ndarray:
-    """Sinkage z0 [m] with Eq. (7)(z0, s) = W for each sample (the exact vertical balance).
+    """Sinkage z0 [m] with Eq. (7)(z0, s) = W for each sample (the exact vertical balance);
+    with ``rut`` ``(z_f (N,), R)`` (module doc) the sinkage below the rut's bottom.
 
     Vectorised bracketing root finder in x = log z: false position with the Illinois
     modification inside a bracket, bisection when a step leaves it; converged when
@@ -224,7 +251,8 @@ def balance_sinkage(soil, radius_m, width_m, load_n, slip, *, n=None, theta_m_fr
 
     def g(x, idx):
         sub = {kk: (_bc(soil[kk], size)[idx]) for kk in SOIL_KEYS}
-        wm, _, _, _ = _integrals(sub, r[idx], b, np.exp(x), s[idx], nn[idx], tm[idx], epsrel)
+        sub_rut = None if rut is None else (_bc(rut[0], size)[idx], rut[1])
+        wm, _, _, _ = _integrals(sub, r[idx], b, np.exp(x), s[idx], nn[idx], tm[idx], epsrel, rut=sub_rut)
         return np.log(wm) - np.log(w[idx])
 
     all_idx = np.arange(size)
@@ -271,7 +299,7 @@ def wheel_forces(soil: Mapping[str, Any], radius_m: float, width_m: float, load_
                  sinkage: str = "eq10", H=None, m1=None, m2=None, n1=None, stress=None,
                  exit_frac: float = 0.0, hump=None, tau_scale=1.0, z_cap=None, slip_angle: float = 0.0,
                  grouser: float = 0.0, envelope=None, k_pressure=None, depth_power=None, interface=None,
-                 epsrel: float = EPSREL) -> dict[str, np.ndarray]:
+                 rut=None, epsrel: float = EPSREL) -> dict[str, np.ndarray]:
     """Reference forces of a rigid wheel on soil per sample (paper Eqs. 1-13, Wong-Reece stress).
 
     Parameters
@@ -297,6 +325,10 @@ def wheel_forces(soil: Mapping[str, Any], radius_m: float, width_m: float, load_
     k_pressure : ``(sigma0, gamma)``: K growing with the normal stress (module doc), or None (paper).
     depth_power : ``(d0, a)``: the strength x (d/d0)^a, d the depth below the surface (module doc), or None.
     interface : ``(sigma_x, f)``: above sigma_x the tyre-soil interface's friction f tan phi (module doc), or None.
+    rut : ``(z_f, R)``: the wheel runs in the rut of a wheel ahead that sank z_f [m] ((N,) or scalar)
+        into the soil, reloading R times stiffer than the virgin soil's secant (module doc); the
+        sinkage then comes from the vertical balance whatever ``sinkage`` says, and ``sinkage_m``
+        is measured from the original surface. None: virgin soil (paper).
     epsrel : quadrature tolerance.
 
     Returns
@@ -334,10 +366,11 @@ def wheel_forces(soil: Mapping[str, Any], radius_m: float, width_m: float, load_
         a1, a2 = stress
         tm = _bc(a1, size) + _bc(a2, size) * s
     soil_n = {kk: _bc(soil[kk], size) for kk in SOIL_KEYS}
-    if sinkage == "eq10":
+    rut_n = None if rut is None else (_bc(rut[0], size), float(rut[1]))
+    if sinkage == "eq10" and rut is None:
         z0 = sinkage_eq10(soil_n, r, b, w, n)
     else:
-        z0 = balance_sinkage(soil_n, r, b, w, s, n=n, theta_m_frac=tm, epsrel=max(epsrel, 1e-10))
+        z0 = balance_sinkage(soil_n, r, b, w, s, n=n, theta_m_frac=tm, rut=rut_n, epsrel=max(epsrel, 1e-10))
     z = z0.copy()
     if H is not None:
         z = z0 + _bc(H, size) * s  # Eq. (11)
@@ -353,6 +386,8 @@ def wheel_forces(soil: Mapping[str, Any], radius_m: float, width_m: float, load_
         i = int(np.flatnonzero(~np.isfinite(z) | (z <= 0) | (z >= r))[0])
         raise ValueError(f"sinkage[{i}] = {z[i]:.4g} m outside (0, r = {r[i]:.4g} m): the wheel buries itself")
     w_m, dp, t, th1 = _integrals(soil_n, r, b, z, s, n, tm, epsrel, exit_frac, hump, tau_scale, slip_angle, grouser,
-                                 envelope, k_pressure, depth_power, interface)
+                                 envelope, k_pressure, depth_power, interface, rut_n)
+    if rut_n is not None:  # below the original surface: the rut's permanent depth z_f (1 - 1/R) added
+        z = z + rut_n[0] * (1.0 - 1.0 / rut_n[1])
     return {"sinkage_m": z, "static_sinkage_m": z0, "theta1_rad": th1, "load_model_n": w_m,
             "drawbar_pull_n": dp, "torque_nm": t}
