@@ -116,6 +116,59 @@ def test_drifts_no_drifting_form_follows_change_the_soil_as_stated(effect, shape
     assert ACCEPTABLE[effect] == ("terrain_drift", "unexplained") and family_of(effect) == "out"
 
 
+def _rut_forces_by_dense_sum(z, s, z_f, ratio, m=400001):
+    """Eqs. (7)-(9) for one sample in a rut by the trapezoid rule on m angles (no quadrature, no
+    variable change): the check of the adaptive quadrature's split at the rut's kink."""
+    k = SOIL["kc"] / B + SOIL["kphi"]
+    z_r = z_f / ratio
+    th1 = math.acos(1 - z / R)
+    th = np.linspace(0.0, th1, m)
+    zt = R * (np.cos(th) - math.cos(th1))
+    sigma = np.where(zt <= z_r, k * z_f ** SOIL["n"] / z_r * zt, k * (zt + z_f - z_r) ** SOIL["n"])
+    j = R * (th1 - th - (1 - s) * (math.sin(th1) - np.sin(th)))
+    tau = (SOIL["c"] + sigma * math.tan(SOIL["phi"])) * -np.expm1(-j / SOIL["K"])
+    w = R * B * np.trapezoid(sigma * np.cos(th) + tau * np.sin(th), th)
+    dp = R * B * np.trapezoid(tau * np.cos(th) - sigma * np.sin(th), th)
+    return w, dp, R * R * B * np.trapezoid(tau, th)
+
+
+def test_held_out_12_the_rut_the_tyre_losing_pressure_and_the_moisture_drift(wong):
+    """Held-out batch 12.  In the front wheel's rut the vertical balance holds, the forces are the
+    integrals of the piecewise pressure (a dense sum agrees with the split quadrature), the wheel
+    sinks below the rut and pulls more than on virgin soil (less compaction); a rut of no depth is
+    the virgin soil.  The tyre losing pressure is the lab wheel at the run's start and the deflected
+    tyre at its end.  The moisture drift moves k_eq, c and phi together, one way."""
+    z_f = float(sinkage_eq10(SOIL, R, B, W0))
+    ru = _tm("rut", load_ratio=1.0, R=8.0).drive_forces(LOAD, SLIP)
+    np.testing.assert_allclose(ru["load_model_n"], LOAD, rtol=1e-7)
+    assert np.all(ru["sinkage_m"] > z_f) and np.all(ru["drawbar_pull_n"][3:] > wong["drawbar_pull_n"][3:])
+    below = ru["sinkage_m"] - z_f * (1 - 1 / 8.0)  # below the rut's bottom
+    for i in (2, 9):
+        w, dp, t = _rut_forces_by_dense_sum(below[i], SLIP[i], z_f, 8.0)
+        assert w == pytest.approx(W0, rel=1e-5)
+        assert dp == pytest.approx(ru["drawbar_pull_n"][i], abs=1e-4 * W0)
+        assert t == pytest.approx(ru["torque_nm"][i], rel=1e-5)
+    flat = wheel_forces(SOIL, R, B, LOAD, SLIP, rut=(1e-9, 8.0))
+    virgin = wheel_forces(SOIL, R, B, LOAD, SLIP, sinkage="balance")
+    np.testing.assert_allclose(flat["drawbar_pull_n"], virgin["drawbar_pull_n"], rtol=1e-4, atol=1e-3 * W0)
+    tp = _tm("tyre_pressure_loss", kappa=0.2)
+    np.testing.assert_allclose(tp.drive_forces(LOAD, SLIP, frac=0.0)["drawbar_pull_n"], wong["drawbar_pull_n"],
+                               rtol=1e-9)
+    np.testing.assert_allclose(tp.drive_forces(LOAD, SLIP, frac=1.0)["drawbar_pull_n"],
+                               _tm("tyre_deflection", kappa=0.2).drive_forces(LOAD, SLIP)["drawbar_pull_n"], rtol=1e-9)
+    p = draw_effect("moisture", np.random.default_rng(5), size=0.6)
+    ch = p["changes"]
+    assert set(ch) == {"k_eq", "c", "phi"}
+    up = ch["k_eq"]["value"] > 1
+    assert (ch["c"]["value"] > 1) == up and (ch["phi"]["value"] > 0) == up
+    mo = _tm("moisture", **p)
+    start, end = mo.soil_at(0.0), mo.soil_at(1.0)
+    for key in ("kphi", "c", "phi"):
+        assert (end[key] > start[key]) == up
+    assert ACCEPTABLE["moisture"] == ("terrain_drift", "unexplained")
+    assert ACCEPTABLE["rut"] == ACCEPTABLE["tyre_pressure_loss"] == ("unexplained",)
+
+
 def test_out_of_family_soil_and_tyre_effects(wong):
     ty = _tm("tyre_deflection", kappa=0.2).drive_forces(LOAD, SLIP)
     assert np.all(ty["sinkage_m"] < wong["sinkage_m"])  # a larger equivalent wheel sinks less
