@@ -62,7 +62,12 @@ region, theta1 - theta = (theta1 - theta_m) u^2; u in [1, 2] the rear region,
 theta = theta_m (u - 1)^2. The squares soften the (theta1 - theta)^n endpoint
 singularity of Eq. (2) (and theta^n of the rear region); every integrand is
 divided by a per-sample scale so the max-norm error control is relative
-(default ``EPSREL`` 1e-10 of each integral's scale).
+(default ``EPSREL`` 1e-10 of each integral's scale). In a rut the pressure has a
+kink where the reloading line meets the virgin curve, at a different angle
+theta_k in each sample; one shared subdivision would chase them all (300x the
+work), so the front region is split there: u in [0, 1] runs from theta1 to
+theta_k (squared, as above), u in [1, 2] linearly on to theta_m, and the rear
+region is u in [2, 3].
 
 Sinkage: Eq. (10) (``sinkage="eq10"``) or the vertical balance Eq. (7) = W
 (``sinkage="balance"``), solved per sample by a vectorised bracketing
@@ -222,8 +227,8 @@ def _integrals(soil, r, b, z, s, n, theta_m_frac, epsrel, exit_frac=0.0, hump=No
             jac * sigma * st / s_sig, jac * tau / s_tau,
         ])
 
-    res, _err = quad_vec(integrand, 0.0, u_rear + 1.0, points=[1.0, u_rear][:int(u_rear)], epsabs=epsrel * 1e-3, epsrel=epsrel,
-                         norm="max", limit=4000)
+    res, _err = quad_vec(integrand, 0.0, u_rear + 1.0, points=[1.0] if rut is None else [1.0, 2.0],
+                         epsabs=epsrel * 1e-3, epsrel=epsrel, norm="max", limit=4000)
     i_sc, i_ts, i_tc, i_ss, i_t = res.reshape(5, size)
     w = r * b * i_sc * s_sig + r_g * b * i_ts * s_tau  # Eq. (7)
     dp = r_g * b * i_tc * s_tau - r * b * i_ss * s_sig  # Eq. (8)
