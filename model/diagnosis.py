@@ -196,8 +196,9 @@ from .crossval import FIT_MAX_ITER, MAX_FOLDS, HypFit, cross_validate, fit_hypot
 from .data import CHANNELS, FitData, prepare_data
 from .hypotheses import EFFECTS, HYPOTHESES, Context, DriftStep, get_hypothesis, lab_prior
 from .hypotheses import LIBRARY_PRIOR_WIDEN, speed_reference
+from .wong import sinkage_eq10
 
-__all__ = ["Diagnosis", "diagnose", "structure_test", "binned_residuals", "SLIP_SINKAGE_MODELS", "TITLES",
+__all__ = ["Diagnosis", "diagnose", "LabTerrainBuriesWheel", "structure_test", "binned_residuals", "SLIP_SINKAGE_MODELS", "TITLES",
            "CHANNEL_TITLES", "THRESHOLDS"]
 
 ALPHA = 0.01  #: family-wise significance level (structure tests, Bonferroni; "improves" per channel)
@@ -750,6 +751,13 @@ def _detectable_only(tests: dict, n_tests: int) -> list:
     return [k for k, t in tests.items() if np.isfinite(t["p"]) and t["p"] < lvl and not _relevant(t)]
 
 
+class LabTerrainBuriesWheel(ValueError):
+    """Wong's model (paper Eq. 10) on the lab terrain sinks the wheel to its radius or deeper at loads
+    the measured wheel carried while driving.  Wong's model is then shown to err on these data, so
+    the verdict is ``unexplained``, but no hypothesis can be fitted from the lab values (the caller,
+    ``wheelsoil.pipeline.run_fit``, writes a report with that verdict)."""
+
+
 # ----------------------------------------------------------------------------- paired out-of-sample tests
 
 
@@ -1120,7 +1128,9 @@ def diagnose(
     max_iter : Gauss-Newton iteration limit per fit (default ``FIT_MAX_ITER``; a fit that does not converge is
         reported in ``failures`` and left out of the verdict).
 
-    Returns :class:`Diagnosis`.  Raises ValueError for bad data or an unknown hypothesis.
+    Returns :class:`Diagnosis`.  Raises ValueError for bad data or an unknown hypothesis, and its
+    subclass :class:`LabTerrainBuriesWheel` when Wong's model on the lab terrain sinks the wheel to
+    its radius at the measured loads (shown to err, nothing fitted from it).
     """
     if not isinstance(data, FitData):
         data = prepare_data(data, slip_min=slip_min)
@@ -1190,6 +1200,15 @@ def diagnose(
         bar.close()
     notes += [f"not tried ({why}): {', '.join(ns)}." for why, ns in not_tried.items()]
     if "wong" not in fits:
+        z0 = np.asarray(sinkage_eq10(terrain, wheel, data.load_n), float)
+        buried = ~(z0 < wheel.radius)
+        if buried.any():
+            raise LabTerrainBuriesWheel(
+                f"Wong's model with the lab terrain buries the wheel: its static sinkage (Eq. 10) at the measured "
+                f"loads reaches {np.nanmax(z0):.3g} m, at least the wheel radius r = {wheel.radius:g} m in "
+                f"{100 * buried.mean():.0f} % of the samples, while the wheel was measured carrying those loads and "
+                "driving: the lab terrain does not describe this run (a firmer soil, a rut, another terrain file or "
+                "wheel), and no hypothesis can start from its values")
         raise ValueError("Wong's model could not be evaluated on these data: " + "; ".join(failures))
     from .fit import _metrics
 

@@ -117,6 +117,28 @@ def test_bad_tables_give_a_clear_message_and_a_report_saying_so(tmp_path, conten
         assert "Nothing could be fitted" in (out / "report.html").read_text()
 
 
+def test_a_lab_terrain_that_buries_the_wheel_is_a_verdict_not_an_error(tmp_path):
+    """Held-out batch 12 on library soils (seeds 16098, 16101): a wheel in the front wheel's rut on
+    snow carried 13 kN while driving, where the lab snow's Eq. (10) sinkage is 0.67 m, deeper than
+    the 0.47 m wheel's radius.  The fit stopped with an error and a report whose verdict was empty;
+    Wong's model is shown to err there, so the verdict is ``unexplained`` (nothing is fitted from the
+    lab values), and the CLI exits 0."""
+    p = tmp_path / "snow.csv"
+    p.write_text("slip,load_n,drawbar_pull_n,torque_nm\n"
+                 + "".join(f"{s},13000,{1500 + 2000 * s:.0f},{4000 + 1500 * s:.0f}\n" for s in (0.2, 0.3, 0.4, 0.5, 0.6)))
+    out = tmp_path / "rep"
+    rep = run_fit([p], "snow-us", out, wheel_radius=0.47, wheel_width=0.32)
+    d = _strict_json(out / "report.json")["diagnosis"]
+    assert rep["diagnosis"] == d and d["effect"] == "unexplained" and d["model"] is None
+    assert "buries the wheel" in d["summary"] and "r = 0.47 m" in d["summary"]
+    assert "Verdict: unexplained" in (out / "report.html").read_text()
+    proc = subprocess.run([sys.executable, "-m", "wheelsoil", "fit", str(p), "--terrain", "snow-us", "-q",
+                           "--wheel-radius", "0.47", "--wheel-width", "0.32", "-o", str(tmp_path / "r2")],
+                          capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr
+    assert "effect: unexplained" in proc.stdout
+
+
 def test_cli_reports_bad_input_with_exit_code_2(tmp_path):
     p = tmp_path / "t.csv"
     p.write_text("slip,load_n,drawbar_pull_n\n0.3,1000,5\n")

@@ -543,8 +543,11 @@ def build_provenance(inputs, info, *, command, terrain, ter, wheel, wheel_source
     return prov, quality
 
 
-def _failure_report(out_dir: Path, inputs, terrain, wheel, slip_min, error: str, provenance=None) -> None:
-    """Write a report.json/report.html that says what could not be done."""
+def _failure_report(out_dir: Path, inputs, terrain, wheel, slip_min, error: str, provenance=None,
+                    effect: str | None = None) -> dict:
+    """Write a report.json/report.html that says what could not be done; returns the report dict.
+    ``effect``: the verdict the failure itself gives (``unexplained`` when Wong's model on the lab
+    terrain buries the wheel the run measured carrying its load), else None."""
     import html
     import json
 
@@ -563,8 +566,9 @@ def _failure_report(out_dir: Path, inputs, terrain, wheel, slip_min, error: str,
         "models": {m: {"status": f"not fitted: {error}", "params": None, "stderr": None,
                        "metrics": {"M0_pct": None, "R0_n": None, "R2": None}, "cv_R0_n": None, "bic": None}
                    for m in ALL_MODELS},
-        "diagnosis": {"effect": None, "model": None, "confidence": None,
-                      "summary": f"Nothing could be fitted: {error}"},
+        "diagnosis": {"effect": effect, "model": None, "confidence": "medium" if effect else None,
+                      "summary": (f"Wong's model errs on these data, and the cause is {effect}: {error}." if effect
+                                  else f"Nothing could be fitted: {error}")},
         "gain": {"R0_n_before": None, "R0_n_after": None, "cv_R0_n_before": None, "cv_R0_n_after": None},
         "flags": [],
         "not_done": [f"fit and diagnosis: {error}"],
@@ -574,11 +578,14 @@ def _failure_report(out_dir: Path, inputs, terrain, wheel, slip_min, error: str,
     (out_dir / "report.html").write_text(
         "<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'>"
         "<meta name='viewport' content='width=device-width, initial-scale=1'><title>wheelsoil fit report</title>"
-        f"</head><body><h1>wheelsoil fit report</h1><p><b>Nothing could be fitted.</b></p><p>{html.escape(error)}</p>"
+        f"</head><body><h1>wheelsoil fit report</h1><p><b>"
+        + (f"Verdict: {effect}. Wong's model errs on these data; nothing could be fitted from the lab terrain."
+           if effect else "Nothing could be fitted.") + f"</b></p><p>{html.escape(error)}</p>"
         f"<p>Inputs: {html.escape(', '.join(map(str, inputs)))}</p>"
         + (f"<p>Command: <code>{html.escape(cmd)}</code></p>" if cmd else "") + "</body></html>",
         encoding="utf-8",
     )
+    return rep
 
 
 DEFAULT_MODELS = ("vasilev", "lyasko", "ding", "terrain_mismatch")
@@ -642,7 +649,7 @@ def run_fit(
         The output directory cannot be written.
     """
     from wheelsoil.model import DEFAULT_WHEEL, Terrain, Wheel, load_terrain
-    from wheelsoil.model.diagnosis import diagnose
+    from wheelsoil.model.diagnosis import LabTerrainBuriesWheel, diagnose
     from wheelsoil.model.fit import CANDIDATES, prepare_data
     from wheelsoil.model.report import foreign_files, write_report
 
@@ -704,6 +711,8 @@ def run_fit(
         data = prepare_data(df, slip_min=slip_min, source=source, wheel_radius_m=wheel.radius)
         diag = diagnose(data, ter, wheel, models=[m for m in models if m != "wong"], fit_terrain=fit_terrain,
                         sinkage=sinkage, progress=progress)
+    except LabTerrainBuriesWheel as exc:  # a verdict (Wong errs, unexplained), not an error of the input
+        return _failure_report(out, inputs, ter, wheel, slip_min, str(exc), provenance=prov, effect="unexplained")
     except ValueError as exc:
         _failure_report(out, inputs, ter, wheel, slip_min, str(exc), provenance=prov)
         raise ValueError(f"{exc} (a report saying so was written to {out / 'report.html'})") from None
