@@ -125,7 +125,8 @@ def test_a_lab_terrain_that_buries_the_wheel_is_a_verdict_not_an_error(tmp_path)
     lab values), and the CLI exits 0."""
     p = tmp_path / "snow.csv"
     p.write_text("slip,load_n,drawbar_pull_n,torque_nm\n"
-                 + "".join(f"{s},13000,{1500 + 2000 * s:.0f},{4000 + 1500 * s:.0f}\n" for s in (0.2, 0.3, 0.4, 0.5, 0.6)))
+                 + "".join(f"{s},13000,{1500 + 2000 * s:.0f},{4000 + 1500 * s:.0f}\n"
+                           for s in (0.2, 0.3, 0.4, 0.5, 0.6)))
     out = tmp_path / "rep"
     rep = run_fit([p], "snow-us", out, wheel_radius=0.47, wheel_width=0.32)
     d = _strict_json(out / "report.json")["diagnosis"]
