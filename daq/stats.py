@@ -160,11 +160,7 @@ class StatsAccumulator:
                 k_steps = step + mod * np.maximum(wraps, 0)
             else:
                 k_steps = step
-            lost = np.where(step == 0, 0, k_steps - 1)
-            long = dt > LONG_GAP_NS
-            if long.any():
-                lost = np.where(long, 0, lost)
-                s.long_gaps[name] = s.long_gaps.get(name, 0) + int(long.sum())
+            lost = np.where((step == 0) | self._long_gaps(name, dt), 0, k_steps - 1)
             s.lost_frames[name] = s.lost_frames.get(name, 0) + int(lost.sum())
             s.counter_duplicates[name] = s.counter_duplicates.get(name, 0) + int((step == 0).sum())
             s.lost_frames.setdefault(name, 0)
@@ -174,6 +170,14 @@ class StatsAccumulator:
             if ts is None:
                 ts = b.timestamp_ns[good]
             self._cycle_gaps(bus, cyc, keys, uk, ts, rem[good])
+
+    def _long_gaps(self, name: str, dt) -> np.ndarray:
+        """Intervals ``dt`` [ns] (K,) of message ``name`` longer than :data:`LONG_GAP_NS`, counted in
+        :attr:`FrameStats.long_gaps`; returns their mask (K,), the intervals no lost frame is counted in."""
+        long = dt > LONG_GAP_NS
+        if long.any():
+            self.stats.long_gaps[name] = self.stats.long_gaps.get(name, 0) + int(long.sum())
+        return long
 
     def _cycle_gaps(self, bus, cyc, keys, uk, ts, rem) -> None:
         """Frames missing by nominal cycle time for the ids of ``cyc`` in this batch."""
@@ -191,10 +195,7 @@ class StatsAccumulator:
             if prev is not None:
                 t = np.concatenate(([prev], t))
             dt = np.diff(t).astype(np.float64)
-            long = dt > LONG_GAP_NS
-            if long.any():
-                s.long_gaps[name] = s.long_gaps.get(name, 0) + int(long.sum())
-            big = (dt > 1.5 * cycle) & ~long
+            big = (dt > 1.5 * cycle) & ~self._long_gaps(name, dt)
             n = int((np.round(dt[big] / cycle) - 1).sum()) if big.any() else 0
             s.lost_frames_estimated[name] = s.lost_frames_estimated.get(name, 0) + n
             self._last_t[(bus, k)] = int(t[-1])

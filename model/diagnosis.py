@@ -119,9 +119,10 @@ decides with this rule (constants below; none was tuned on a benchmark):
    step 2 judges a worsening: one-sided p < ``WORSEN_ALPHA``, a gain of at least
    ``MIN_GAIN``; a named model must be no worse on new data than the model
    containing it, as it must be no worse than Wong's; :func:`_whole_better`).
-   When it does, the soil differs (or changes) in more than one value or in a way no single value describes (a tyre-soil interface weaker
-   than the soil at the higher stresses acts on Dp like a lower phi, and the
-   five-value re-fit then predicts the torque better): ``unexplained``, with
+   When it does, the soil differs (or changes) in more than one value or in a
+   way no single value describes (a tyre-soil interface weaker than the soil
+   at the higher stresses acts on Dp like a lower phi, and the five-value
+   re-fit then predicts the torque better): ``unexplained``, with
    the one-value re-fit as the candidate.  Likewise a stand-in for causes on no list that
    contains the candidate (``speed_k``: a k_eq that depends on the forward speed contains the
    one-value k_eq re-fit) must not predict any measured channel better out of sample with its

@@ -1489,7 +1489,8 @@ def foreign_files(out_dir: Path) -> list[str]:
     """Names of the entries in the existing directory ``out_dir`` that no report writes
     (``report.json``, ``report.html``, its figures): a report is not written into a directory of
     other files.  Raises OSError."""
-    return sorted(p.name for p in out_dir.iterdir() if p.name not in ("report.json", "report.html") and not _is_figure(p))
+    return sorted(p.name for p in out_dir.iterdir()
+                  if p.name not in ("report.json", "report.html") and not _is_figure(p))
 
 
 def clear_figures(out_dir: Path) -> None:
