@@ -640,6 +640,27 @@ def structure_statements(rep) -> list:
     return out
 
 
+def worse_than_wong_rows(rep) -> list:
+    """Every (model, channel) on which a fitted model is worse than Wong, in the report's model order:
+    list of dicts ``model, channel, where`` ("in sample and out of sample"), ``r0`` and ``cv_r0``
+    (Wong's and the model's R0 in the channel's display unit, str pairs), ``reason`` and ``text``
+    (the sentence of :func:`findings`)."""
+    w = (rep["models"].get("wong") or {}).get("per_channel") or {}
+    rows = []
+    for k, chans in sorted(((k, v.get("worse_than_wong")) for k, v in rep["models"].items()
+                            if v.get("worse_than_wong")), key=lambda kv: _model_order(kv[0])):
+        pc = rep["models"][k]["per_channel"]
+        for c, v in chans.items():
+            where = " and ".join(x for x, flag in (("in sample", v["in_sample"]), ("out of sample", v["out_of_sample"]))
+                                 if flag)
+            r0 = (_chan_fmt(_r0(w, c), c), _chan_fmt(_r0(pc, c), c))
+            cv = (_chan_fmt(_r0(w, c, True), c), _chan_fmt(_r0(pc, c, True), c))
+            rows.append({"model": k, "channel": c, "where": where, "r0": r0, "cv_r0": cv, "reason": v["reason"],
+                         "text": f"{_title(k)} is worse than Wong on the {CHANNEL_TITLES.get(c, c)} {where} "
+                                 f"(R0 {r0[0]} -> {r0[1]}, out of sample {cv[0]} -> {cv[1]}): {v['reason']}."})
+    return rows
+
+
 def findings(rep) -> list:
     """The report's own statements around the diagnosis summary, each generated from the numbers it
     cites (list of str): the structure test per channel, what the chosen model does per channel, the
@@ -661,16 +682,7 @@ def findings(rep) -> list:
             verb = "lowers" if b < a else ("raises" if b > a else "leaves")
             out.append(f"{_title(chosen)} {verb} the out-of-sample {CHANNEL_TITLES.get(c, c)} error: "
                        f"{_chan_fmt(a, c)} (Wong) -> {_chan_fmt(b, c)}.")
-    for k, chans in sorted(((k, v.get("worse_than_wong")) for k, v in rep["models"].items()
-                            if v.get("worse_than_wong")), key=lambda kv: _model_order(kv[0])):
-        for c, v in chans.items():
-            where = " and ".join(x for x, flag in (("in sample", v["in_sample"]), ("out of sample", v["out_of_sample"]))
-                                 if flag)
-            out.append(f"{_title(k)} is worse than Wong on the {CHANNEL_TITLES.get(c, c)} {where} "
-                       f"(R0 {_chan_fmt(_r0(w.get('per_channel') or {}, c), c)} -> "
-                       f"{_chan_fmt(_r0(rep['models'][k]['per_channel'], c), c)}, out of sample "
-                       f"{_chan_fmt(_r0(w.get('per_channel') or {}, c, True), c)} -> "
-                       f"{_chan_fmt(_r0(rep['models'][k]['per_channel'], c, True), c)}): {v['reason']}.")
+    out.extend(r["text"] for r in worse_than_wong_rows(rep))
     shown = chosen if chosen in rep["models"] else "wong"
     if d.get("fit_terrain") and (rep["models"].get(shown) or {}).get("params") is not None:
         mm = rep["models"][shown]
@@ -1037,7 +1049,7 @@ table{border-collapse:collapse;margin:.6em 0;font-size:.9em}
 th,td{border:1px solid #ccc;padding:.25em .6em;text-align:right;vertical-align:top}th{background:#f0f0f0}
 td:first-child,th:first-child,td.l{text-align:left}
 .verdict{padding:.8em 1em;border-radius:6px;background:#eef5ff;border:1px solid #9bc}
-.effect{font-size:1.3em;font-weight:bold}
+.effect{font-size:1.3em;font-weight:bold}.verdict table{background:#fff}.full{font-size:.9em;color:#333}
 .warn{background:#fff4e0;border:1px solid #e0b060;padding:.5em 1em;border-radius:6px}
 .sim{background:#f3eefc;border:1px solid #a58bd0;padding:.5em 1em;border-radius:6px;margin:.6em 0}
 .flag{color:#a40000;font-weight:bold;white-space:nowrap}
@@ -1055,6 +1067,33 @@ a{color:inherit;text-decoration:none}}
 
 def _e(x) -> str:
     return html.escape(str(x), quote=True)
+
+
+def _glance(d: dict) -> str:
+    """The verdict at a glance (HTML): each measured channel's out-of-sample error under Wong and the
+    best supported model with the channel's own verdict, the effects' probabilities, and why the
+    confidence is what it is; every number from ``d`` (``report.json``'s ``diagnosis``)."""
+    rows = []
+    for c, v in (d.get("channels") or {}).items():
+        if not isinstance(v, dict) or not v.get("measured"):
+            continue
+        best = v.get("best_cv_rmse")
+        rows.append([CHANNEL_TITLES.get(c, c), _chan_fmt(v.get("wong_cv_rmse"), c),
+                     (f"{_chan_fmt(best, c)} ({_title(_canon(v.get('model')))})" if best is not None else "n/a"),
+                     str(v.get("effect") or "n/a")])
+    out = ""
+    if rows:
+        out += _table(["channel", "Wong's error on new data (CV R0)", "the best supported model's",
+                       "this channel's verdict"], rows)
+    probs = sorted(((k, p) for k, p in (d.get("effect_probabilities") or {}).items() if p is not None and p >= 1e-3),
+                   key=lambda kp: -kp[1])
+    if probs:
+        out += "<p>Probability of each effect: " + _e(", ".join(f"{k} {num(p, 2)}" for k, p in probs)) + ".</p>"
+    why = d.get("confidence_reasons") or []
+    if why:
+        out += (f"<p>Confidence {_e(d.get('confidence'))}:</p><ul>"
+                + "".join(f"<li>{_e(x)}</li>" for x in why) + "</ul>")
+    return out
 
 
 def _table(headers, rows, raw: bool = False) -> str:
@@ -1266,10 +1305,12 @@ def _metrics_section(rep) -> list:
                        + (" <span class='flag'>[worse than Wong]</span>" if wv.get("out_of_sample") else ""))
         rows.append(row)
     parts.append(_table(hdr, rows, raw=True))
-    reasons = [(k, c, v["reason"]) for k, m in rep["models"].items() for c, v in (m.get("worse_than_wong") or {}).items()]
-    if reasons:
-        parts.append("<p>Why a fitted model is worse than Wong on a channel:</p><ul>" + "".join(
-            f"<li>{_e(_title(k))}, {_e(CHANNEL_TITLES.get(c, c))}: {_e(r)}</li>" for k, c, r in reasons) + "</ul>")
+    worse_rows = worse_than_wong_rows(rep)
+    if worse_rows:
+        parts.append("<p>Where a fitted model is worse than Wong, and why (R0 and CV R0: Wong -> the model):</p>")
+        parts.append(_table(["model", "channel", "worse", "R0", "CV R0", "why"],
+                            [[_title(r["model"]), CHANNEL_TITLES.get(r["channel"], r["channel"]), r["where"],
+                              " -> ".join(r["r0"]), " -> ".join(r["cv_r0"]), r["reason"]] for r in worse_rows]))
     dch = rep["diagnosis"].get("channels") or {}
     if dch:
         parts.append("<h3>Verdict per channel</h3>")
@@ -1379,12 +1420,21 @@ def _html(rep: dict, figs: list, overviews: list) -> str:
     parts.append(
         f"<div class='verdict'><div class='effect'>Effect: {_e(eff)} &nbsp;·&nbsp; model: "
         f"{_e(_title(_canon(d.get('model'))))} &nbsp;·&nbsp; confidence: {_e(d.get('confidence'))}</div>"
-        f"<p>{_e(d.get('summary', ''))}</p></div>")
+        + _glance(d) + f"<p class='full'><b>In full.</b> {_e(d.get('summary', ''))}</p></div>")
     if rep.get("not_done"):
         parts.append("<h2>What could not be done</h2><div class='warn'><ul>"
                      + "".join(f"<li>{_e(x)}</li>" for x in rep["not_done"]) + "</ul></div>")
-    parts.append("<h2>What the verdict rests on</h2><ul>" + "".join(f"<li>{_e(x)}</li>" for x in rep["findings"])
-                 + "</ul>")
+    worse_rows = worse_than_wong_rows(rep)
+    shown = [x for x in rep["findings"] if x not in {r["text"] for r in worse_rows}]
+    if worse_rows:  # each with its numbers and reason in the per-channel section, not twice
+        per = {}
+        for r in worse_rows:
+            per.setdefault(CHANNEL_TITLES.get(r["channel"], r["channel"]), set()).add(r["model"])
+        shown.append(f"{len({r['model'] for r in worse_rows})} fitted model(s) are worse than Wong on a channel ("
+                     + ", ".join(f"{len(m)} on the {c}" for c, m in per.items())
+                     + "): the table under 'Per channel: in sample and out of sample' gives each, with its numbers "
+                       "and the reason.")
+    parts.append("<h2>What the verdict rests on</h2><ul>" + "".join(f"<li>{_e(x)}</li>" for x in shown) + "</ul>")
     alts = d.get("alternatives") or []
     if alts:
         parts.append("<p>Hypotheses that explain the data equally well: " + _e(", ".join(_title(a) for a in alts))
