@@ -9,8 +9,9 @@ Steps (each in its own module):
    lost runs of at most ``MAX_FILL_SAMPLES`` samples are interpolated,
    longer ones split the data into segments;
 3. clocks: host->GPS time mapping, and the GNSS latency (:mod:`.timesync`)
-   from up to three estimators: the free-rolling front wheels' r*omega (or
-   the measured wheel where it is nearly unloaded), the measured wheel's
+   from up to three estimators: the free-rolling front wheels' r*omega (or,
+   when none is logged or the 4x4 drives them, the measured wheel where it
+   transmits no torque: coasting, another axle braking), the measured wheel's
    slip-traction consistency (T/(rW) a single function of slip: needs no
    free-rolling wheel) and the vehicle dynamics (GNSS dV/dt against the
    measured Fx); front wheels that turn with the measured one or disagree
@@ -75,6 +76,11 @@ LATENCY_MAX_DECEL_MPS2 = 0.3
 LATENCY_REF_CUTOFF_HZ = 5.0
 #: |T| [N m] under which the measured wheel counts as free rolling (latency fallback).
 FREE_ROLLING_TORQUE_NM = 150.0
+#: The measured wheel serves as the latency reference only this long [s] on either side of a sample
+#: after and before any torque above FREE_ROLLING_TORQUE_NM: a wheel passing through zero torque
+#: between driving and braking is changing its slip fast, not rolling freely, and the 5 Hz zero-phase
+#: filter of the reference (LATENCY_REF_CUTOFF_HZ) spreads such a change over about +-0.2 s.
+FREE_ROLLING_HOLD_S = 0.5
 #: GNSS latency search range [s] (hardware.md: typically 20-200 ms); an estimate within 4 ms of
 #: either end is an edge hit (unreliable).
 LATENCY_MAX_S = 0.5
@@ -89,7 +95,11 @@ MIN_CUTOFF_HZ = 0.1
 #: slip-traction estimate is biased by up to ~15 ms where the torque is not a function of slip
 #: and load alone (load transfer, hidden effects), the dynamics one by ~+15..25 ms (the measured
 #: wheel's Fx only stands for the sum over the wheels); benchmarks/bench_latency.py measures them.
-LATENCY_SYSTEMATIC_S = {"wheel_reference": 0.0, "traction": 0.015, "dynamics": 0.025}
+LATENCY_SYSTEMATIC_S = {"wheel_reference": 0.0, "traction": 0.015, "dynamics": 0.025,
+                        # the measured wheel coasting: its slip at zero torque follows the load
+                        # transfer of a decelerating vehicle a little (5 runs of an independent
+                        # generator with coasting rear wheels: errors -9.6 .. +5.7 ms)
+                        "measured_wheel": 0.010}
 #: Two estimates agree when they differ by at most this many combined (total) standard errors.
 LATENCY_AGREE_SIGMAS = 2.0
 #: A latency is reliable only with a total standard error at most this [s] (the +-20 ms target).
@@ -237,6 +247,24 @@ def _validity_signal(names: list, signal: str) -> str | None:
     return max(hits, key=len) if hits else None
 
 
+def _at_range_limit(cfg, ref, v: np.ndarray) -> np.ndarray:
+    """(n,) bool: which SI values ``v`` (n,) of the configured signal ``ref`` sit at the physical
+    value of one of its extreme raw codes (within half its resolution): the highest code, and for a
+    signed signal the lowest too (an unsigned 0 is a true zero); none for a float signal. A
+    transducer or an encoder clipping at its range, or the all-ones "not available" code of many
+    ECUs, sends these codes: no measurement. Source: the DBC's bit length, sign, scale and offset
+    (the raw range of an n-bit two's complement or unsigned integer)."""
+    s = cfg.database(ref.bus).get_message_by_name(ref.message).get_signal_by_name(ref.signal)
+    out = np.zeros(v.shape, dtype=bool)
+    if s.is_float:
+        return out
+    n = int(s.length)
+    codes = (-(1 << (n - 1)), (1 << (n - 1)) - 1) if s.is_signed else ((1 << n) - 1,)
+    for raw in codes:
+        out |= np.abs(v - (raw * s.scale + s.offset) * ref.scale_to_si) <= 0.5 * abs(s.scale * ref.scale_to_si)
+    return out
+
+
 def _recorded_wheel(read_report) -> tuple[float, float] | None:
     """The wheel (radius, width) [m] a recording's ``wheelsoil.recording`` metadata states (the writer's
     copy of its configuration), from a reader's report; None when it states none or an implausible one."""
@@ -337,6 +365,15 @@ def _fronts_coupled(t_front_ns: np.ndarray, v_front: np.ndarray, t_rear_ns: np.n
     return bool(np.percentile(np.abs(v_front[mv] / rear[mv] - 1.0), 99) < COUPLED_MAX_DEV)
 
 
+def _sustained(mask: np.ndarray, t_s: np.ndarray, hold_s: float) -> np.ndarray:
+    """(n,) bool: ``mask`` (n,) holds at every sample within ``hold_s`` [s] of this one (times
+    ``t_s`` (n,) sorted): a binary erosion in time."""
+    bad = np.concatenate([[0], np.cumsum(~mask)])
+    lo = np.searchsorted(t_s, t_s - hold_s, side="left")
+    hi = np.searchsorted(t_s, t_s + hold_s, side="right")
+    return mask & (bad[hi] - bad[lo] == 0)
+
+
 def _force_latency(g_rel: np.ndarray, g_v: np.ndarray, g_period: float, t_grid: np.ndarray,
                    fx: np.ndarray, cutoff_hz: float) -> LatencyEstimate | None:
     """GNSS latency from vehicle dynamics: the vehicle's acceleration follows the soil's
@@ -382,14 +419,18 @@ def _choose_latency(cands: dict, errs: dict, *, coupled: bool, wheel_ref_label: 
     ``cands`` name -> :class:`.timesync.LatencyEstimate` (``wheel_reference``,
     ``traction``, ``dynamics``); ``errs`` name -> why a candidate is missing;
     ``coupled`` the front wheels turn with the measured one (driven: no free-rolling
-    reference); ``fronts`` the reference is the front wheels. Each candidate's standard
+    reference; the caller then takes the measured wheel where it transmits no torque);
+    ``fronts`` the reference is the front wheels. Each candidate's standard
     error is first raised by its systematic uncertainty (:data:`LATENCY_SYSTEMATIC_S`).
     Rules: a candidate at the edge of the search range or without a finite standard
-    error is unusable; the wheel reference is unusable when the front wheels are
-    coupled, or when it disagrees with the slip-traction estimate (which needs no
+    error is unusable; the front wheels' reference is unusable when they are
+    coupled, and when it disagrees with the slip-traction estimate (which needs no
     other wheel) unless the dynamics estimate sides with it: its wheels then do not
-    roll freely. The choice: the wheel reference if usable (most precise), else the
-    inverse-variance mean of agreeing traction and dynamics estimates, else the
+    roll freely (the measured wheel's own torque shows whether it does). The choice:
+    the wheel reference if usable and precise (total standard error at most
+    :data:`LATENCY_RELIABLE_SE_S`; a coasting wheel whose deceleration hardly changes
+    tells little), else the inverse-variance mean of agreeing traction and dynamics
+    estimates, else the
     usable one with the smaller standard error, else (flagged) the best finite one;
     the dynamics estimate alone is never applied (its bias is known, it only confirms
     or joins the traction one): then no latency is applied.
@@ -410,17 +451,18 @@ def _choose_latency(cands: dict, errs: dict, *, coupled: bool, wheel_ref_label: 
     info: dict = {}
     usable: dict = {}
     stat = {k: c.stderr_s for k, c in cands.items()}
-    cands = {k: _with_systematic(k, c) for k, c in cands.items()}
+    sys_key = {k: "measured_wheel" if k == "wheel_reference" and not fronts else k for k in cands}
+    cands = {k: _with_systematic(sys_key[k], c) for k, c in cands.items()}
     for k, c in cands.items():
         why = ""
         if c.note:
             why = c.note
         elif not (math.isfinite(c.stderr_s) and math.isfinite(c.latency_s)):
             why = "no finite standard error"
-        elif k == "wheel_reference" and coupled:
+        elif k == "wheel_reference" and fronts and coupled:
             why = "the front wheels turn with the measured wheel (driven): no free-rolling reference"
         info[k] = {"estimate_s": c.latency_s, "stderr_s": c.stderr_s, "stderr_stat_s": stat[k],
-                   "systematic_s": LATENCY_SYSTEMATIC_S.get(k, 0.0), "usable": not why, "note": why,
+                   "systematic_s": LATENCY_SYSTEMATIC_S[sys_key[k]], "usable": not why, "note": why,
                    "n": c.n, "method": _LATENCY_METHODS[k]}
         if not why:
             usable[k] = c
@@ -429,7 +471,9 @@ def _choose_latency(cands: dict, errs: dict, *, coupled: bool, wheel_ref_label: 
                             "systematic_s": LATENCY_SYSTEMATIC_S.get(k, 0.0), "usable": False, "note": e,
                             "n": 0, "method": _LATENCY_METHODS[k]})
     wr, tr, dy = usable.get("wheel_reference"), usable.get("traction"), usable.get("dynamics")
-    if wr is not None and tr is not None and not _agree(wr, tr):
+    if fronts and wr is not None and tr is not None and not _agree(wr, tr):
+        # (the measured wheel as the reference is free rolling by its own torque: kept, and a
+        # disagreement makes it unreliable below)
         if dy is None or _agree(tr, dy) or not _agree(wr, dy):
             # the slip-traction estimate (independent of any other wheel) contradicts the wheel
             # reference: the reference wheels slip (driven, or braking), so they are not used
@@ -441,7 +485,7 @@ def _choose_latency(cands: dict, errs: dict, *, coupled: bool, wheel_ref_label: 
             wr = None
     chosen: LatencyEstimate | None = None
     method = ""
-    if wr is not None:
+    if wr is not None and (wr.stderr_s <= LATENCY_RELIABLE_SE_S or tr is None):
         chosen, method = wr, "wheel_reference"
     elif tr is not None and dy is not None and _agree(tr, dy):
         w1, w2 = tr.stderr_s ** -2, dy.stderr_s ** -2
@@ -455,7 +499,7 @@ def _choose_latency(cands: dict, errs: dict, *, coupled: bool, wheel_ref_label: 
         chosen = alone[method]
     elif cands:  # nothing usable: the best-supported one, flagged, if not at the edge
         fin = {k: c for k, c in cands.items() if not c.note and math.isfinite(c.stderr_s)
-               and not (k == "wheel_reference" and coupled) and k != "dynamics"}
+               and not (k == "wheel_reference" and fronts and coupled) and k != "dynamics"}
         if fin:
             method = min(fin, key=lambda k: fin[k].stderr_s)
             chosen = fin[method]
@@ -903,12 +947,21 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
                          + "".join(f"; {w}" for w in warns))
     warns += screen.warnings(found={m.name for m in dec.values() if len(m)})
 
-    def get(key_or_ref) -> tuple[np.ndarray, np.ndarray] | None:
+    def get(key_or_ref, measured: bool = False) -> tuple[np.ndarray, np.ndarray] | None:
+        """(timestamps, SI values) of a configured signal; ``measured``: values at the DBC's range
+        limit (:func:`_at_range_limit`) are NaN, with a warning (a clipped reading is no measurement)."""
         ref = sig[key_or_ref] if isinstance(key_or_ref, str) else key_or_ref
         m: DecodedMessage | None = dec.get(ref.message)
         if m is None or len(m) == 0:
             return None
-        return m.timestamp_ns, m.signals[ref.signal] * ref.scale_to_si
+        v = m.signals[ref.signal] * ref.scale_to_si
+        if measured:
+            at = _at_range_limit(cfg, ref, v)
+            if at.any():
+                v = np.where(at, np.nan, v)
+                warns.append(f"{ref.message}.{ref.signal} ({ref.bus}): {int(at.sum())} of {at.size} values at the "
+                             "DBC's range limit (clipped, or the 'not available' code): left out as lost")
+        return m.timestamp_ns, v
 
     def label(key: str) -> str:
         return f"{sig[key].message}.{sig[key].signal} ({sig[key].bus})"
@@ -1035,6 +1088,14 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
             if bad.any():
                 warns.append(f"WFT Status flags overload/bridge/encoder fault in {np.count_nonzero(bad)} "
                              "samples: those samples are treated as lost")
+            for k in ("wft_fx_w", "wft_fz_w", "wft_my"):  # clipped at the DBC's range: an overload the
+                if k in cols:                                # Status did not flag
+                    at = _at_range_limit(cfg, sig[k], cols[k]) & ~bad
+                    if at.any():
+                        bad |= at
+                        warns.append(f"WFT: {label(k)} at the DBC's range limit in {int(at.sum())} samples "
+                                     "(the transducer or its encoding clipped; Status did not flag it): those "
+                                     "samples are treated as lost, like an overload")
             t_w = rel_s(ws.timestamp_ns)
             if all(k in cols for k in ("wft_fx_w", "wft_fz_w", "wft_angle")):
                 fx, fz = rotate_to_hub(cols["wft_fx_w"], cols["wft_fz_w"], cols["wft_angle"])
@@ -1080,7 +1141,7 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
     # ---- 3a. wheel speeds -----------------------------------------------------------------
     omega = domega = nan
     ws_ref = sig["wheel_speed"]
-    got = get("wheel_speed")
+    got = get("wheel_speed", measured=True)
     wss_t = wss_rel = None
     if got is not None and got[0].shape[0] < 3:
         warns.append(f"only {got[0].shape[0]} wheel speed frames ({label('wheel_speed')}): not used")
@@ -1156,23 +1217,31 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
         errs: dict[str, str] = {}
         ref_t = ref_v = usable = None
         wheel_ref_label = ""
-        f_series = [s for s in (get(f) for f in fronts) if s is not None and s[0].shape[0] >= 3]
+        f_series = [s for s in (get(f, measured=True) for f in fronts) if s is not None and s[0].shape[0] >= 3]
+        coupled = False
         if f_series:
             ft = f_series[0][0]
-            fv = np.nanmean(np.vstack([np.interp(ft, s[0], s[1]) for s in f_series]), axis=0) * r
+            with _w.catch_warnings():
+                _w.simplefilter("ignore", RuntimeWarning)  # every front wheel lost at a sample: NaN
+                fv = np.nanmean(np.vstack([np.interp(ft, s[0], s[1]) for s in f_series]), axis=0) * r
+            coupled = wss_t is not None and _fronts_coupled(ft, fv, wss_t, got[1] * r)
+        front_ref = bool(f_series) and not coupled
+        if front_ref:
             ref_t, ref_v = rel_s(ft), fv
             wheel_ref_label = "front wheels r*omega (" + ", ".join(f.signal for f in fronts) + ")"
         elif wss_t is not None and np.isfinite(torque).any():
+            # no front wheel rolls freely (none logged, or the 4x4 drives them): the measured wheel
+            # where it transmits no torque does (coasting, another axle braking); its transducer
+            # reads a brake torque too, so no deceleration limit is needed
             ref_t, ref_v = wss_rel, got[1] * r
             tq = np.interp(ref_t, t_grid, np.nan_to_num(torque, nan=1e9))
-            usable = np.abs(tq) < FREE_ROLLING_TORQUE_NM
+            usable = _sustained(np.abs(tq) < FREE_ROLLING_TORQUE_NM, ref_t, FREE_ROLLING_HOLD_S)
             wheel_ref_label = f"measured wheel r*omega where |T| < {FREE_ROLLING_TORQUE_NM:g} N m"
         if ref_t is not None:
             _, ref_period = _time_gaps("ref", (ref_t * 1e9).astype(np.int64))
             ref_f = filter_to_grid(ref_t, ref_v, ref_period, ref_t, LATENCY_REF_CUTOFF_HZ)
-            dv = np.gradient(np.nan_to_num(ref_f), ref_t)
-            use = dv > -LATENCY_MAX_DECEL_MPS2
-            usable = use if usable is None else (usable & use)
+            if front_ref:  # a braked front wheel may skid
+                usable = np.gradient(np.nan_to_num(ref_f), ref_t) > -LATENCY_MAX_DECEL_MPS2
             try:
                 cands["wheel_reference"] = estimate_latency(g_rel, g_v, ref_t, ref_f, usable_ref=usable,
                                                             max_latency_s=LATENCY_MAX_S)
@@ -1180,7 +1249,6 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
                 errs["wheel_reference"] = str(exc)
         else:
             errs["wheel_reference"] = "no free-rolling wheel speed to compare with"
-        coupled = bool(f_series) and wss_t is not None and _fronts_coupled(ft, fv, wss_t, got[1] * r)
         if np.isfinite(omega).any() and np.isfinite(torque).any() and np.isfinite(load).any():
             with np.errstate(invalid="ignore", divide="ignore"):
                 coeff = np.where(load > LATENCY_MIN_LOAD_N, torque / (r * load), np.nan)
@@ -1197,7 +1265,7 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
         else:
             errs["dynamics"] = "needs the measured Fx and the GNSS speed"
         latency, lat_ref, quality["latency"], lat_warns = _choose_latency(
-            cands, errs, coupled=coupled, wheel_ref_label=wheel_ref_label, fronts=bool(f_series))
+            cands, errs, coupled=coupled, wheel_ref_label=wheel_ref_label, fronts=front_ref)
         warns.extend(lat_warns)
         shift = latency.latency_s if latency is not None else 0.0
         speed, dspeed = filter_to_grid(g_rel - shift, g_v, g_period, t_grid, min(cutoff, 0.4 / g_period),

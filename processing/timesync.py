@@ -150,20 +150,25 @@ def estimate_latency(t_gnss_s: np.ndarray, v_gnss: np.ndarray, t_ref_s: np.ndarr
     res = optimize.minimize_scalar(lambda t: _fit_at(t, t_g, v_g, t_r, v_r, keep)[0],
                                    bounds=(lo, hi), method="bounded", options={"xatol": 1e-5})
     tau = float(res.x)
-    mse, a, b, m, _ = _fit_at(tau, t_g, v_g, t_r, v_r, keep)
+    mse, a, b, m, x = _fit_at(tau, t_g, v_g, t_r, v_r, keep)
     dv = np.gradient(v_r, t_r)
     slope = a * np.interp(t_g - tau, t_r, dv)[m]
-    resid = v_g[m] - (a * np.interp(t_g - tau, t_r, v_r)[m] + b)
+    resid = v_g[m] - (a * x[m] + b)
     n = int(np.count_nonzero(m))
     s2 = float(resid @ resid) / max(n - 3, 1)
-    # a gap in the reference (lost frames: NaN) spreads to its neighbours' gradient; the
-    # information comes from the points where the slope is defined
-    info = float(np.sum(slope[np.isfinite(slope)] ** 2))
-    if info <= 0:
-        raise ValueError("the reference speed never changes: the latency cannot be estimated")
+    # the information on tau given the fitted gain and offset (Gauss-Newton covariance of
+    # (a, b, tau), Seber & Wild 1989, 2.1): a reference changing at a constant rate (a wheel
+    # coasting at one deceleration) shifts by a constant that the offset takes up, and tells
+    # nothing. A gap in the reference (lost frames: NaN) spreads to its neighbours' gradient;
+    # the information comes from the points where the slope is defined.
+    ok = np.isfinite(slope)
+    J = np.column_stack([x[m][ok], np.ones(int(ok.sum())), slope[ok]])
+    jtj = J.T @ J
+    if not (ok.sum() > 3 and np.any(slope[ok] != 0)) or np.linalg.cond(jtj) > 1e12:
+        raise ValueError("the reference speed never changes its rate: the latency cannot be estimated")
     rho = float(np.corrcoef(resid[:-1], resid[1:])[0, 1]) if n > 3 else 0.0
     rho = min(max(rho, 0.0), 0.95) if np.isfinite(rho) else 0.0
-    stderr = float(np.sqrt(s2 / info * (1 + rho) / (1 - rho)))
+    stderr = float(np.sqrt(s2 * np.linalg.inv(jtj)[2, 2] * (1 + rho) / (1 - rho)))
     note = ""
     if tau <= 0.004 or tau >= max_latency_s - 0.004:
         note = f"latency at the edge of the search range 0..{max_latency_s:g} s"

@@ -126,7 +126,7 @@ def write_recording(path, truth: Truth, *, latency_s: float = 0.1, seed: int = 0
                     wheel_speed_zero: tuple[float, float] | None = None,
                     wheel_mass_kg: float = WHEEL_MASS_KG, wheel_inertia_kgm2: float = WHEEL_INERTIA_KGM2,
                     config=None, ts_edit=None, drop_wft_runs=(), drop_frames: dict | None = None,
-                    burst_s: float = 0.0, fronts_coupled: bool = False) -> dict:
+                    burst_s: float = 0.0, fronts_coupled: bool = False, at_max: dict | None = None) -> dict:
     """Encode ``truth`` as frames and write an MCAP recording.
 
     ``drop_wft_bursts``: that many runs of 1..12 lost WFT samples;
@@ -147,7 +147,9 @@ def write_recording(path, truth: Truth, *, latency_s: float = 0.1, seed: int = 0
     delivers each bus's frames in bursts: receive times rounded up to the
     next multiple of ``burst_s`` (as USB/UDP adapters do); ``fronts_coupled``:
     the front wheels turn with the measured one (all wheels driven, locked
-    differentials) instead of rolling freely.
+    differentials) instead of rolling freely; ``at_max`` ``{signal name: (t0_s, t1_s)}``:
+    ``Fx_w`` or ``WheelSpeed_RL`` reads its DBC maximum in that window (a clipped sensor, or
+    the all-ones "not available" code).
 
     Returns ``{"path", "lost_samples", "start_ns", "dropped_frames"}``
     (``dropped_frames``: message -> frames removed by ``drop_frames``).
@@ -169,6 +171,10 @@ def write_recording(path, truth: Truth, *, latency_s: float = 0.1, seed: int = 0
     fx_hub = truth.drawbar_pull_n - wheel_mass_kg * np.gradient(truth.speed_mps, t)
     my_hub = truth.torque_nm + wheel_inertia_kgm2 * np.gradient(truth.omega_radps, t)
     fx_w = fx_hub * ca - truth.load_n * sa + rng.normal(0, FORCE_NOISE_N, n)
+    at_max = at_max or {}
+    if "Fx_w" in at_max:
+        fx_w[(t >= at_max["Fx_w"][0]) & (t < at_max["Fx_w"][1])] = \
+            wft.get_message_by_name("WFT_RL_Force").get_signal_by_name("Fx_w").maximum
     fz_w = fx_hub * sa + truth.load_n * ca + rng.normal(0, FORCE_NOISE_N, n)
     my = my_hub + rng.normal(0, MOMENT_NOISE_NM, n)
     counter = np.arange(n) % 256
@@ -213,9 +219,12 @@ def write_recording(path, truth: Truth, *, latency_s: float = 0.1, seed: int = 0
             if wheel_speed_zero and wheel_speed_zero[0] <= tw < wheel_speed_zero[1]:
                 om = 0.0
             rpm = lambda w: float(np.clip(abs(w * (1 + rng.normal(0, 0.002))) * 60 / (2 * np.pi), 0, 655))
+            rl = rpm(om)
+            if "WheelSpeed_RL" in at_max and at_max["WheelSpeed_RL"][0] <= tw < at_max["WheelSpeed_RL"][1]:
+                rl = m_ws.get_signal_by_name("WheelSpeed_RL").maximum
             can1.append((tw, m_ws, m_ws.encode({"WheelSpeed_FL": rpm(v / truth.radius_m),
                                                  "WheelSpeed_FR": rpm(v / truth.radius_m),
-                                                 "WheelSpeed_RL": rpm(om), "WheelSpeed_RR": rpm(om)})))
+                                                 "WheelSpeed_RL": rl, "WheelSpeed_RR": rpm(om)})))
     # ---- GNSS, 20 Hz fixes on the GPS clock, received latency_s later
     if not no_gnss:
         m_v = gps.get_message_by_name("RT_SB_INS_Vel_Body_Axes")

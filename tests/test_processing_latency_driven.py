@@ -89,6 +89,75 @@ def test_choice_edge_hit_and_dynamics_alone_apply_nothing():
     assert any("latency not estimated" in w for w in warns)
 
 
+def test_choice_keeps_the_coasting_measured_wheel_against_the_traction_estimate():
+    """The measured wheel as the reference (no free-rolling front wheel) rolls freely by its own
+    torque: a slip-traction estimate that disagrees (its static torque-slip curve broken by an
+    effect or by transients) makes it unreliable, but does not replace it, as it replaces front
+    wheels that may be driven (an independent generator: the traction estimate 26 ms and 339 ms
+    against true 120 ms and 50 ms; the coasting wheel 114 ms and 40 ms)."""
+    cands = {"wheel_reference": _est(0.114, 0.0013), "traction": _est(0.026, 0.015), "dynamics": _est(0.087, 0.038)}
+    lat, _, q, warns = _choose_latency(cands, {}, coupled=True, wheel_ref_label="measured wheel", fronts=False)
+    assert q["method"] == "wheel_reference" and lat.latency_s == pytest.approx(0.114)
+    assert not q["reliable"] and any("disagrees with traction" in r for r in q["reasons"])
+    assert q["candidates"]["wheel_reference"]["systematic_s"] > 0  # coasting is not an exact reference
+    assert any("GNSS LATENCY UNRELIABLE" in w for w in warns)
+    # the same numbers from front wheels: they may be driven, and the traction estimate wins
+    lat, _, q, _ = _choose_latency(cands, {}, coupled=False, wheel_ref_label="fronts", fronts=True)
+    assert q["method"] == "traction+dynamics" and not q["candidates"]["wheel_reference"]["usable"]
+
+
+def _coasting_run(latency_s: float):
+    """Drive (a slip sweep, torque on) 0-7 s of each 15 s cycle; the measured wheel coasts 7-11 s
+    (no torque, slip -0.02) while the front axle brakes the vehicle (-0.7 m/s^2) and then lets it
+    roll (-0.1 m/s^2); all wheels brake 11-15 s (a skid, torque negative). The wheel follows its
+    slip command with a 0.12 s driveline lag. Returns (t_gnss, v_gnss, t, r omega, torque)."""
+    dt = 0.01
+    t = np.arange(0.0, 180.0, dt)
+    ph = t % 15.0
+    cmd = np.select([ph < 7.0, ph < 11.0], [0.1 + 0.5 * np.sin(np.pi * ph / 7.0), -0.02], -0.1)
+    acc = np.select([ph < 7.0, ph < 9.0, ph < 11.0], [0.9, -0.7, -0.1], -1.15)
+    slip, v = np.empty_like(cmd), np.empty_like(cmd)
+    slip[0], v[0] = cmd[0], 1.0
+    for i in range(1, t.size):
+        slip[i] = slip[i - 1] + (cmd[i - 1] - slip[i - 1]) * dt / 0.12
+        v[i] = max(v[i - 1] + acc[i - 1] * dt, 0.5)
+    t_g = np.arange(0.0, t[-1], 0.05)
+    v_g = np.interp(t_g, t, v) + np.random.default_rng(3).normal(0, 0.01, t_g.size)
+    return t_g + latency_s, v_g, t, v / (1 - slip), 4000.0 * (slip + 0.02)
+
+
+def test_the_measured_wheel_is_a_reference_where_it_coasts_not_where_it_passes_zero_torque():
+    """Between driving and braking the wheel passes through zero torque while its slip changes
+    fast: the samples within FREE_ROLLING_HOLD_S of any torque are left out, and the latency from
+    the coasting wheel is the true one; from every zero-torque sample it is 40 ms off."""
+    from wheelsoil.processing.pipeline import FREE_ROLLING_HOLD_S, FREE_ROLLING_TORQUE_NM, _sustained
+    from wheelsoil.processing.timesync import estimate_latency
+
+    t_g, v_g, t, w, torque = _coasting_run(0.08)
+    low = np.abs(torque) < FREE_ROLLING_TORQUE_NM
+    held = _sustained(low, t, FREE_ROLLING_HOLD_S)
+    assert 0 < held.sum() < low.sum() and not (held & ~low).any()
+    good = estimate_latency(t_g, v_g, t, w, usable_ref=held, max_latency_s=LATENCY_MAX_S)
+    assert good.latency_s == pytest.approx(0.08, abs=0.005) and good.stderr_s < 0.005
+    bad = estimate_latency(t_g, v_g, t, w, usable_ref=low, max_latency_s=LATENCY_MAX_S)
+    assert abs(bad.latency_s - 0.08) > 5 * bad.stderr_s  # biased, and overconfident
+
+
+def test_a_reference_changing_at_one_rate_gives_no_latency_information():
+    """Coasting at one constant deceleration only: V(t - tau) = V(t) + d tau, a constant the fitted
+    offset takes up. The estimator says it cannot tell (before: an estimate with a standard error
+    of about a millisecond, from the slope's information without the offset)."""
+    from wheelsoil.processing.timesync import estimate_latency
+
+    t = np.arange(0.0, 60.0, 0.01)
+    v = 6.0 - 0.08 * (t % 20.0)
+    t_g = np.arange(0.0, 60.0, 0.05)
+    v_g = np.interp(t_g, t, v) + np.random.default_rng(4).normal(0, 0.01, t_g.size)
+    steady = (t % 20.0 > 1.0) & (t % 20.0 < 19.0)
+    with pytest.raises(ValueError, match="never changes its rate"):
+        estimate_latency(t_g + 0.1, v_g, t, v, usable_ref=steady, max_latency_s=LATENCY_MAX_S)
+
+
 # --------------------------------------------------------------------------- simulated 4x4 runs
 def _simulate(tmp_path, front_wheels: str, latency_s: float, seed: int):
     sim = pytest.importorskip("wheelsoil.simulate")

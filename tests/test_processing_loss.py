@@ -131,3 +131,27 @@ def test_gnss_velocity_the_receiver_flags_invalid_is_left_out(tmp_path):
     both = outside & s_bad["valid"].to_numpy() & s_good["valid"].to_numpy()
     assert both.sum() > 100
     np.testing.assert_allclose(s_bad["slip"].to_numpy()[both], s_good["slip"].to_numpy()[both], atol=0.02)
+
+
+def test_readings_at_the_dbc_range_limit_are_lost_samples_not_values(truth, tmp_path):
+    """A wheel-speed sensor pinned at the top of its DBC range (655.35 rpm: the 16-bit signal's
+    all-ones code, a clipped reading or "not available") and a WFT bridge clipped at Fx_w's range
+    with Status 0: before, 655.35 rpm was a wheel speed (slip far off) and the clipped Fx_w a force
+    rotated into the hub frame; now both are lost samples, each said in a warning."""
+    clean = process_recording(write_recording(tmp_path / "clean.mcap", truth)["path"])
+    info = write_recording(tmp_path / "clip.mcap", truth, at_max={"WheelSpeed_RL": (10.0, 11.0), "Fx_w": (20.0, 20.5)})
+    res = process_recording(info["path"])
+    said = [w for w in res.warnings if "range limit" in w]
+    assert any("WheelSpeed_RL" in w and "100 of" in w for w in said), said
+    assert any("Fx_w" in w and "250 samples" in w for w in said), said
+    assert not any("range limit" in w for w in clean.warnings)
+    s, c = res.signals, clean.signals
+    t = s["t_s"].to_numpy()
+    ws = (t > 10.2) & (t < 10.8)
+    assert np.isnan(s["omega_radps"].to_numpy()[ws]).all() and not s["valid"].to_numpy()[ws].any()
+    assert np.nanmax(s["omega_radps"].to_numpy()) < 655.35 * 2 * np.pi / 60 * 0.5  # no pinned value left
+    wft = (t > 20.1) & (t < 20.4)
+    assert np.isnan(s["load_n"].to_numpy()[wft]).all() and not s["valid"].to_numpy()[wft].any()
+    away = (t < 9.0) | ((t > 12.0) & (t < 19.0)) | (t > 22.0)  # elsewhere as without the clipping (the
+    # segment after a lost stretch is resampled on its own grid: within the 30 N sensor noise)
+    assert np.nanmax(np.abs(s["load_n"].to_numpy()[away] - c["load_n"].to_numpy()[away])) < 30.0
