@@ -100,6 +100,13 @@ LATENCY_SYSTEMATIC_S = {"wheel_reference": 0.0, "traction": 0.015, "dynamics": 0
                         # transfer of a decelerating vehicle a little (5 runs of an independent
                         # generator with coasting rear wheels: errors -9.6 .. +5.7 ms)
                         "measured_wheel": 0.010}
+#: A wheel reference whose own fit shows it rolling freely: GNSS V = a r*omega + b with |a - 1| at
+#: most this (a free tyre's effective rolling radius within 5 % of the configured one) ...
+FREE_ROLLING_GAIN_TOL = 0.05
+#: ... and a residual RMS at most this fraction of the RMS GNSS speed (a driven wheel in a slip
+#: sweep, r*omega = V/(1 - s), leaves tens of per cent): then a slip-traction estimate that
+#: disagrees is the one that fails (the torque is not a static function of slip and load there).
+FREE_ROLLING_RESID_REL = 0.05
 #: Two estimates agree when they differ by at most this many combined (total) standard errors.
 LATENCY_AGREE_SIGMAS = 2.0
 #: A latency is reliable only with a total standard error at most this [s] (the +-20 ms target).
@@ -413,25 +420,29 @@ def _with_systematic(name: str, c: LatencyEstimate) -> LatencyEstimate:
     return replace(c, stderr_s=math.hypot(c.stderr_s, LATENCY_SYSTEMATIC_S.get(name, 0.0)))
 
 
-def _choose_latency(cands: dict, errs: dict, *, coupled: bool, wheel_ref_label: str, fronts: bool):
+def _choose_latency(cands: dict, errs: dict, *, coupled: bool, wheel_ref_label: str, fronts: bool,
+                    speed_rms_mps: float | None = None):
     """Pick the GNSS latency from the candidate estimates and judge its reliability.
 
     ``cands`` name -> :class:`.timesync.LatencyEstimate` (``wheel_reference``,
     ``traction``, ``dynamics``); ``errs`` name -> why a candidate is missing;
     ``coupled`` the front wheels turn with the measured one (driven: no free-rolling
     reference; the caller then takes the measured wheel where it transmits no torque);
-    ``fronts`` the reference is the front wheels. Each candidate's standard
+    ``fronts`` the reference is the front wheels; ``speed_rms_mps`` the RMS GNSS speed [m/s] (None:
+    the wheel reference's own fit is not judged). Each candidate's standard
     error is first raised by its systematic uncertainty (:data:`LATENCY_SYSTEMATIC_S`).
     Rules: a candidate at the edge of the search range or without a finite standard
     error is unusable; the front wheels' reference is unusable when they are
     coupled, and when it disagrees with the slip-traction estimate (which needs no
     other wheel) unless the dynamics estimate sides with it: its wheels then do not
-    roll freely (the measured wheel's own torque shows whether it does). The choice:
-    the wheel reference if usable and precise (total standard error at most
-    :data:`LATENCY_RELIABLE_SE_S`; a coasting wheel whose deceleration hardly changes
-    tells little), else the inverse-variance mean of agreeing traction and dynamics
-    estimates, else the
-    usable one with the smaller standard error, else (flagged) the best finite one;
+    roll freely (the measured wheel's own torque shows whether it does); but a wheel
+    reference whose own fit shows it rolling freely (:data:`FREE_ROLLING_GAIN_TOL`,
+    :data:`FREE_ROLLING_RESID_REL`) makes a disagreeing slip-traction estimate unusable
+    instead. The choice: the wheel reference if usable and precise (total standard error
+    at most :data:`LATENCY_RELIABLE_SE_S`; a coasting wheel whose deceleration hardly
+    changes tells little), else the inverse-variance mean of agreeing traction and
+    dynamics estimates, else the usable one with the smaller standard error, else
+    (flagged) the best finite one;
     the dynamics estimate alone is never applied (its bias is known, it only confirms
     or joins the traction one): then no latency is applied.
     ``reliable`` needs a total standard error of at most
@@ -471,6 +482,16 @@ def _choose_latency(cands: dict, errs: dict, *, coupled: bool, wheel_ref_label: 
                             "systematic_s": LATENCY_SYSTEMATIC_S.get(k, 0.0), "usable": False, "note": e,
                             "n": 0, "method": _LATENCY_METHODS[k]})
     wr, tr, dy = usable.get("wheel_reference"), usable.get("traction"), usable.get("dynamics")
+    rolls_freely = (wr is not None and speed_rms_mps is not None and abs(wr.gain - 1.0) <= FREE_ROLLING_GAIN_TOL
+                    and wr.residual_rms_mps <= FREE_ROLLING_RESID_REL * speed_rms_mps)
+    if rolls_freely and tr is not None and not _agree(wr, tr):
+        info["traction"]["usable"] = False
+        info["traction"]["note"] = (
+            f"disagrees with a wheel reference that rolls freely (GNSS V = {wr.gain:.3f} r*omega "
+            f"{wr.offset_mps:+.3f} m/s, residual {wr.residual_rms_mps:.3f} m/s): the torque is not a static "
+            "function of slip and load in this run")
+        usable.pop("traction")
+        tr = None
     if fronts and wr is not None and tr is not None and not _agree(wr, tr):
         # (the measured wheel as the reference is free rolling by its own torque: kept, and a
         # disagreement makes it unreliable below)
@@ -1265,7 +1286,8 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
         else:
             errs["dynamics"] = "needs the measured Fx and the GNSS speed"
         latency, lat_ref, quality["latency"], lat_warns = _choose_latency(
-            cands, errs, coupled=coupled, wheel_ref_label=wheel_ref_label, fronts=front_ref)
+            cands, errs, coupled=coupled, wheel_ref_label=wheel_ref_label, fronts=front_ref,
+            speed_rms_mps=float(np.sqrt(np.nanmean(g_v ** 2))) if np.isfinite(g_v).any() else None)
         warns.extend(lat_warns)
         shift = latency.latency_s if latency is not None else 0.0
         speed, dspeed = filter_to_grid(g_rel - shift, g_v, g_period, t_grid, min(cutoff, 0.4 / g_period),

@@ -106,6 +106,23 @@ def test_choice_keeps_the_coasting_measured_wheel_against_the_traction_estimate(
     assert q["method"] == "traction+dynamics" and not q["candidates"]["wheel_reference"]["usable"]
 
 
+def test_a_wheel_reference_that_rolls_freely_outranks_a_disagreeing_traction_estimate():
+    """Free-rolling front wheels (GNSS V = 1.000 r*omega + 0.000, residual 0.02 m/s: the GNSS noise) on
+    an independent generator's runs, where the slip-traction estimate was 110-340 ms off: before, the
+    reference was dropped as 'not rolling freely' and a wrong latency applied as reliable. A front
+    wheel that slips (its fit follows V badly) is still dropped for the traction estimate."""
+    free = LatencyEstimate(0.168, 0.003, 1.0, 0.0, 0.02, 2000, "")
+    cands = {"wheel_reference": free, "traction": _est(0.045, 0.004), "dynamics": _est(0.11, 0.024)}
+    lat, _, q, _ = _choose_latency(cands, {}, coupled=False, wheel_ref_label="fronts", fronts=True,
+                                   speed_rms_mps=3.0)
+    assert q["method"] == "wheel_reference" and lat.latency_s == pytest.approx(0.168) and q["reliable"]
+    assert not q["candidates"]["traction"]["usable"] and "rolls freely" in q["candidates"]["traction"]["note"]
+    slipping = LatencyEstimate(0.168, 0.003, 1.35, -0.4, 0.6, 2000, "")
+    lat, _, q, _ = _choose_latency(dict(cands, wheel_reference=slipping), {}, coupled=False,
+                                   wheel_ref_label="fronts", fronts=True, speed_rms_mps=3.0)
+    assert q["method"] == "traction+dynamics" and not q["candidates"]["wheel_reference"]["usable"]
+
+
 def _coasting_run(latency_s: float):
     """Drive (a slip sweep, torque on) 0-7 s of each 15 s cycle; the measured wheel coasts 7-11 s
     (no torque, slip -0.02) while the front axle brakes the vehicle (-0.7 m/s^2) and then lets it
