@@ -1088,7 +1088,10 @@ def _glance(d: dict) -> str:
     probs = sorted(((k, p) for k, p in (d.get("effect_probabilities") or {}).items() if p is not None and p >= 1e-3),
                    key=lambda kp: -kp[1])
     if probs:
-        out += "<p>Probability of each effect: " + _e(", ".join(f"{k} {num(p, 2)}" for k, p in probs)) + ".</p>"
+        out += ("<p>Probability of each effect, over the hypotheses tried: "
+                + _e(", ".join(f"{k} {num(p, 2)}" for k, p in probs)) + "."
+                + (" A probable effect is named only when its model also holds on new data and against the "
+                   "causes on no list that act alike (below)." if probs[0][0] != d.get("effect") else "") + "</p>")
     why = d.get("confidence_reasons") or []
     if why:
         out += (f"<p>Confidence {_e(d.get('confidence'))}:</p><ul>"
@@ -1418,7 +1421,8 @@ def _html(rep: dict, figs: list, overviews: list) -> str:
                      "gap.</p></div>")
     eff = d.get("effect")
     parts.append(
-        f"<div class='verdict'><div class='effect'>Effect: {_e(eff)} &nbsp;·&nbsp; model: "
+        f"<div class='verdict'><div class='effect'>Effect: {_e(eff)} &nbsp;·&nbsp; "
+        f"{'best candidate' if eff == 'unexplained' else 'model'}: "
         f"{_e(_title(_canon(d.get('model'))))} &nbsp;·&nbsp; confidence: {_e(d.get('confidence'))}</div>"
         + _glance(d) + f"<p class='full'><b>In full.</b> {_e(d.get('summary', ''))}</p></div>")
     if rep.get("not_done"):
