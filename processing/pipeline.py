@@ -54,7 +54,7 @@ from .slip import PHASES, accel_cycles, classify_phases, slip_ratio
 from .timebase import (MAX_GRID_ROWS, cycle_loss, find_clock_steps, find_time_outliers, robust_period,
                        split_joined_parts)
 from .timesync import LatencyEstimate, estimate_latency, estimate_latency_traction, fit_gps_time_mapping
-from .wft import assemble_wft_samples, rotate_to_hub
+from .wft import assemble_wft_samples, rotate_to_hub, rotation_ripple
 
 __all__ = ["ProcessResult", "process_recording", "COLUMNS", "MAX_FILL_SAMPLES"]
 
@@ -81,6 +81,10 @@ FREE_ROLLING_TORQUE_NM = 150.0
 #: between driving and braking is changing its slip fast, not rolling freely, and the 5 Hz zero-phase
 #: filter of the reference (LATENCY_REF_CUTOFF_HZ) spreads such a change over about +-0.2 s.
 FREE_ROLLING_HOLD_S = 0.5
+#: A component of the hub forces locked to the wheel angle (once or twice per revolution) at or above
+#: this fraction of the mean load is reported as a calibration fault: a 2x ripple of 3 % is a 6 %
+#: gain mismatch of the rotating bridges; a tyre's radial force variation is usually under 1.5 %.
+WFT_RIPPLE_REL = 0.03
 #: GNSS latency search range [s] (hardware.md: typically 20-200 ms); an estimate within 4 ms of
 #: either end is an edge hit (unreliable).
 LATENCY_MAX_S = 0.5
@@ -1122,6 +1126,19 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
                 fx, fz = rotate_to_hub(cols["wft_fx_w"], cols["wft_fz_w"], cols["wft_angle"])
                 fx[bad] = np.nan
                 fz[bad] = np.nan
+                ripple = rotation_ripple(fx, fz, cols["wft_angle"], t_w)
+                quality["wft_ripple"] = ripple
+                w_mean = float(np.nanmean(fz)) if np.isfinite(fz).any() else float("nan")
+                if ripple is not None and w_mean > 0:
+                    for order, why in ((2, "the two in-plane bridges read with different gains (about "
+                                           f"{200 * max(ripple['fx_2x_n'], ripple['fz_2x_n']) / w_mean:.0f} %)"),
+                                       (1, "an offset in a rotating channel (the transducer not zeroed), or a "
+                                           "wheel or tyre out of round")):
+                        amp = max(ripple[f"fx_{order}x_n"], ripple[f"fz_{order}x_n"])
+                        if amp >= WFT_RIPPLE_REL * w_mean:
+                            warns.append(f"WFT: the hub forces carry {amp:.0f} N ({100 * amp / w_mean:.1f} % of the "
+                                         f"mean load) {'twice' if order == 2 else 'once'} per wheel revolution: "
+                                         f"{why}; check the transducer's calibration")
                 fx_f = filter_to_grid(t_w, fx, ws.period_s, t_grid, cutoff)
                 load = filter_to_grid(t_w, fz, ws.period_s, t_grid, cutoff)
             else:

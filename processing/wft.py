@@ -124,6 +124,52 @@ def rotate_to_hub(fx_w: np.ndarray, fz_w: np.ndarray, angle_rad: np.ndarray) -> 
     return fx_w * ca + fz_w * sa, -fx_w * sa + fz_w * ca
 
 
+def rotation_ripple(fx: np.ndarray, fz: np.ndarray, angle_rad: np.ndarray, t_s: np.ndarray, *,
+                    min_rev_s: float = 1.0, window_s: float = 1.0) -> dict | None:
+    """The hub forces' components locked to the wheel's angle, once and twice per revolution.
+
+    A transducer that turns with the wheel and reads its two in-plane bridges correctly gives hub
+    forces with no part that follows the wheel angle (hardware.md, "Frames and signs"); a gain
+    mismatch g between ``Fx_w`` and ``Fz_w`` leaves about ``g W / 2`` twice per revolution, an
+    offset o in one of them ``o`` once per revolution (so does an out-of-round tyre, usually far
+    less). Samples where the wheel turns at least ``min_rev_s`` [rev/s] are used, each force less
+    its centred ``window_s`` moving mean (at least one revolution: the ripple averages out of it),
+    and fitted by least squares with ``cos a, sin a, cos 2a, sin 2a``.
+
+    ``fx``, ``fz`` (N,) hub forces [N] (NaN: lost), ``angle_rad`` (N,) the wheel angle of the same
+    samples, ``t_s`` (N,) their times [s], uniformly sampled. Returns ``{"fx_1x_n", "fx_2x_n",
+    "fz_1x_n", "fz_2x_n", "samples"}`` (amplitudes [N]) or None with fewer than 5 s of turning
+    samples. Source: harmonic (Fourier) regression on the wheel angle.
+    """
+    ok = np.isfinite(fx) & np.isfinite(fz) & np.isfinite(angle_rad) & np.isfinite(t_s)
+    if ok.sum() < 100:
+        return None
+    dt = float(np.median(np.diff(t_s[ok])))
+    rate = np.full(t_s.shape, np.nan)
+    rate[ok] = np.gradient(np.unwrap(angle_rad[ok]), t_s[ok]) / (2 * np.pi)
+    k = max(int(round(window_s / dt)), 1)
+    kernel = np.ones(k) / k
+
+    def detrend(y):
+        filled = np.where(ok, y, 0.0)
+        weight = np.convolve(ok.astype(float), kernel, "same")
+        with np.errstate(invalid="ignore", divide="ignore"):
+            return y - np.convolve(filled, kernel, "same") / weight
+
+    use = ok & (np.abs(rate) >= min_rev_s)
+    use[: k // 2] = use[len(use) - k // 2:] = False  # the moving mean is one-sided there
+    if use.sum() * dt < 5.0:
+        return None
+    a = angle_rad[use]
+    X = np.column_stack([np.cos(a), np.sin(a), np.cos(2 * a), np.sin(2 * a)])
+    out = {"samples": int(use.sum())}
+    for name, y in (("fx", fx), ("fz", fz)):
+        c = np.linalg.lstsq(X, detrend(y)[use], rcond=None)[0]
+        out[f"{name}_1x_n"] = float(np.hypot(c[0], c[1]))
+        out[f"{name}_2x_n"] = float(np.hypot(c[2], c[3]))
+    return out
+
+
 @dataclass
 class GapReport:
     """Lost WFT samples: ``lost`` count, ``gaps`` list of (t_start_ns, t_end_ns, n_lost),

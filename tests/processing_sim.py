@@ -126,7 +126,8 @@ def write_recording(path, truth: Truth, *, latency_s: float = 0.1, seed: int = 0
                     wheel_speed_zero: tuple[float, float] | None = None,
                     wheel_mass_kg: float = WHEEL_MASS_KG, wheel_inertia_kgm2: float = WHEEL_INERTIA_KGM2,
                     config=None, ts_edit=None, drop_wft_runs=(), drop_frames: dict | None = None,
-                    burst_s: float = 0.0, fronts_coupled: bool = False, at_max: dict | None = None) -> dict:
+                    burst_s: float = 0.0, fronts_coupled: bool = False, at_max: dict | None = None,
+                    fx_w_gain: float = 1.0, fx_w_offset_n: float = 0.0) -> dict:
     """Encode ``truth`` as frames and write an MCAP recording.
 
     ``drop_wft_bursts``: that many runs of 1..12 lost WFT samples;
@@ -149,7 +150,8 @@ def write_recording(path, truth: Truth, *, latency_s: float = 0.1, seed: int = 0
     the front wheels turn with the measured one (all wheels driven, locked
     differentials) instead of rolling freely; ``at_max`` ``{signal name: (t0_s, t1_s)}``:
     ``Fx_w`` or ``WheelSpeed_RL`` reads its DBC maximum in that window (a clipped sensor, or
-    the all-ones "not available" code).
+    the all-ones "not available" code); ``fx_w_gain``, ``fx_w_offset_n``: the rotating Fx_w
+    bridge reads with that gain and offset (a calibration fault).
 
     Returns ``{"path", "lost_samples", "start_ns", "dropped_frames"}``
     (``dropped_frames``: message -> frames removed by ``drop_frames``).
@@ -171,6 +173,7 @@ def write_recording(path, truth: Truth, *, latency_s: float = 0.1, seed: int = 0
     fx_hub = truth.drawbar_pull_n - wheel_mass_kg * np.gradient(truth.speed_mps, t)
     my_hub = truth.torque_nm + wheel_inertia_kgm2 * np.gradient(truth.omega_radps, t)
     fx_w = fx_hub * ca - truth.load_n * sa + rng.normal(0, FORCE_NOISE_N, n)
+    fx_w = fx_w * fx_w_gain + fx_w_offset_n
     at_max = at_max or {}
     if "Fx_w" in at_max:
         fx_w[(t >= at_max["Fx_w"][0]) & (t < at_max["Fx_w"][1])] = \

@@ -155,3 +155,20 @@ def test_readings_at_the_dbc_range_limit_are_lost_samples_not_values(truth, tmp_
     away = (t < 9.0) | ((t > 12.0) & (t < 19.0)) | (t > 22.0)  # elsewhere as without the clipping (the
     # segment after a lost stretch is resampled on its own grid: within the 30 N sensor noise)
     assert np.nanmax(np.abs(s["load_n"].to_numpy()[away] - c["load_n"].to_numpy()[away])) < 30.0
+
+
+def test_a_rotating_bridge_with_its_own_gain_or_offset_is_reported_from_the_ripple_it_leaves(truth, tmp_path):
+    """The transducer turns with the wheel: a gain mismatch g of the Fx_w bridge leaves about g W / 2 in
+    the hub forces twice per revolution, an offset o of it o once per revolution. Before, nothing
+    said so (an independent generator's 8 % Fx_w gain: a 307 N RMS ripple and no warning)."""
+    clean = process_recording(write_recording(tmp_path / "clean.mcap", truth)["path"])
+    gain = process_recording(write_recording(tmp_path / "gain.mcap", truth, fx_w_gain=1.10)["path"])
+    offs = process_recording(write_recording(tmp_path / "offset.mcap", truth, fx_w_offset_n=600.0)["path"])
+    w = float(np.mean(truth.load_n))
+    rg, ro, rc = (r.quality["wft_ripple"] for r in (gain, offs, clean))
+    assert rg["fz_2x_n"] == pytest.approx(0.10 * w / 2, rel=0.15) and rg["fz_1x_n"] < 0.01 * w
+    assert ro["fx_1x_n"] == pytest.approx(600.0, rel=0.15) and ro["fx_2x_n"] < 0.01 * w
+    assert max(v for k, v in rc.items() if k != "samples") < 0.01 * w
+    assert any("twice per wheel revolution" in x and "different gains" in x for x in gain.warnings)
+    assert any("once per wheel revolution" in x for x in offs.warnings)
+    assert not any("per wheel revolution" in x for x in clean.warnings)
