@@ -1129,16 +1129,16 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
                 ripple = rotation_ripple(fx, fz, cols["wft_angle"], t_w)
                 quality["wft_ripple"] = ripple
                 w_mean = float(np.nanmean(fz)) if np.isfinite(fz).any() else float("nan")
-                if ripple is not None and w_mean > 0:
-                    for order, why in ((2, "the two in-plane bridges read with different gains (about "
-                                           f"{200 * max(ripple['fx_2x_n'], ripple['fz_2x_n']) / w_mean:.0f} %)"),
-                                       (1, "an offset in a rotating channel (the transducer not zeroed), or a "
-                                           "wheel or tyre out of round")):
-                        amp = max(ripple[f"fx_{order}x_n"], ripple[f"fz_{order}x_n"])
-                        if amp >= WFT_RIPPLE_REL * w_mean:
-                            warns.append(f"WFT: the hub forces carry {amp:.0f} N ({100 * amp / w_mean:.1f} % of the "
-                                         f"mean load) {'twice' if order == 2 else 'once'} per wheel revolution: "
-                                         f"{why}; check the transducer's calibration")
+                for order in (2, 1) if ripple is not None and w_mean > 0 else ():
+                    amp = max(ripple[f"fx_{order}x_n"], ripple[f"fz_{order}x_n"])
+                    if amp >= WFT_RIPPLE_REL * w_mean:
+                        why = (f"the two in-plane bridges read with different gains (about {200 * amp / w_mean:.0f} %)"
+                               if order == 2 else
+                               "an offset in a rotating channel (the transducer not zeroed), or a wheel or tyre out "
+                               "of round")
+                        warns.append(f"WFT: the hub forces carry {amp:.0f} N ({100 * amp / w_mean:.1f} % of the mean "
+                                     f"load) {'twice' if order == 2 else 'once'} per wheel revolution: {why}; check "
+                                     "the transducer's calibration")
                 fx_f = filter_to_grid(t_w, fx, ws.period_s, t_grid, cutoff)
                 load = filter_to_grid(t_w, fz, ws.period_s, t_grid, cutoff)
             else:
