@@ -1126,6 +1126,26 @@ class VerticalBalance(Hypothesis):
         return wong_forces(terrain, ctx.wheel, load_n, slip, sinkage="balance")
 
 
+class SmallAngleSinkage(Hypothesis):
+    """The converse of :class:`VerticalBalance` for a fit made with ``--sinkage balance``: Wong's
+    model with the static sinkage from Eq. (10)'s small-angle formula; no parameters. Tried only
+    when the fit takes the sinkage from the vertical balance: a soil whose sinkage follows Eq. (10)
+    then reads as a sinkage growing with slip (an independent generator's run with no effect was
+    named slip sinkage, Ding + terrain, at "medium"). A model-form alternative, not a cause.
+    """
+
+    name, effect, title = "eq10", "unexplained", "static sinkage from Eq. (10) (no listed cause)"
+    source = "paper Eq. (10) (wheelsoil.model.wong, sinkage='eq10')"
+
+    def available(self, ctx, has_x):
+        if ctx.sinkage != "balance":
+            return "the fit already takes the static sinkage from Eq. (10)"
+        return super().available(ctx, has_x)
+
+    def forces(self, ctx, terrain, load_n, slip, x, p):
+        return wong_forces(terrain, ctx.wheel, load_n, slip, sinkage="eq10")
+
+
 #: The registry: name -> hypothesis.  Add a cause: one class above and one entry here.
 HYPOTHESES: dict[str, Hypothesis] = {
     h.name: h
@@ -1134,7 +1154,8 @@ HYPOTHESES: dict[str, Hypothesis] = {
               WongReece(), DriftLinear(), DriftStep(), *(_drift_one(n) for n in TERRAIN_NAMES),
               *(_drift_one(n, step=True) for n in TERRAIN_NAMES), DrawbarResistance(), DrawbarDrift(), ZeroDrift(),
               WheelRadius(), SpeedGain(), TyreRadius(), WheelWidth(), SensorGain(), AngleOffset(), LoadStiffness(),
-              SpeedStiffness(), Rebound(), ShearSlip(), CurvedEnvelope(), StressK(), VerticalBalance())
+              SpeedStiffness(), Rebound(), ShearSlip(), CurvedEnvelope(), StressK(), VerticalBalance(),
+              SmallAngleSinkage())
 }
 
 

@@ -27,3 +27,24 @@ def test_slip_sinkage_and_the_latency_found_on_an_independent_generators_run(tmp
     assert row["latency_s"] is not None and abs(row["latency_s"] - row["latency_true_s"]) <= 0.02, row
     assert row["latency_method"] == "wheel_reference"
     assert row["score"] == "right" and row["effect"] == "slip_sinkage", row
+
+
+def test_a_fit_with_the_other_sinkage_law_names_no_cause(tmp_path):
+    """The generator's run with no effect, its sinkage from Eq. (10), fitted with ``--sinkage balance``:
+    before, slip sinkage (Ding + terrain) was named; the converse stand-in (static sinkage from Eq. 10)
+    now explains it, a model-form alternative on no list."""
+    import warnings
+
+    from bench_foreign import NAMED, generate
+
+    from wheelsoil.daq.convert import import_log
+    from wheelsoil.pipeline import run_fit
+
+    case = next(c for c in CASES if c[0] == "a1")
+    generate(*case, tmp_path)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        rec = import_log(tmp_path / "a1.log", tmp_path / "a1.mcap").output
+        d = run_fit([rec], "sand", tmp_path / "rep", sinkage="balance")["diagnosis"]
+    assert d["effect"] not in NAMED, d["summary"]
+    assert "eq10" in d["models"]
