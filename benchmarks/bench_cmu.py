@@ -51,7 +51,8 @@ def main() -> None:
     t0 = time.perf_counter()
     wrong = 0
     print(f"{'table':<22} {'beta':>4} {'dz/ds mm':>12} {'Wong Dp cvR0 N':>14}  verdict (confidence)            Dp / z channels")
-    for t in tables():
+    found = tables()
+    for t in found:
         rep = run(t, base / t.stem)
         d = rep["diagnosis"]
         ev = d.get("sinkage_evidence") or {}
@@ -64,8 +65,7 @@ def main() -> None:
         print(f"{t.stem:<22} {t.stem.split('beta')[1]:>4} {slope:>12} {cv:>14.3f}  "
               f"{verdict + ' (' + d['confidence'] + ')':<32} {ch['drawbar_pull_n']['effect']} / {ch['sinkage_m']['effect']}"
               f"{'' if ok else '   <- WRONG NAMED CAUSE'}")
-    n = len(tables())
-    print(f"\nwrong named causes: {wrong}/{n}; reports in {base}; wall time {time.perf_counter() - t0:.1f} s")
+    print(f"\nwrong named causes: {wrong}/{len(found)}; reports in {base}; wall time {time.perf_counter() - t0:.1f} s")
 
 
 if __name__ == "__main__":

@@ -8,7 +8,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
-from bench_foreign import CASES, GEN, run_case  # noqa: E402
+from bench_foreign import CASES, GEN, NAMED, generate, run_case  # noqa: E402
 
 
 def test_the_independent_generator_imports_nothing_from_wheelsoil():
@@ -34,8 +34,6 @@ def test_a_fit_with_the_other_sinkage_law_names_no_cause(tmp_path):
     before, slip sinkage (Ding + terrain) was named; the converse stand-in (static sinkage from Eq. 10)
     now explains it, a model-form alternative on no list."""
     import warnings
-
-    from bench_foreign import NAMED, generate
 
     from wheelsoil.daq.convert import import_log
     from wheelsoil.pipeline import run_fit
