@@ -1,18 +1,24 @@
-"""The pipeline on a run of the second, independent generator (benchmarks/foreign/gen.py: written from
-hardware.md, the DBCs and the paper alone, importing nothing from wheelsoil): front wheels locked to
-the instrumented one, which coasts without torque while the vehicle is braked elsewhere."""
+"""The pipeline on runs of two independent generators (benchmarks/foreign/gen.py and
+benchmarks/foreign2/gen.py: written from hardware.md, the DBCs and the paper alone, importing nothing
+from wheelsoil). The first: front wheels locked to the instrumented one, which coasts without torque
+while the vehicle is braked elsewhere."""
 
 import sys
 from pathlib import Path
 
+import pytest
+
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
-from bench_foreign import CASES, GEN, NAMED, generate, run_case  # noqa: E402
+from bench_foreign import CASES, GEN, GEN2, NAMED, generate, run_case  # noqa: E402
 
 
-def test_the_independent_generator_imports_nothing_from_wheelsoil():
-    for f in GEN.parent.glob("*.py"):
+@pytest.mark.parametrize("folder", [GEN.parent, GEN2.parent], ids=["foreign", "foreign2"])
+def test_the_independent_generators_import_nothing_from_wheelsoil(folder):
+    files = list(folder.glob("*.py"))
+    assert files
+    for f in files:
         lines = [ln.strip() for ln in f.read_text().splitlines()]
         assert not [ln for ln in lines if ln.startswith(("import wheelsoil", "from wheelsoil"))], f
 
