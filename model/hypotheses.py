@@ -54,8 +54,8 @@ The hypotheses (paper numbering for Eqs.; Wong = *Theory of Ground Vehicles*, 4t
   hub-frame forces are turned by that angle (the load leaks into the drawbar
   pull, the drawbar pull into the measured load): effect ``unexplained``.
 * ``load_k``, ``speed_k``: not listed causes: a pressure-sinkage modulus that depends on the
-  load, or on the forward speed (a soil stiffer at a faster loading rate: k_eq (V/V_ref)^beta,
-  k_eq re-fitted): over one run each acts much as a constant k_eq mismatch: effect
+  load, k_eq (W/W_static)^beta, or on the forward speed (a soil stiffer at a faster loading rate:
+  k_eq (V/V_ref)^beta), k_eq re-fitted in both: over one run each acts much as a constant k_eq mismatch: effect
   ``unexplained``.
 * ``rebound``: not a listed cause: a soil that rebounds behind the wheel, so the
   contact runs on past the bottom to an exit angle theta2 = lambda theta1 (Wong's rear
@@ -889,38 +889,51 @@ class AngleOffset(Wong):
 
 
 class LoadStiffness(Hypothesis):
-    """A pressure-sinkage modulus that depends on the load: k_eq(W) = k_eq (W / W_static)^beta.
+    """A pressure-sinkage modulus that depends on the load: k_eq(W) = k_eq (W / W_static)^beta,
+    k_eq re-fitted against its lab prior.
 
     Not a cause on our list: it stands for a soil response that changes with the wheel load
     (Bekker's k_c, k_phi measured with plates smaller than the contact patch; the patch grows
     with the load: Wong 2008 ch. 2, plate size; Reece 1965).  W_static is the run's static
-    wheel load (the mean load over the whole recording, :attr:`FitData.load_static_n`): the lab
-    value holds at the static load, and the load transferred while accelerating moves k_eq.
-    With a load that varies only a few per cent, this mimics a constant k_eq mismatch at the
-    driving load, which is why it is tried: a terrain mismatch it explains as well is not named.
+    wheel load (the mean load over the whole recording, :attr:`FitData.load_static_n`), the
+    reference of the power law; the modulus there is re-fitted, as nothing makes the lab's plate
+    value hold at the wheel's static load (a plate of another size loaded to another pressure:
+    until this was re-fitted, a soil whose modulus follows the load about another reference was
+    named a k_eq mismatch, an independent generator's run with k (W / 12 kN)^-0.5 at 13 kN).
+    With a load that varies only a few per cent this acts much as a constant k_eq mismatch;
+    with beta = 0 it is the one-value mismatch ``terrain_k_eq`` it contains (``nested``), and
+    it counts only when it predicts better than that out of sample (as its sibling
+    :class:`SpeedStiffness`, a modulus that depends on the speed).
 
     The forces are Wong's (Eqs. 1-10) with k_eq taken at each cell's load, interpolated
     quadratically in ln W between the kernel's forces at the smallest, middle and largest
     load of the call (the moduli there differ by (W_max / W_min)^beta; interpolation error
     of order (beta ln(W_max / W_min))^3 of the force's change).  Effect ``unexplained``.
-    Not tried without a static load (tables).
+    Not tried without a static load (tables).  With ``ctx.fit_terrain`` the terrain block
+    holds k_eq and beta is the only own parameter.
     """
 
     name, effect, title = "load_k", "unexplained", "a pressure-sinkage modulus that depends on the load (no listed cause)"
     source = "generic alternative: load (contact-size) dependent k_eq (Wong 2008 ch. 2; Reece 1965)"
+    nested = ("terrain_k_eq", "wong")
 
     def own_params(self, ctx):
-        return (HParam("beta", 0.0, -20.0, 20.0, "-", "exponent of k_eq in W / W_static"),)
+        beta = HParam("beta", 0.0, -20.0, 20.0, "-", "exponent of k_eq in W / W_static")
+        if ctx.fit_terrain:
+            return (beta,)
+        return (beta, next(q for q in terrain_params(ctx) if q.name == "k_eq"))
+
+    def nulls(self, ctx):
+        return {"beta": 0.0}
 
     def available(self, ctx, has_x):
         if ctx.w_static is None or not ctx.w_static > 0:
             return "needs the run's static wheel load (a time series over whole accelerate-brake cycles)"
-        return None
+        return super().available(ctx, has_x)
 
     def forces(self, ctx, terrain, load_n, slip, x, p):
-        k0 = terrain.k_eq(ctx.wheel.width)
         return _interpolated(np.log(load_n / float(ctx.w_static)), lambda v: wong_forces(
-            apply_terrain(terrain, {"k_eq": k0 * math.exp(p["beta"] * v)}), ctx.wheel, load_n, slip,
+            apply_terrain(terrain, {"k_eq": p["k_eq"] * math.exp(p["beta"] * v)}), ctx.wheel, load_n, slip,
             sinkage=ctx.sinkage))
 
 
