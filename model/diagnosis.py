@@ -1064,12 +1064,14 @@ _LOOK_ALIKES = {
                          "shear the soil at a larger radius, a slip angle, a deflecting tyre, a tyre-soil interface "
                          "weaker than the soil (it acts as a lower friction angle), a loose top layer (as a "
                          "different cohesion), a soil stiffer at the wheel's loading rate than under the lab's "
-                         "plate (a viscous or wet soil: as a larger k_eq): each can change the drawbar pull and "
-                         "torque as a soil of other values would (measured on the benchmark's held-out batches)",
+                         "plate (a viscous or wet soil: as a larger k_eq), a modulus that follows the load (a plate "
+                         "smaller than the contact patch: as another k_eq over a run whose load varies little): each "
+                         "can change the drawbar pull and torque as a soil of other values would (measured on the "
+                         "benchmark's held-out batches and an independent generator's runs)",
                          "plate-sinkage and shear tests of this soil in the field, at the surface and at the rut's "
                          "depth and at the wheel's loading rate, a shear test of the tyre's rubber on this soil, the "
-                         "wheel's sinkage and rut depth against the load, the same sweep at another forward speed, "
-                         "and the wheel's tread, alignment and loaded radius"),
+                         "wheel's sinkage and rut depth against the load, the same sweep at another forward speed "
+                         "and at a second static load, and the wheel's tread, alignment and loaded radius"),
     "stress_distribution": ("a shear strength that falls with slip (a soil remoulded at high shear) shifts the "
                             "forces as a moving stress maximum does",
                             "shear tests at several shear rates and the normal stress under the wheel (pressure "
