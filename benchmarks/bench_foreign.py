@@ -75,21 +75,24 @@ CASES2 = [
 NAMED = ("slip_sinkage", "terrain_mismatch", "stress_distribution", "terrain_drift")
 
 
-def generate(name: str, case: str, fronts: str, seed: int, latency_s: float, extra: list, out: Path) -> dict:
-    """Run the generator for one case into ``out``; returns its truth dict (``NAME_truth.json``).
-    Raises ``subprocess.CalledProcessError`` if the generator fails."""
-    subprocess.run([sys.executable, str(GEN), case, "--fronts", fronts, "--seed", str(seed), "--latency",
-                    str(latency_s), *extra, "--out", name, "--outdir", str(out)], check=True, capture_output=True)
+def _run_generator(gen: Path, args: list, name: str, out: Path) -> dict:
+    """Run generator ``gen`` with ``args`` writing ``out/NAME.log``; returns its truth dict
+    (``NAME_truth.json``).  Raises ``subprocess.CalledProcessError`` if the generator fails."""
+    subprocess.run([sys.executable, str(gen), *args, "--out", name, "--outdir", str(out)], check=True,
+                   capture_output=True)
     return json.loads((out / f"{name}_truth.json").read_text())
+
+
+def generate(name: str, case: str, fronts: str, seed: int, latency_s: float, extra: list, out: Path) -> dict:
+    """Run the first generator for one case into ``out`` (:func:`_run_generator`)."""
+    return _run_generator(GEN, [case, "--fronts", fronts, "--seed", str(seed), "--latency", str(latency_s), *extra],
+                          name, out)
 
 
 def generate2(name: str, case: str, seed: int, latency_s: float, params: dict, out: Path) -> dict:
-    """Run the second generator for one case into ``out``; returns its truth dict (``NAME_truth.json``).
-    Raises ``subprocess.CalledProcessError`` if the generator fails."""
+    """Run the second generator for one case into ``out`` (:func:`_run_generator`)."""
     extra = [a for k, v in params.items() for a in ("--p", f"{k}={v}")]
-    subprocess.run([sys.executable, str(GEN2), case, "--seed", str(seed), "--latency", str(latency_s), *extra,
-                    "--out", name, "--outdir", str(out)], check=True, capture_output=True)
-    return json.loads((out / f"{name}_truth.json").read_text())
+    return _run_generator(GEN2, [case, "--seed", str(seed), "--latency", str(latency_s), *extra], name, out)
 
 
 def run_case(name: str, case: str, fronts: str, seed: int, latency_s: float, extra: list, out: Path) -> dict:

@@ -888,7 +888,27 @@ class AngleOffset(Wong):
         return dataclasses.replace(f, drawbar_pull_n=(f.drawbar_pull_n + iota) * cd + w * sd - iota)
 
 
-class LoadStiffness(Hypothesis):
+class _KeqPowerLaw(Hypothesis):
+    """A pressure-sinkage modulus k_eq u^beta following a covariate u about its reference, k_eq
+    re-fitted against its lab prior (:class:`LoadStiffness`, :class:`SpeedStiffness`): with beta = 0
+    the one-value mismatch ``terrain_k_eq`` it contains (``nested``).  ``BETA``: the exponent's
+    bounds and its doc."""
+
+    nested = ("terrain_k_eq", "wong")
+    BETA: tuple = (-1.0, 1.0, "")
+
+    def own_params(self, ctx):
+        lo, hi, doc = self.BETA
+        beta = HParam("beta", 0.0, lo, hi, "-", doc)
+        if ctx.fit_terrain:
+            return (beta,)
+        return (beta, next(q for q in terrain_params(ctx) if q.name == "k_eq"))
+
+    def nulls(self, ctx):
+        return {"beta": 0.0}
+
+
+class LoadStiffness(_KeqPowerLaw):
     """A pressure-sinkage modulus that depends on the load: k_eq(W) = k_eq (W / W_static)^beta,
     k_eq re-fitted against its lab prior.
 
@@ -915,16 +935,7 @@ class LoadStiffness(Hypothesis):
 
     name, effect, title = "load_k", "unexplained", "a pressure-sinkage modulus that depends on the load (no listed cause)"
     source = "generic alternative: load (contact-size) dependent k_eq (Wong 2008 ch. 2; Reece 1965)"
-    nested = ("terrain_k_eq", "wong")
-
-    def own_params(self, ctx):
-        beta = HParam("beta", 0.0, -20.0, 20.0, "-", "exponent of k_eq in W / W_static")
-        if ctx.fit_terrain:
-            return (beta,)
-        return (beta, next(q for q in terrain_params(ctx) if q.name == "k_eq"))
-
-    def nulls(self, ctx):
-        return {"beta": 0.0}
+    BETA = (-20.0, 20.0, "exponent of k_eq in W / W_static")
 
     def available(self, ctx, has_x):
         if ctx.w_static is None or not ctx.w_static > 0:
@@ -960,7 +971,7 @@ def speed_reference(speed_mps) -> float | None:
     return float(mid) if hi >= SPEED_SPREAD_MIN * lo else None
 
 
-class SpeedStiffness(Hypothesis):
+class SpeedStiffness(_KeqPowerLaw):
     """A pressure-sinkage modulus that depends on the forward speed: k_eq(V) = k_eq (V / V_ref)^beta,
     V_ref the run's median speed (:func:`speed_reference`), k_eq re-fitted against its lab prior.
 
@@ -979,16 +990,7 @@ class SpeedStiffness(Hypothesis):
 
     name, effect, title = "speed_k", "unexplained", "a pressure-sinkage modulus that depends on the speed (no listed cause)"
     source = "generic alternative: a rate (speed) dependent k_eq, a power law in V; paper Eqs. (1)-(10) at each speed"
-    nested = ("terrain_k_eq", "wong")
-
-    def own_params(self, ctx):
-        beta = HParam("beta", 0.0, -1.0, 1.0, "-", "exponent of k_eq in V / V_ref")
-        if ctx.fit_terrain:
-            return (beta,)
-        return (beta, next(q for q in terrain_params(ctx) if q.name == "k_eq"))
-
-    def nulls(self, ctx):
-        return {"beta": 0.0}
+    BETA = (-1.0, 1.0, "exponent of k_eq in V / V_ref")
 
     def available(self, ctx, has_x):
         if ctx.v_ref is None:
