@@ -11,7 +11,7 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
-from bench_foreign import CASES, GEN, GEN2, NAMED, generate, run_case  # noqa: E402
+from bench_foreign import CASES, CASES2, GEN, GEN2, NAMED, generate, run_case, run_case2  # noqa: E402
 
 
 @pytest.mark.parametrize("folder", [GEN.parent, GEN2.parent], ids=["foreign", "foreign2"])
@@ -52,3 +52,12 @@ def test_a_fit_with_the_other_sinkage_law_names_no_cause(tmp_path):
         d = run_fit([rec], "sand", tmp_path / "rep", sinkage="balance")["diagnosis"]
     assert d["effect"] not in NAMED, d["summary"]
     assert "eq10" in d["models"]
+
+
+def test_ding_slip_sinkage_on_the_third_generators_run(tmp_path):
+    """The third generator (benchmarks/foreign2: a 4x4 whose speed comes from the four wheels' drawbar pull,
+    soil varying along the track, its own quadrature): Ding's N = n + n1 s with n1 = 0.25, GNSS 35 ms
+    late. The latency is found and slip sinkage named in Ding's form."""
+    row = run_case2(*next(c for c in CASES2 if c[0] == "ding2"), tmp_path)
+    assert row["latency_s"] is not None and abs(row["latency_s"] - row["latency_true_s"]) <= 0.02, row
+    assert row["score"] == "right" and row["effect"] == "slip_sinkage" and row["form"], row
