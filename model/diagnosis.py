@@ -8,7 +8,9 @@ decides with this rule (constants below; none was tuned on a benchmark):
 
 1. **Structure.**  Wong's residuals on the cells, each divided by the
    channel's model-free cell noise, are tested against slip (quadratic and
-   binned-means F-tests), the drawbar pull's also against load, and every
+   binned-means F-tests; the measured sinkage also for a straight-line trend,
+   one degree of freedom: slip sinkage grows with slip in all of Eqs. 11-13),
+   the drawbar pull's also against load, and every
    channel's against distance/time (quadratic, binned means and a change
    point: another patch of ground is a step).  In a time
    series the accelerate cycle is the independent unit for whatever is
@@ -384,14 +386,18 @@ _clean = json_ready
 # ----------------------------------------------------------------------------- structure tests
 
 
-def _structure_1d(s_u: np.ndarray, e_u: np.ndarray, degree: int = 2, step: bool = False) -> dict:
+def _structure_1d(s_u: np.ndarray, e_u: np.ndarray, degree: int = 2, step: bool = False,
+                  slope: bool = False) -> dict:
     """F-tests of unit means ``e_u`` (in noise sigmas) against a coordinate ``s_u``.
 
     A polynomial of ``degree`` against zero (no systematic error), a one-way
-    ANOVA of up to 8 quantile bins against zero and, with ``step``, a
+    ANOVA of up to 8 quantile bins against zero, with ``step`` a
     change point (:func:`_step_test`: two levels, split between any two
-    neighbouring units, Bonferroni over the splits); ``p`` is their
-    Bonferroni combination.  The residual scatter of the unit means about the
+    neighbouring units, Bonferroni over the splits) and with ``slope`` a
+    trend (the slope of a straight line, its level free: one numerator
+    degree of freedom where the polynomial spends ``degree + 1``; the sinkage
+    channel's pre-stated alternative, Eqs. 11-13 all growing with slip);
+    ``p`` is their Bonferroni combination.  The residual scatter of the unit means about the
     fitted shape is the noise reference (the test does not trust the sigma).
     Returns dict ``p``, ``p_poly``, ``p_bins``, ``p_step``, ``F``, ``units``,
     ``degree``, ``effect`` (RMS of the fitted shape), ``shape_p``, ``coef``.
@@ -447,9 +453,20 @@ def _structure_1d(s_u: np.ndarray, e_u: np.ndarray, degree: int = 2, step: bool 
         if np.isfinite(p_step) and p_step < min(p, p_bins if np.isfinite(p_bins) else 1.0) and \
                 np.mean(fitted_s**2) > np.mean(fitted**2):
             fitted = fitted_s
-    ps_all = [q for q in (p, p_bins, p_step) if np.isfinite(q)]
+    p_slope = float("nan")
+    if slope and U >= 4 and np.unique(np.round(x, 9)).size >= 2:
+        V1 = np.vander(x, 2)
+        c1, *_ = np.linalg.lstsq(V1, e_u, rcond=None)
+        fitted_l = V1 @ c1
+        rss_l = float(np.sum((e_u - fitted_l) ** 2))
+        if rss_l > 0:
+            p_slope = float(stats.f.sf((rssc - rss_l) / (rss_l / (U - 2)), 1, U - 2))
+            if p_slope < min(q for q in (p, p_bins, p_step, 1.0) if np.isfinite(q)) and \
+                    np.mean(fitted_l**2) > np.mean(fitted**2):
+                fitted = fitted_l
+    ps_all = [q for q in (p, p_bins, p_step, p_slope) if np.isfinite(q)]
     p_comb = min(1.0, len(ps_all) * min(ps_all)) if ps_all else p
-    out.update(p=p_comb, p_poly=p, p_bins=p_bins, p_step=p_step, F=float(F), degree=d,
+    out.update(p=p_comb, p_poly=p, p_bins=p_bins, p_step=p_step, p_slope=p_slope, F=float(F), degree=d,
                effect=float(np.sqrt(np.mean(fitted**2))), shape_p=ps, coef=[float(c) for c in coef],
                rms_upper=_rms_upper(float(F), df1, df2, s2, U))
     return out
@@ -626,7 +643,7 @@ def _structure_cells(data: FitData, pred: dict) -> dict:
         size = _magnitude(y)
         tests = {}
         if not by_cycle:
-            tests[c] = _structure_1d(cells.slip, e)
+            tests[c] = _structure_1d(cells.slip, e, slope=c == "sinkage_m")
             if c == "drawbar_pull_n" and np.std(cells.load_n) > 0.01 * abs(np.mean(cells.load_n)):
                 tests[c + "@load"] = _structure_1d(cells.load_n, e, degree=1)
         else:
@@ -636,7 +653,7 @@ def _structure_cells(data: FitData, pred: dict) -> dict:
             gm = np.bincount(inv, weights=e[ok]) / cnt
             ec = e[ok] - gm[inv]
             lvl = _level_test(gm)
-            shp = _structure_1d(cells.slip[ok], ec)
+            shp = _structure_1d(cells.slip[ok], ec, slope=c == "sinkage_m")
             p = min(1.0, 2 * min(lvl["p"], shp["p"])) if np.isfinite(lvl["p"]) and np.isfinite(shp["p"]) else shp["p"]
             t = dict(shp)
             t.update(p=p, p_level=lvl["p"], p_shape=shp["p"], level_sigma=lvl.get("mean", float("nan")),

@@ -613,3 +613,19 @@ def test_a_lagging_torque_channel_is_unexplained_not_none_nor_a_cause():
     assert "ramp rate" in d.separating_measurement
     assert d.to_dict()["channels"]["torque_nm"]["effect"] == "unexplained"
     assert diagnose(_table(seed=0), SAND, W).hysteresis_test == {}  # a table has no time
+
+
+def test_a_sinkage_trend_is_tested_with_one_degree_of_freedom():
+    """A residual growing linearly with slip on 12 rows (a table's sinkage under slip sinkage, Eqs. 11-13):
+    the straight-line trend test, one numerator degree of freedom, finds it with a smaller p than the
+    quadratic and binned-means tests, which spend three and four; over ten noise draws its combined p is
+    lower in every one. Without ``slope`` (the drawbar pull, the torque) the test is as before."""
+    from wheelsoil.model.diagnosis import _structure_1d
+
+    s = np.linspace(0.15, 0.9, 12)
+    for seed in range(10):
+        e = (s - s.mean()) / s.std() + np.random.default_rng(seed).normal(0.0, 1.0, s.size)
+        with_trend, without = _structure_1d(s, e, slope=True), _structure_1d(s, e)
+        assert with_trend["p_slope"] < with_trend["p_poly"], seed
+        assert with_trend["p"] < without["p"], seed
+        assert np.isnan(without["p_slope"]) and without["p_poly"] == with_trend["p_poly"]
