@@ -399,7 +399,7 @@ def _structure_1d(s_u: np.ndarray, e_u: np.ndarray, degree: int = 2, step: bool 
     channel's pre-stated alternative, Eqs. 11-13 all growing with slip);
     ``p`` is their Bonferroni combination.  The residual scatter of the unit means about the
     fitted shape is the noise reference (the test does not trust the sigma).
-    Returns dict ``p``, ``p_poly``, ``p_bins``, ``p_step``, ``F``, ``units``,
+    Returns dict ``p``, ``p_poly``, ``p_bins``, ``p_step``, ``p_slope``, ``F``, ``units``,
     ``degree``, ``effect`` (RMS of the fitted shape), ``shape_p``, ``coef``.
     Source: nested-model F-test (Seber & Wild, Nonlinear Regression, §5.3).
     """
