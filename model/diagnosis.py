@@ -1373,9 +1373,21 @@ def diagnose(
                            + _LOOK_ALIKES[fits[best].effect][0] + ")")
         elif _catch_all(fits[best]):
             effect = "unexplained"
-            reasons.append(f"only {TITLES[best]} explains the data, no re-fit of a single lab value does: Wong "
-                           "with the lab's terrain errs, but the data do not show which value is wrong, nor that a "
-                           "soil value is what is wrong (" + _LOOK_ALIKES[fits[best].effect][0] + ")")
+            # a one-value re-fit (or drift) that is supported but less probable: say what it found
+            ones = sorted((k for k in supported if fits[k].effect == fits[best].effect and not _catch_all(fits[k])),
+                          key=lambda k: -probs.get(k, 0.0))
+            if ones:
+                o = fits[ones[0]]
+                bf = lp[best] - lp[ones[0]]  # ln Bayes factor of the catch-all over it
+                lead = (f"{TITLES[best]} explains the data best; the best re-fit of a single lab value, "
+                        f"{TITLES[o.name]} (" + ", ".join(_param_text(q, v, o.stderr.get(q)) for q, v in o.params.items())
+                        + f"), also lowers the {target_txt} error out of sample, but with "
+                        + (f"{math.exp(bf):.2g}" if bf < 700 else f"e^{bf:.0f}")
+                        + f" times less evidence")
+            else:
+                lead = f"only {TITLES[best]} explains the data, no re-fit of a single lab value does"
+            reasons.append(lead + ": Wong with the lab's terrain errs, but the data do not show which value is "
+                           "wrong, nor that a soil value is what is wrong (" + _LOOK_ALIKES[fits[best].effect][0] + ")")
         else:
             effect = fits[best].effect
         sep_names = [best, *alternatives, *rivals[:1]]
