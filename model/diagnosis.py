@@ -1374,16 +1374,16 @@ def diagnose(
         elif _catch_all(fits[best]):
             effect = "unexplained"
             # a one-value re-fit (or drift) that is supported but less probable: say what it found
-            ones = sorted((k for k in supported if fits[k].effect == fits[best].effect and not _catch_all(fits[k])),
-                          key=lambda k: -probs.get(k, 0.0))
-            if ones:
-                o = fits[ones[0]]
-                bf = lp[best] - lp[ones[0]]  # ln Bayes factor of the catch-all over it
+            one = max((k for k in supported if fits[k].effect == fits[best].effect and not _catch_all(fits[k])),
+                      key=lambda k: probs.get(k, 0.0), default=None)
+            if one is not None:
+                o = fits[one]
+                bf = lp[best] - lp[one]  # ln Bayes factor of the catch-all over it
                 lead = (f"{TITLES[best]} explains the data best; the best re-fit of a single lab value, "
                         f"{TITLES[o.name]} (" + ", ".join(_param_text(q, v, o.stderr.get(q)) for q, v in o.params.items())
                         + f"), also lowers the {target_txt} error out of sample, but with "
                         + (f"{math.exp(bf):.2g}" if bf < 700 else f"e^{bf:.0f}")
-                        + f" times less evidence")
+                        + " times less evidence")
             else:
                 lead = f"only {TITLES[best]} explains the data, no re-fit of a single lab value does"
             reasons.append(lead + ": Wong with the lab's terrain errs, but the data do not show which value is "
