@@ -269,7 +269,8 @@ class Diagnosis:
     forms_distinguishable, indistinguishable_forms; confidence_reasons;
     thresholds; notes; failures; gain; fit_terrain; identifiability; tried;
     c_hat (common overdispersion); deff (the cells' design effect in the evidence);
-    paired (name -> channel -> paired test).
+    paired (name -> channel -> paired test); supported (the hypotheses a verdict may name, rule
+    step 3); why_not (name -> why it is not supported, ``models.<name>.not_supported_because``).
     """
 
     effect: str
@@ -306,6 +307,7 @@ class Diagnosis:
     deff: float = 1.0
     paired: dict = field(default_factory=dict)
     supported: list = field(default_factory=list)
+    why_not: dict = field(default_factory=dict)
     target_channels: list = field(default_factory=list)
     hysteresis_test: dict = field(default_factory=dict)
 
@@ -329,7 +331,8 @@ class Diagnosis:
                 "metrics": metrics, "bic": f.bic, "log_evidence": f.evidence(self.c_hat, self.deff),
                 "probability": self.probabilities.get(k), "k": f.k, "cells": f.n_data,
                 "chi2_data": f.chi2_data, "chi2_prior": f.chi2_prior, "condition_number": f.condition_number,
-                "supported": k in self.supported, "notes": list(f.notes),
+                "supported": k in self.supported, "not_supported_because": self.why_not.get(k),
+                "notes": list(f.notes),
                 "cv_folds": (f.cv or {}).get("n_groups"), "cv_failed_folds": (f.cv or {}).get("failed_folds"),
             }
         return _clean({
@@ -1285,7 +1288,7 @@ def diagnose(
         if not f.success:
             why_not[k] = "did not converge"
         elif not all(pr[c]["improves"] for c in target):
-            why_not[k] = f"does not lower the {target_txt} error out of sample"
+            why_not[k] = _not_improved(pr, target, target_txt)
         elif worse:
             why_not[k] = "worsens the " + ", ".join(CHANNEL_TITLES[c] for c in worse) + " out of sample"
         elif not _effective(f):
@@ -1309,8 +1312,8 @@ def diagnose(
         effect, model = "none", "wong"
     elif not supported:
         effect = "unexplained"
-        reasons.append(f"no hypothesis lowers the {target_txt} error out of sample without worsening another "
-                       "channel (tried: " + ", ".join(TITLES[k] for k in fits if k != "wong") + ")")
+        reasons.append(f"none of the {len(fits) - 1} hypotheses tried is shown to lower the {target_txt} error out of sample "
+                       "without worsening another channel")
         if "drawbar_pull_n" not in target:
             reasons.append("Wong's drawbar pull shows no relevant systematic error; the error is in the "
                            f"{target_txt} only")
@@ -1474,9 +1477,8 @@ def diagnose(
         effect_probabilities=eprobs, alternatives=alternatives, holds_against=holds, separating_measurement=sep,
         not_excluded=not_excl,
         consistency=consistency, flags=flags, tried=tried, c_hat=c_hat, deff=deff, paired=paired, supported=supported,
-        target_channels=target, hysteresis_test=hyst,
+        why_not=why_not, target_channels=target, hysteresis_test=hyst,
     )
-    diag._why_not = why_not  # noqa: SLF001 - for the summary
     diag._remain = remain  # noqa: SLF001
     diag._sig_w = sig_w  # noqa: SLF001
     diag.summary = _summary(diag)
@@ -1879,9 +1881,11 @@ def _summary(d: Diagnosis) -> str:
         parts.append("The cause is unexplained: " + "; ".join(r for r in d.notes if r in d.confidence_reasons) + ".")
         if d.alternatives or d.model:
             parts.append("Candidates: " + ", ".join(TITLES[k] for k in [d.model, *d.alternatives] if k) + ".")
-        wn = getattr(d, "_why_not", {})
-        if wn:
-            parts.append("Not supported: " + "; ".join(f"{TITLES[k]} {v}" for k, v in wn.items()) + ".")
+        top = max(d.probabilities, key=d.probabilities.get, default=None)
+        if top in d.why_not and top in d.paired:
+            parts.append(_top_unsupported(d, top))
+        if d.why_not and (d.supported or len(set(d.why_not.values())) > 1):
+            parts.append("Not supported: " + _grouped(d.why_not) + ".")
     if d.separating_measurement:
         parts.append(f"What would separate them: {d.separating_measurement}.")
     if d.not_excluded:
@@ -1895,7 +1899,11 @@ def _summary(d: Diagnosis) -> str:
                      f"{_fmt(g['cv_R0_n_after'])}; improves {', '.join(imp) or 'no channel'}"
                      + (f", worsens {', '.join(wor)}" if wor else "") + ".")
     incons = [k for k, c in d.consistency.items() if not c["consistent"]]
-    if incons:
+    if incons and len(incons) == len(d.consistency) and d.consistency.get("wong", {}).get("reasons"):
+        parts.append(f"Every fit is physically inconsistent, Wong's with the lab terrain included "
+                     f"({d.consistency['wong']['reasons'][0]}): the run lies outside the range of Eqs. 7 and 10, "
+                     "whatever the cause.")
+    elif incons:
         parts.append("Physically inconsistent fits (Eq. 7 load balance or Eq. 10 sinkage limit): "
                      + ", ".join(TITLES[k] for k in incons) + ".")
     if d.fit_terrain:
@@ -1909,6 +1917,46 @@ def _summary(d: Diagnosis) -> str:
     if d.failures:
         parts.append("Not done: " + " ".join(d.failures))
     return " ".join(parts)
+
+
+def _not_improved(pr: dict, target, target_txt: str) -> str:
+    """Why step 2's paired test (``pr``: channel -> :func:`_paired` record) finds no improvement in
+    the ``target`` channels: no lower held-out error, a gain under ``MIN_GAIN``, or a gain the folds
+    do not show consistently (the held-out error is lower, the paired test is not significant)."""
+    miss = [pr[c] for c in target if not pr[c]["improves"]]
+    if any(r["gain_noise_var"] <= 0 for r in miss):
+        return f"does not lower the {target_txt} error out of sample"
+    if any(r["gain_noise_var"] < MIN_GAIN for r in miss):
+        return (f"lowers the {target_txt} error out of sample by less than {MIN_GAIN:g} noise variance per cell "
+                "(too little to matter)")
+    return (f"lowers the {target_txt} error out of sample only inconsistently over the folds (paired p >= "
+            f"{ALPHA:g}: too few folds, or a gain confined to some of them)")
+
+
+def _top_unsupported(d: Diagnosis, top: str) -> str:
+    """The sentence on the most probable hypothesis ``top`` when it is not supported: what it does
+    on new data against Wong's model, per measured channel, and why that is not enough."""
+    txt = []
+    for c, r in d.paired[top].items():
+        if r.get("cv_rmse") is None or r.get("wong_cv_rmse") is None:
+            continue
+        p = f"paired p = {r['p_improve']:.2g} over {r['folds']} folds" if np.isfinite(r["p_improve"]) else "no paired test"
+        scale, unit = {"torque_nm": (1.0, "N m"), "sinkage_m": (1e3, "mm")}.get(c, (1.0, "N"))
+        txt.append(f"{CHANNEL_TITLES[c]} {_fmt(scale * r['wong_cv_rmse'], unit)} -> {_fmt(scale * r['cv_rmse'], unit)} "
+                   f"({p})")
+    return (f"The most probable hypothesis, {TITLES[top]} ({d.probabilities[top]:.3g}), predicts new data with "
+            + ", ".join(txt) + f" against Wong's model; it {d.why_not[top]}"
+            + (", so it is not named." if "folds" not in d.why_not[top] else
+               ", so it is not named: more test points would tell." if d.data.kind == "table" else
+               ", so it is not named: a run with more accelerate cycles would tell."))
+
+
+def _grouped(why: dict) -> str:
+    """``{hypothesis: reason}`` as "reason: title, title; reason: title" (reasons in first-seen order)."""
+    by: dict[str, list] = {}
+    for k, v in why.items():
+        by.setdefault(v, []).append(TITLES[k])
+    return "; ".join(f"{v}: {', '.join(ks)}" for v, ks in by.items())
 
 
 _LEVELS = ("low", "medium", "high")
