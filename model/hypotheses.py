@@ -422,7 +422,7 @@ def _terrain_one(name: str) -> TerrainOne:
     """The one-value terrain mismatch of terrain value ``name``."""
     cls = type(f"Terrain_{name}", (TerrainOne,), {
         "param": name, "name": f"terrain_{name}",
-        "title": f"terrain mismatch in {name} alone (the other soil values as in the lab)",
+        "title": f"terrain mismatch in {name} alone",
         "source": "Wong (2008) ch. 2; one lab value as a Gaussian prior (penalised least squares)"})
     return cls()
 
@@ -617,13 +617,13 @@ class DriftStepOne(DriftOne, DriftStep):
 
 def _drift_one(name: str, step: bool = False) -> DriftOne:
     """The one-value drift of terrain value ``name``: linear along the run, or a ``step``."""
-    title, source = ((f"another patch of ground with another {name}", "a change of soil along the track (Wong 2008 "
+    title, source = ((f"another patch of ground with another {name} alone", "a change of soil along the track (Wong 2008 "
                       "ch. 2); one soil value steps at the change point") if step else
-                     (f"{name} drifting along the run", "repeated passes compact the soil (Wong 2008 ch. 2); linear "
+                     (f"{name} alone drifting along the run", "repeated passes compact the soil (Wong 2008 ch. 2); linear "
                       "drift of one soil value"))
     cls = type(f"Drift{'Step' if step else ''}_{name}", (DriftStepOne if step else DriftOne,), {
         "param": name, "name": f"drift_{'step_' if step else ''}{name}", "nested": (f"terrain_{name}",),
-        "title": title + " (the other soil values as in the lab)", "source": source})
+        "title": title, "source": source})
     return cls()
 
 
