@@ -31,7 +31,9 @@ with ``--terrains``, the next soil of the list).
     python benchmarks/bench_diagnosis.py --effects held-out-8       # ... an eighth
     python benchmarks/bench_diagnosis.py --effects held-out-9       # ... a ninth
     python benchmarks/bench_diagnosis.py --effects held-out-10      # ... a tenth
-    python benchmarks/bench_diagnosis.py --effects held-out-11      # ... and an eleventh
+    python benchmarks/bench_diagnosis.py --effects held-out-11      # ... an eleventh
+    python benchmarks/bench_diagnosis.py --effects held-out-12      # ... a twelfth
+    python benchmarks/bench_diagnosis.py --effects held-out-13      # ... and a thirteenth
 
 A held-out batch is scored once with the rule as it stands when the batch is added: that first
 score measures how the rule meets causes it was not developed on; anything changed because of it
@@ -139,8 +141,8 @@ def imprint(run, n_max: int = 300) -> dict | None:
     r = run.wheel[0]
     speed, omega, load = (tr[k].to_numpy() for k in ("speed_mps", "omega_radps", "load_n"))
     t = tr["t_s"].to_numpy()
-    gnss_gain, rl_gain, rl_delay_s = speed_channel_errors(e, p, load, STATIC_LOAD_N + run.info["added_load_n"])
-    speed = speed * gnss_gain
+    gnss_read, rl_gain, rl_delay_s = speed_channel_errors(e, p, load, STATIC_LOAD_N + run.info["added_load_n"])
+    speed = gnss_read(speed)
     if rl_gain is not None:
         omega = omega * rl_gain
     if rl_delay_s:
@@ -402,7 +404,8 @@ def main(argv=None) -> int:
                     "follows: a saturating compaction, a gradual patch, alternating ground; terrain_drift or "
                     "unexplained acceptable); 'held-out-12' a twelfth (the wheel in the front wheel's rut, a tyre "
                     "losing pressure along the run, the soil's moisture changing k_eq, c and phi together "
-                    "along the run: terrain_drift or unexplained acceptable)")
+                    "along the run: terrain_drift or unexplained acceptable); 'held-out-13' a thirteenth (a "
+                    "sinkage growing with the tread's speed, a GNSS speed offset, a tyre growing with its speed)")
     ap.add_argument("--json", default=None, metavar="FILE", help="also write the rows as JSON")
     ap.add_argument("--keep", default=None, metavar="DIR", help="keep recordings, truths and reports here")
     args = ap.parse_args(argv)

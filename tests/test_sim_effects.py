@@ -169,6 +169,33 @@ def test_held_out_12_the_rut_the_tyre_losing_pressure_and_the_moisture_drift(won
     assert ACCEPTABLE["rut"] == ACCEPTABLE["tyre_pressure_loss"] == ("unexplained",)
 
 
+def test_held_out_13_speed_sinkage_gnss_offset_and_tyre_growth(wong):
+    """Held-out batch 13.  The speed-driven sinkage adds H r omega / 5 m/s to Eq. 10's sinkage (more at a
+    higher forward speed at the same slip; none without a speed); the GNSS offset reads V + b past
+    0.5 m/s and 0 at standstill; the growing tyre is the lab wheel at rest and, at speed, the
+    radius-error wheel of the same growth."""
+    from wheelsoil.simulate import speed_channel_errors
+
+    for v in (2.0, 4.0):
+        ss = _tm("speed_sinkage", H=0.02).drive_forces(LOAD, SLIP, speed_mps=np.full(12, v))
+        np.testing.assert_allclose(ss["sinkage_m"] - wong["sinkage_m"], 0.02 * v / (1 - SLIP) / 5.0, rtol=1e-9)
+        assert np.all(ss["drawbar_pull_n"][1:] < wong["drawbar_pull_n"][1:])
+    np.testing.assert_allclose(_tm("speed_sinkage", H=0.02).drive_forces(LOAD, SLIP)["sinkage_m"], wong["sinkage_m"])
+    read = speed_channel_errors("gnss_offset", {"offset_mps": -0.1}, LOAD, W0)[0]
+    np.testing.assert_allclose(read(np.array([0.0, 0.25, 0.5, 3.0])), [0.0, 0.2, 0.4, 2.9])
+    assert speed_channel_errors("gnss_gain", {"gain": 1.02}, LOAD, W0)[0](3.0) == pytest.approx(3.06)
+    assert speed_channel_errors("none", {}, LOAD, W0)[0](3.0) == 3.0
+    tg = _tm("tyre_growth", kappa=0.03)
+    np.testing.assert_allclose(tg.drive_forces(LOAD, SLIP, speed_mps=np.zeros(12))["drawbar_pull_n"],
+                               wong["drawbar_pull_n"], rtol=1e-9)
+    v = 3.0
+    g = 1 + 0.03 * (v / (1 - SLIP[5]) / 10.0) ** 2
+    grown = tg.drive_forces(LOAD[5:6], SLIP[5:6], speed_mps=np.array([v]))
+    same = _tm("radius_error", e=g - 1).drive_forces(LOAD[5:6], SLIP[5:6])
+    np.testing.assert_allclose(grown["drawbar_pull_n"], same["drawbar_pull_n"], rtol=1e-9)
+    assert ACCEPTABLE["speed_sinkage"] == ACCEPTABLE["gnss_offset"] == ACCEPTABLE["tyre_growth"] == ("unexplained",)
+
+
 def test_out_of_family_soil_and_tyre_effects(wong):
     ty = _tm("tyre_deflection", kappa=0.2).drive_forces(LOAD, SLIP)
     assert np.all(ty["sinkage_m"] < wong["sinkage_m"])  # a larger equivalent wheel sinks less

@@ -48,7 +48,7 @@ import numpy as np
 
 from wheelsoil.sim.effects import (ACCEPTABLE, ALL_HELD_OUT, EFFECTS, HELD_OUT, HELD_OUT_2, HELD_OUT_3,
                                    HELD_OUT_4, HELD_OUT_5, HELD_OUT_6, HELD_OUT_7, HELD_OUT_8, HELD_OUT_9,
-                                   HELD_OUT_10, HELD_OUT_11, HELD_OUT_12, HELD_OUT_BATCHES, IN_FAMILY, OUT_OF_FAMILY,
+                                   HELD_OUT_10, HELD_OUT_11, HELD_OUT_12, HELD_OUT_13, HELD_OUT_BATCHES, IN_FAMILY, OUT_OF_FAMILY,
                                    PARAM_NAMES, SENSOR_EFFECTS, VERDICTS, TruthModel, draw_effect, family_of)
 from wheelsoil.sim.physics import bandlimited as _bandlimited
 from wheelsoil.sim.terra import soil_dict
@@ -56,7 +56,7 @@ from wheelsoil.sim.vehicle import PROCEDURES
 
 __all__ = ["EFFECTS", "IN_FAMILY", "OUT_OF_FAMILY", "HELD_OUT", "HELD_OUT_2", "HELD_OUT_3", "HELD_OUT_4",
            "HELD_OUT_5", "HELD_OUT_6", "HELD_OUT_7", "HELD_OUT_8", "HELD_OUT_9", "HELD_OUT_10", "HELD_OUT_11",
-           "HELD_OUT_12",
+           "HELD_OUT_12", "HELD_OUT_13",
            "HELD_OUT_BATCHES", "ALL_HELD_OUT", "ACCEPTABLE", "VERDICTS",
            "SimulatedRun", "simulate_run", "write_simulation", "write_truth", "write_vehicle_config", "judge",
            "draw_case", "pack_signals", "vehicle_config_for", "SIMULATOR"]
@@ -244,16 +244,30 @@ def pack_signals(message, values: Mapping[str, Any], n: int) -> tuple[np.ndarray
 
 # ------------------------------------------------------------------- simulation
 def speed_channel_errors(effect: str, params: Mapping[str, Any], load_n: np.ndarray, static_load_n: float):
-    """What a sensor effect does to the speed channels slip is computed from: ``(gnss_gain,
-    rl_gain, rl_delay_s)``, the GNSS speed's gain (1: none), the left-rear wheel-speed reading's gain
-    per sample (``(N,)`` like ``load_n`` [N], a rolling radius shrinking with the load,
-    1 - e (W/W0 - 1); None: none) and its delay [s] (0: none).  ``static_load_n`` W0 [N].  Used by
-    :func:`simulate_run` for the frames and by the benchmark's imprint for the slip the fit sees.
-    Raises KeyError when ``params`` lacks the effect's parameter."""
-    gnss_gain = float(params["gain"]) if effect == "gnss_gain" else 1.0
+    """What a sensor effect does to the speed channels slip is computed from: ``(gnss_read,
+    rl_gain, rl_delay_s)``: ``gnss_read(v)``, what the GNSS reads for the true forward speed v (m/s,
+    any shape): g v for ``gnss_gain``, v + b min(v / 0.5 m/s, 1) for ``gnss_offset``, else v; the
+    left-rear wheel-speed reading's gain per sample (``(N,)`` like ``load_n`` [N], a rolling radius
+    shrinking with the load, 1 - e (W/W0 - 1); None: none) and its delay [s] (0: none).
+    ``static_load_n`` W0 [N].  Used by :func:`simulate_run` for the frames and by the benchmark's
+    imprint for the slip the fit sees.  Raises KeyError when ``params`` lacks the effect's parameter."""
+    from wheelsoil.sim.effects import GNSS_OFFSET_FADE_MPS
+
+    if effect == "gnss_gain":
+        g = float(params["gain"])
+        def gnss_read(v):
+            return g * np.asarray(v, float)
+    elif effect == "gnss_offset":
+        b = float(params["offset_mps"])
+        def gnss_read(v):
+            v = np.asarray(v, float)
+            return v + b * np.clip(np.abs(v) / GNSS_OFFSET_FADE_MPS, 0.0, 1.0)
+    else:
+        def gnss_read(v):
+            return np.asarray(v, float)
     rl_gain = 1.0 - params["e"] * (np.asarray(load_n, float) / static_load_n - 1.0) if effect == "load_radius" else None
     rl_delay_s = float(params["delay_s"]) if effect == "wheel_latency" else 0.0
-    return gnss_gain, rl_gain, rl_delay_s
+    return gnss_read, rl_gain, rl_delay_s
 
 
 def simulate_run(
@@ -411,7 +425,7 @@ def simulate_run(
             w_meas = lag(w_meas)
         else:
             my = lag(my)
-    gnss_gain, rl_gain, rl_delay_s = speed_channel_errors(effect, params, load, static)
+    gnss_read, rl_gain, rl_delay_s = speed_channel_errors(effect, params, load, static)
 
     start_s = 1765416600 + int(seed % 5000) * 3607 + rng.uniform(0, 1)  # a December morning, seeded
     gps_offset_s = float(rng.uniform(-2.0, 2.0))       # GPS - (host UTC + leap) at the start
@@ -421,7 +435,7 @@ def simulate_run(
                              angle_err_deg=angle_err_deg, noise=(wft_noise, wft_noise_hz))
     frames_veh = _vehicle_bus_frames(dbs, rng, t_rel, speed, omega, slip, r, gnss_latency_s,
                                      start_s, gps_offset_s, gps_drift, front_wheels=front_wheels,
-                                     gnss_gain=gnss_gain, rl_gain=rl_gain, rl_delay_s=rl_delay_s)
+                                     gnss_read=gnss_read, rl_gain=rl_gain, rl_delay_s=rl_delay_s)
     start_ns = int(round(start_s * 1e9))
     frames = {}
     for bus, parts in ((BUS_WFT, frames_wft), (BUS_VEH, frames_veh)):
@@ -657,7 +671,7 @@ def _wft_frames(db, rng, t_rel, load, fx, my_true, angle_rad, angle_deg, drop_ra
 
 
 def _vehicle_bus_frames(dbs, rng, t_rel, speed, omega, slip, r, latency_s, start_s, gps_offset_s, gps_drift,
-                        front_wheels="driven", gnss_gain=1.0, rl_gain=None, rl_delay_s=0.0):
+                        front_wheels="driven", gnss_read=None, rl_gain=None, rl_delay_s=0.0):
     """can1: wheel speeds (100 Hz), WSS status (10 Hz), GNSS speed/velocity/time (20 Hz), GPS status (1 Hz).
 
     All four wheels are driven through locked differentials: they turn at the
@@ -665,7 +679,7 @@ def _vehicle_bus_frames(dbs, rng, t_rel, speed, omega, slip, r, latency_s, start
     the wheel speeds differ by that). ``front_wheels="reference"`` puts an
     idealised undriven reference wheel (r omega = V, rolling slip -0.8 %) on the
     FL/FR channels instead (the dynamics stay 4x4); GNSS velocities are of the fix epoch
-    and arrive ``latency_s`` later (their speeds read ``gnss_gain`` x the true ones); ``rl_gain``
+    and arrive ``latency_s`` later (their speeds read ``gnss_read(v)`` of the true ones, None: v); ``rl_gain``
     (on the ``t_rel`` grid, or None) multiplies the left-rear wheel-speed reading only, which
     reads the omega of ``rl_delay_s`` earlier (a late channel, 0: none);
     ``RT_SB_GPS_Time`` carries the fix's GPS week and time of week on the GPS clock (host
@@ -713,7 +727,9 @@ def _vehicle_bus_frames(dbs, rng, t_rel, speed, omega, slip, r, latency_s, start
     gps_fix = np.arange(k0, k1 + 1) * step
     t_fix = (gps_fix - gps0) / (1 + gps_drift)  # host time of the fix epoch
     ng = len(t_fix)
-    v_fix = gnss_gain * np.interp(t_fix, t_rel, speed)
+    v_fix = np.interp(t_fix, t_rel, speed)
+    if gnss_read is not None:
+        v_fix = gnss_read(v_fix)
     t_rx = t_fix + latency_s + np.abs(rng.normal(0, 1.5e-3, ng))
     m_spd = gps.get_message_by_name("RT_SB_GPS_Speed")
     m_vel = gps.get_message_by_name("RT_SB_INS_Vel_Body_Axes")
@@ -1013,7 +1029,7 @@ effects (--effect; parameters with --param NAME=VALUE, the others drawn at --siz
                          kphi and c x factor, so terrain_mismatch is acceptable too
     zero_drift           the transducer's My zero drifts over the run (drift_nm, end - start)
   held out (out of family, added after the diagnosis' rule to score it on causes it was
-  not developed on; bench_diagnosis.py --effects held-out / held-out-2 / ... / -11):
+  not developed on; bench_diagnosis.py --effects held-out / held-out-2 / ... / -13):
     exit_angle           a rebounding soil: contact on to theta2 = exit_frac theta1 behind the
                          bottom (a stress distribution: stress_distribution acceptable too)
     shear_hump           Wong's hump-shaped shear curve, residual Kr x the strength
@@ -1052,6 +1068,9 @@ effects (--effect; parameters with --param NAME=VALUE, the others drawn at --siz
                          below reloading R x stiffer
     tyre_pressure_loss   the tyre's deflection growing along the run to r (1 + kappa W/W_static)
     moisture             k_eq, c and phi falling (rising) together along the run -> terrain_drift or unexplained
+    speed_sinkage        sinkage z0 + H r omega / (5 m/s): growing with the tread's speed, not with slip
+    gnss_offset          the GNSS speed reads V + offset_mps (faded in over the first 0.5 m/s)
+    tyre_growth          the rolling radius grows with speed, r (1 + kappa (r omega / 10 m/s)^2)
 
 The recording holds only what a logger would record plus a provenance record
 (kind "simulated", the seed): the effect and its parameters go to --truth FILE

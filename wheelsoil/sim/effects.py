@@ -202,6 +202,20 @@ once)
                        one-value drifting form follows, so ``terrain_drift`` or ``unexplained`` are
                        acceptable.
 
+Held out, thirteenth batch (``--effects held-out-13``; added with the rule of ``e4fa602`` unchanged, scored
+once).  Causes that act through the wheel's or the vehicle's speed in ways no stand-in follows:
+  ``speed_sinkage``    a sinkage that grows with the tread's speed r omega, not with slip (a spinning tyre
+                       vibrating loose sand under it, dynamic sinkage): z0 + H r omega / (5 m/s),
+                       H 0.005-0.04 m; in a slip sweep r omega rises with slip, so slip sinkage is its
+                       look-alike, but it also grows with the forward speed at a given slip.
+  ``gnss_offset``      the GNSS speed reads V + b (a receiver's Doppler bias, a velocity filter's
+                       offset), b +-0.02-0.3 m/s, faded in over the first 0.5 m/s (a receiver's
+                       zero-velocity clamp holds it at 0 at standstill): slip is off most at low speed.
+  ``tyre_growth``      the tyre's rolling radius grows with its speed (centrifugal growth of the
+                       tread): r (1 + kappa (r omega / 10 m/s)^2), kappa 0.005-0.05; slip is computed
+                       with r, the soil sees the grown wheel at its own slip.
+As for the tenth batch, the vehicle's dynamics use Wong's forces for the two tyre/soil effects.
+
 Sensor effects (``fx_gain``, ``my_gain``, ``load_gain``, ``angle_offset``, ``zero_drift``) change only
 what the transducer reports; the soil forces (and the vehicle) are Wong's.
 """
@@ -218,7 +232,7 @@ from .terra import sinkage_eq10, wheel_forces
 
 __all__ = ["EFFECTS", "IN_FAMILY", "OUT_OF_FAMILY", "HELD_OUT", "HELD_OUT_2", "HELD_OUT_3", "HELD_OUT_4",
            "HELD_OUT_5", "HELD_OUT_6", "HELD_OUT_7", "HELD_OUT_8", "HELD_OUT_9", "HELD_OUT_10", "HELD_OUT_11",
-           "HELD_OUT_12",
+           "HELD_OUT_12", "HELD_OUT_13",
            "HELD_OUT_BATCHES", "ALONG_RUN",
            "ALL_HELD_OUT", "ACCEPTABLE", "VERDICTS", "SENSOR_EFFECTS", "draw_effect", "TruthModel", "family_of"]
 
@@ -254,16 +268,19 @@ HELD_OUT_11 = ("saturating_drift", "gradual_patch", "patchy_ground")
 #: the twelfth, scored once with the rule of 354913b (the wheel in the front wheel's rut, a tyre losing
 #: pressure along the run, the soil's moisture changing along the run in three values at once)
 HELD_OUT_12 = ("rut", "tyre_pressure_loss", "moisture")
+#: the thirteenth, scored once with the rule of e4fa602 (speed-driven sinkage, a GNSS speed offset, a
+#: tyre growing with its speed)
+HELD_OUT_13 = ("speed_sinkage", "gnss_offset", "tyre_growth")
 #: the batches by their ``bench_diagnosis.py --effects`` name, and all held-out effects
 HELD_OUT_BATCHES = {"held-out": HELD_OUT, "held-out-2": HELD_OUT_2, "held-out-3": HELD_OUT_3,
                     "held-out-4": HELD_OUT_4, "held-out-5": HELD_OUT_5, "held-out-6": HELD_OUT_6,
                     "held-out-7": HELD_OUT_7, "held-out-8": HELD_OUT_8, "held-out-9": HELD_OUT_9,
                     "held-out-10": HELD_OUT_10, "held-out-11": HELD_OUT_11,
-                    "held-out-12": HELD_OUT_12}
+                    "held-out-12": HELD_OUT_12, "held-out-13": HELD_OUT_13}
 ALL_HELD_OUT = tuple(e for batch in HELD_OUT_BATCHES.values() for e in batch)
 SENSOR_EFFECTS = ("fx_gain", "my_gain", "load_gain", "angle_offset", "zero_drift", "gnss_gain", "inertia_error",
                   "fz_crosstalk", "load_radius", "wheel_latency", "fx_gain_drift", "load_lag",
-                  "fz_zero_drift", "my_crosstalk", "fx_saturation", "my_lag")
+                  "fz_zero_drift", "my_crosstalk", "fx_saturation", "my_lag", "gnss_offset")
 #: effects whose truth changes along the run (the simulator tabulates their forces against distance too)
 ALONG_RUN = ("terrain_drift", "mud_buildup", "tyre_pressure_loss", "moisture") + HELD_OUT_11
 
@@ -273,6 +290,12 @@ RATE_SLIP_REF = 0.02
 SPEED_REF_MPS = 5.0
 #: ``rate_sinkage``'s reference loading rate [m/s]: the lab plate's penetration speed
 PLATE_RATE_MPS = 0.025
+#: ``speed_sinkage``'s reference tread speed [m/s]: the extra sinkage is H at it
+SPEED_SINKAGE_REF_MPS = 5.0
+#: ``tyre_growth``'s reference tread speed [m/s]: the radius is r (1 + kappa) at it
+TYRE_GROWTH_REF_MPS = 10.0
+#: ``gnss_offset`` fades in over this forward speed [m/s] (a receiver's zero-velocity clamp)
+GNSS_OFFSET_FADE_MPS = 0.5
 
 #: Acceptable verdicts per effect (contract F). See the module docstring for the two
 #: out-of-family effects with an exact in-family equivalent (load_gain, width_error).
@@ -328,6 +351,9 @@ ACCEPTABLE: dict[str, tuple[str, ...]] = {
     "rut": ("unexplained",),
     "tyre_pressure_loss": ("unexplained",),
     "moisture": ("terrain_drift", "unexplained"),
+    "speed_sinkage": ("unexplained",),
+    "gnss_offset": ("unexplained",),
+    "tyre_growth": ("unexplained",),
 }
 
 #: Terrain parameters a mismatch / drift may change, with the relative (or absolute) range
@@ -383,6 +409,9 @@ _ONE_PARAM: dict[str, tuple[str, float, float, bool, str]] = {
     "rate_sinkage": ("e", 0.005, 0.10, True, "plain"),
     "my_lag": ("tau_s", 0.03, 0.5, True, "plain"),
     "tyre_pressure_loss": ("kappa", 0.04, 0.40, True, "plain"),
+    "speed_sinkage": ("H", 0.005, 0.04, True, "plain"),
+    "gnss_offset": ("offset_mps", 0.02, 0.3, True, "signed"),
+    "tyre_growth": ("kappa", 0.005, 0.05, True, "plain"),
 }
 
 
@@ -626,8 +655,16 @@ class TruthModel:
             kw["depth_power"] = (float(self.static_sinkage(self.static_load_n)), p["a"])
         elif e == "interface":
             kw["interface"] = (0.5 * self.static_peak_stress(), p["f"])
-        elif e in ("mud_buildup", "radius_error"):  # another wheel; slip is computed with the configured r
-            g = 1.0 + p["e"] * (np.asarray(frac, float) if e == "mud_buildup" else 1.0)
+        elif e == "speed_sinkage" and speed_mps is not None:  # z0 + H r omega / V_ref (Eq. 11's H s form)
+            rw = np.abs(np.asarray(speed_mps, float)) / np.maximum(1.0 - s, 0.03)  # r omega from V and s
+            kw["H"] = p["H"] * (rw / SPEED_SINKAGE_REF_MPS) / np.maximum(s, 1e-6)
+        elif e in ("mud_buildup", "radius_error") or (e == "tyre_growth" and speed_mps is not None):
+            # another wheel; slip is computed with the configured r
+            if e == "tyre_growth":
+                rw = np.abs(np.asarray(speed_mps, float)) / np.maximum(1.0 - s, 0.03)
+                g = 1.0 + p["kappa"] * (rw / TYRE_GROWTH_REF_MPS) ** 2
+            else:
+                g = 1.0 + p["e"] * (np.asarray(frac, float) if e == "mud_buildup" else 1.0)
             r = self.radius_m * g
             s = np.maximum(1.0 - (1.0 - s) / g, 0.0)  # a smaller wheel at the lowest slips: rolling, s = 0
         elif e == "rut":  # the front wheel's rut, of its Eq. (10) sinkage at the static load on this soil
