@@ -1,6 +1,6 @@
 """The diagnosis on runs of two independent generators (``benchmarks/foreign/``, ``benchmarks/foreign2/``).
 
-    python benchmarks/bench_foreign.py [--generator foreign|foreign2] [--only a1,v15] [--keep DIR]
+    python benchmarks/bench_foreign.py [--generator foreign|foreign2 [--stress]] [--only a1,v15] [--keep DIR]
 
 Each generator was written from the hardware contract, the DBC files and the paper alone, by a
 session that did not read wheelsoil's code (nor, for the second, the first generator), and imports
@@ -20,7 +20,9 @@ drawn in 0.03-0.2 s; front wheels locked to the instrumented one or rolling free
 ``foreign2`` (36 cases: every listed effect and seven causes on no list, each at two sizes chosen
 around the generator's defaults, which change Dp at s = 0.5 by 13-30 %; a 4x4 with locked
 differentials; soil varying along the track) were each chosen once, before the pipeline was run on
-them. Prints one row per case (verdict, latency found against the truth, its method and
+them. ``--stress`` runs eight of the second generator's cases under conditions its 36 do not cover (4
+accelerate cycles, 3x the sensor noise, 3x the soil variability; seeds 401-424), chosen after its 36 were
+scored. Prints one row per case (verdict, latency found against the truth, its method and
 reliability) and the totals, and the wall time.
 """
 
@@ -72,6 +74,15 @@ CASES2 = [
     ("lk1", "load_k", 233, 0.045, {"beta": 0.5}), ("lk2", "load_k", 234, 0.110, {"beta": 1.0}),
     ("xt1", "fx_crosstalk", 235, 0.175, {"fz_to_fx": 0.005}), ("xt2", "fx_crosstalk", 236, 0.060, {"fz_to_fx": -0.01}),
 ]
+#: the second generator's runs under conditions CASES2 does not cover (``--stress``): eight of its cases, each
+#: as 4 accelerate cycles (a short run), with 3x the sensor noise, and with 3x the soil variability
+_STRESS_BASE = [("none", "none", {}), ("vas", "vasilev", {"H": 0.03}), ("tphi", "terrain_phi", {"phi_deg": 24.0}),
+                ("tyre", "tyre_deflection", {"r_eq": 0.52}), ("bd", "bulldozing", {"f_b": 0.35}),
+                ("lug", "lugs", {"h": 0.018}), ("lk", "load_k", {"beta": 1.0}), ("fz", "fz_gain", {"gain": 0.94})]
+_STRESS_CONDITIONS = [("short", ["--cycles", "4"]), ("noise3", ["--noise", "3"]), ("soil3", ["--soil-var", "3"])]
+STRESS = [(f"{cond}_{name}", case, 401 + 8 * i + j, round(0.03 + ((401 + 8 * i + j) * 37 % 170) / 1000, 3), params,
+           extra)
+          for i, (cond, extra) in enumerate(_STRESS_CONDITIONS) for j, (name, case, params) in enumerate(_STRESS_BASE)]
 NAMED = ("slip_sinkage", "terrain_mismatch", "stress_distribution", "terrain_drift")
 
 
@@ -89,10 +100,11 @@ def generate(name: str, case: str, fronts: str, seed: int, latency_s: float, ext
                           name, out)
 
 
-def generate2(name: str, case: str, seed: int, latency_s: float, params: dict, out: Path) -> dict:
-    """Run the second generator for one case into ``out`` (:func:`_run_generator`)."""
+def generate2(name: str, case: str, seed: int, latency_s: float, params: dict, out: Path, options=()) -> dict:
+    """Run the second generator for one case into ``out`` (:func:`_run_generator`); ``options``: more of
+    its command-line options (``--cycles``, ``--noise``, ``--soil-var``)."""
     extra = [a for k, v in params.items() for a in ("--p", f"{k}={v}")]
-    return _run_generator(GEN2, [case, "--seed", str(seed), "--latency", str(latency_s), *extra], name, out)
+    return _run_generator(GEN2, [case, "--seed", str(seed), "--latency", str(latency_s), *extra, *options], name, out)
 
 
 def run_case(name: str, case: str, fronts: str, seed: int, latency_s: float, extra: list, out: Path) -> dict:
@@ -102,9 +114,9 @@ def run_case(name: str, case: str, fronts: str, seed: int, latency_s: float, ext
     return fit_and_score(name, truth, out, fronts)
 
 
-def run_case2(name: str, case: str, seed: int, latency_s: float, params: dict, out: Path) -> dict:
+def run_case2(name: str, case: str, seed: int, latency_s: float, params: dict, out: Path, options=()) -> dict:
     """Generate, import and fit one case of the second generator; returns a row dict as :func:`run_case`."""
-    return fit_and_score(name, generate2(name, case, seed, latency_s, params, out), out, "locked")
+    return fit_and_score(name, generate2(name, case, seed, latency_s, params, out, options), out, "locked")
 
 
 def fit_and_score(name: str, truth: dict, out: Path, fronts: str) -> dict:
@@ -133,6 +145,9 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--generator", choices=("foreign", "foreign2"), default="foreign",
                     help="which independent generator's cases (default: foreign, 14 cases; foreign2: 36)")
+    ap.add_argument("--stress", action="store_true",
+                    help="with --generator foreign2: 24 runs of eight of its cases as short runs (4 cycles), with 3x "
+                         "the sensor noise and with 3x the soil variability, instead of its 36 cases")
     ap.add_argument("--only", default="", help="comma list of case names (default: all)")
     ap.add_argument("--keep", type=Path, default=None, help="keep logs, recordings and reports here")
     args = ap.parse_args()
@@ -142,11 +157,13 @@ def main() -> None:
     t0 = time.perf_counter()
     rows = []
     print(f"{'case':<5} {'fronts':<6} {'truth':<34} {'verdict (model, confidence)':<44} {'score':<6} latency ms (true): method, reliable")
-    for c in (CASES if args.generator == "foreign" else CASES2):
+    if args.stress and args.generator != "foreign2":
+        ap.error("--stress needs --generator foreign2")
+    for c in (CASES if args.generator == "foreign" else STRESS if args.stress else CASES2):
         if only and c[0] not in only:
             continue
         try:
-            r = (run_case if args.generator == "foreign" else run_case2)(*c, base)
+            r = run_case(*c, base) if args.generator == "foreign" else run_case2(*c[:5], base, *c[5:])
         except subprocess.CalledProcessError as e:  # the generator refused (e.g. a run the vehicle cannot drive)
             print(f"{c[0]:<5} generator failed: {e.stderr.decode(errors='replace').strip().splitlines()[-1:]}")
             continue

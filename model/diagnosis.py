@@ -142,7 +142,7 @@ decides with this rule (constants below; none was tuned on a benchmark):
    ``P_HIGH``, ``medium`` >= ``P_NAME``), capped at ``medium`` when the
    named model is physically inconsistent, when one of the generic
    alternatives for causes on no list (effect ``unexplained``: ``dp_resistance``, ``dp_drift``, ``radius``,
-   ``speed_gain``, ``tyre``, ``width``, ``sensor_gain``, ``angle_offset``, ``zero_drift``, ``load_k``, ``speed_k``, ``rebound``, ``shear_slip``, ``envelope``, ``k_stress``, ``balance``) is also supported out of sample (with less
+   ``speed_gain``, ``tyre``, ``width``, ``sensor_gain``, ``angle_offset``, ``zero_drift``, ``load_k``, ``speed_k``, ``speed_sinkage``, ``rebound``, ``shear_slip``, ``envelope``, ``k_stress``, ``balance``) is also supported out of sample (with less
    evidence: the data do not exclude an off-list cause), (model W / measured W outside
    ``LOAD_RATIO_TOL`` in a slip bin, Eq. 7, or static sinkage above D/6, the
    limit of Eq. 10's small-angle form), when there are fewer than
@@ -1055,6 +1055,9 @@ def _separating(effects: set, channels: set, names=()) -> str | None:
         parts.append("shear-box tests of this soil over the whole range of normal stress under the wheel, from a few "
                      "kPa to the peak (a curved failure envelope or a K that changes with the normal stress shows "
                      "there; a wrong lab value is wrong at every stress)")
+    if "speed_sinkage" in names and e & {"slip_sinkage", "terrain_mismatch"}:
+        parts.append("the same slip sweep at another forward speed, with the wheel's sinkage (a sinkage driven by "
+                     "the tread's speed r omega changes with V at the same slip; slip sinkage does not)")
     if "load_k" in names and e & {"terrain_mismatch", "terrain_drift", "slip_sinkage"}:
         parts.append("the same slip sweep at a second static load (only a load-dependent soil changes its "
                      "pressure-sinkage modulus with it)")
@@ -1101,8 +1104,9 @@ _LOOK_ALIKES = {
                       "the transducer's zeros with the wheel lifted before and after the run, and the same slip "
                       "sweep on fresh ground"),
     "slip_sinkage": ("a shear strength that falls with slip, or a hump-shaped shear curve, lowers the drawbar pull "
-                     "at high slip as slip sinkage can",
-                     "the wheel's sinkage against slip"),
+                     "at high slip as slip sinkage can; a sinkage driven by the tread's speed rather than by slip "
+                     "(a spinning tyre vibrating the soil loose) grows with slip in a sweep too",
+                     "the wheel's sinkage against slip, at two forward speeds"),
 }
 
 

@@ -57,6 +57,9 @@ The hypotheses (paper numbering for Eqs.; Wong = *Theory of Ground Vehicles*, 4t
   load, k_eq (W/W_static)^beta, or on the forward speed (a soil stiffer at a faster loading rate:
   k_eq (V/V_ref)^beta), k_eq re-fitted in both: over one run each acts much as a constant k_eq mismatch: effect
   ``unexplained``.
+* ``speed_sinkage``: not a listed cause: a sinkage growing with the tread's speed r omega rather than
+  with slip (a spinning tyre vibrating loose soil under it), z0 + H_v r omega / (5 m/s): slip
+  sinkage's look-alike where V varies: effect ``unexplained``.
 * ``rebound``: not a listed cause: a soil that rebounds behind the wheel, so the
   contact runs on past the bottom to an exit angle theta2 = lambda theta1 (Wong's rear
   region with an exit angle; kernel ``wong_forces(..., exit_ratio=lambda)``).  The
@@ -971,7 +974,18 @@ def speed_reference(speed_mps) -> float | None:
     return float(mid) if hi >= SPEED_SPREAD_MIN * lo else None
 
 
-class SpeedStiffness(_KeqPowerLaw):
+class _NeedsSpeed(Hypothesis):
+    """Mixin of the hypotheses that take the forward speed: not tried without a recorded speed that
+    varies (``ctx.v_ref`` None, :func:`speed_reference`)."""
+
+    def available(self, ctx, has_x):
+        if ctx.v_ref is None:
+            return (f"needs the forward speed (speed_mps), varying by a factor {SPEED_SPREAD_MIN:g} or more over "
+                    "the cells")
+        return super().available(ctx, has_x)
+
+
+class SpeedStiffness(_NeedsSpeed, _KeqPowerLaw):
     """A pressure-sinkage modulus that depends on the forward speed: k_eq(V) = k_eq (V / V_ref)^beta,
     V_ref the run's median speed (:func:`speed_reference`), k_eq re-fitted against its lab prior.
 
@@ -992,12 +1006,6 @@ class SpeedStiffness(_KeqPowerLaw):
     source = "generic alternative: a rate (speed) dependent k_eq, a power law in V; paper Eqs. (1)-(10) at each speed"
     BETA = (-1.0, 1.0, "exponent of k_eq in V / V_ref")
 
-    def available(self, ctx, has_x):
-        if ctx.v_ref is None:
-            return (f"needs the forward speed (speed_mps), varying by a factor {SPEED_SPREAD_MIN:g} or more over "
-                    "the cells")
-        return super().available(ctx, has_x)
-
     def predict(self, ctx, load_n, slip, x, p, inertia=None, speed_mps=None):
         """Wong's forces with k_eq at each sample's speed (class doc): ``speed_mps`` (N,) [m/s], None = all
         at ``ctx.v_ref`` (the report's curves); shapes, units and errors as :meth:`Hypothesis.predict`."""
@@ -1010,6 +1018,41 @@ class SpeedStiffness(_KeqPowerLaw):
         return _interpolated(u, lambda v: wong_forces(
             apply_terrain(terrain, {"k_eq": p["k_eq"] * math.exp(p["beta"] * v)}), ctx.wheel, load_n, slip,
             sinkage=ctx.sinkage))
+
+
+#: :class:`SpeedSinkage`'s reference tread speed [m/s]: the extra sinkage is H_v at r omega = this.
+TREAD_SPEED_REF_MPS = 5.0
+
+
+class SpeedSinkage(_NeedsSpeed):
+    """A sinkage that grows with the tread's speed r omega = V / (1 - s) (Eq. 6), not with slip:
+    z = z0 + H_v r omega / (5 m/s) in Eqs. (1)-(9), z0 from Eq. (10).
+
+    Not a cause on our list: a spinning tyre that vibrates loose soil under it, or a soil whose
+    sinkage follows the rate at which the tread works it (dynamic sinkage).  In a slip sweep r omega
+    rises with slip, so Vasil'ev's z0 + H s (Eq. 11) mimics it; they part where one slip is reached
+    at different forward speeds (the accelerate phase reaches each slip at a higher V each cycle).
+    Effect ``unexplained``: a slip-sinkage form it explains as well is not named.  The sibling of
+    :class:`SpeedStiffness` (a modulus that depends on the speed).  Not tried without a recorded
+    speed that varies (``ctx.v_ref`` None); the report's curves take V = ``ctx.v_ref``.
+    """
+
+    name, effect, title = "speed_sinkage", "unexplained", "a sinkage growing with the tread's speed (no listed cause)"
+    source = "generic alternative: speed-driven (dynamic) sinkage, Eq. (11)'s form in r omega / 5 m/s"
+    nested = ("wong",)
+
+    def own_params(self, ctx):
+        return (HParam("H_v", 0.0, 0.0, 0.2, "m", "extra sinkage at a tread speed r omega of 5 m/s"),)
+
+    def predict(self, ctx, load_n, slip, x, p, inertia=None, speed_mps=None):
+        """Wong's forces with the sinkage raised by H_v r omega / 5 m/s (class doc): ``speed_mps`` (N,)
+        [m/s], None = all at ``ctx.v_ref``; shapes, units and errors as :meth:`Hypothesis.predict`."""
+        load_n, slip = np.asarray(load_n, float), np.asarray(slip, float)
+        v = np.full(load_n.shape, ctx.v_ref or 0.0) if speed_mps is None else np.abs(np.asarray(speed_mps, float))
+        rw = np.broadcast_to(v, load_n.shape) / np.maximum(1.0 - slip, 0.03)  # r omega from V and s (Eq. 6)
+        h = p["H_v"]
+        return wong_forces(self.terrain(ctx, p), ctx.wheel, load_n, slip, sinkage=ctx.sinkage,
+                           z_fn=lambda z0, s: z0 + h * rw / TREAD_SPEED_REF_MPS)
 
 
 class Rebound(Hypothesis):
@@ -1169,7 +1212,7 @@ HYPOTHESES: dict[str, Hypothesis] = {
               WongReece(), DriftLinear(), DriftStep(), *(_drift_one(n) for n in TERRAIN_NAMES),
               *(_drift_one(n, step=True) for n in TERRAIN_NAMES), DrawbarResistance(), DrawbarDrift(), ZeroDrift(),
               WheelRadius(), SpeedGain(), TyreRadius(), WheelWidth(), SensorGain(), AngleOffset(), LoadStiffness(),
-              SpeedStiffness(), Rebound(), ShearSlip(), CurvedEnvelope(), StressK(), VerticalBalance(),
+              SpeedStiffness(), SpeedSinkage(), Rebound(), ShearSlip(), CurvedEnvelope(), StressK(), VerticalBalance(),
               SmallAngleSinkage())
 }
 

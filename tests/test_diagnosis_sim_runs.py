@@ -166,6 +166,16 @@ def test_a_soil_stiffer_at_the_wheels_loading_rate_is_not_named_a_k_eq_mismatch(
     assert d["effect"] == "unexplained" and "depends on the speed" in d["summary"], d["summary"]
 
 
+def test_a_sinkage_driven_by_the_treads_speed_is_not_named_slip_sinkage(tmp_path):
+    """Held-out benchmark seed 17019 (``--effects held-out-13``): a clay on which the wheel sinks by
+    0.0054 m x r omega / (5 m/s) more than Eq. 10 says (a sinkage driven by the tread's speed, not by
+    slip) was named slip sinkage (Vasil'ev, "medium") at the batch's first score, as 3 of its 22 such
+    runs were: in a sweep r omega = V / (1 - s) grows with slip.  The stand-in ``speed_sinkage``
+    (z0 + H_v r omega / 5 m/s) tells them apart where one slip is reached at different speeds."""
+    _, d = _held_out_seed(tmp_path, 17019, "held-out-13", "speed_sinkage")
+    assert d["effect"] == "unexplained" and d["model"] == "speed_sinkage", d["summary"]
+
+
 def test_a_weaker_tyre_soil_interface_is_not_named_a_phi_mismatch(tmp_path):
     """Held-out benchmark seed 12481 (``--effects held-out-8``): a tyre-soil interface weaker than the
     soil at the higher stresses acts on the drawbar pull like a lower phi, and the one-value phi re-fit

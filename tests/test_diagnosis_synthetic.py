@@ -400,6 +400,8 @@ def test_the_separating_measurement_names_what_tells_each_stand_in_from_a_listed
                         ("envelope", "range of normal stress"), ("k_stress", "range of normal stress")):
         text = _separating({"terrain_mismatch", "unexplained"}, {"drawbar_pull_n", "torque_nm"}, [name])
         assert text and words in text, (name, text)
+    text = _separating({"slip_sinkage", "unexplained"}, {"drawbar_pull_n", "torque_nm"}, ["speed_sinkage"])
+    assert text and "another forward speed" in text, text
     assert _separating({"none"}, {"drawbar_pull_n"}, []) is None
 
 

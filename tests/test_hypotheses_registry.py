@@ -31,7 +31,7 @@ def test_every_hypothesis_has_an_effect_bounded_parameters_and_reduces_to_wong(n
     if name == "load_k":  # needs the run's static load
         assert h.available(CTX, True)
         ctx = dataclasses.replace(CTX, w_static=12000.0)
-    if name == "speed_k":  # needs a recorded speed that varies
+    if name in ("speed_k", "speed_sinkage"):  # need a recorded speed that varies
         assert h.available(CTX, True)
         ctx = dataclasses.replace(CTX, v_ref=2.0)
     if name == "eq10":  # tried only in a fit that takes the sinkage from the vertical balance
@@ -309,3 +309,19 @@ def test_the_terrain_search_box_holds_every_library_soils_lab_values():
             assert q.lower <= q.default / 2, (slug, q)
             if q.log:
                 assert 2 * q.default <= q.upper, (slug, q)
+
+
+def test_the_speed_driven_sinkage_follows_the_treads_speed_not_the_slip():
+    """speed_sinkage: z = z0 + H_v r omega / 5 m/s with r omega = V / (1 - s) (Eq. 6): one slip at two forward
+    speeds sinks by different amounts (Vasil'ev's z0 + H s would not), and with H_v = 0 it is Wong's model."""
+    h = HYPOTHESES["speed_sinkage"]
+    ctx = dataclasses.replace(CTX, v_ref=2.0)
+    w, s, v = np.full(4, 12000.0), np.array([0.3, 0.3, 0.6, 0.6]), np.array([1.0, 3.0, 1.0, 3.0])
+    f = h.predict(ctx, w, s, None, {"H_v": 0.02}, speed_mps=v)
+    z0 = wong_forces(SAND, DEFAULT_WHEEL, w, s).sinkage_m
+    np.testing.assert_allclose(f.sinkage_m, z0 + 0.02 * v / (1 - s) / 5.0, rtol=1e-12)
+    assert f.drawbar_pull_n[1] < f.drawbar_pull_n[0] and f.drawbar_pull_n[3] < f.drawbar_pull_n[2]
+    ref = wong_forces(SAND, DEFAULT_WHEEL, w, s)
+    np.testing.assert_allclose(h.predict(ctx, w, s, None, {"H_v": 0.0}, speed_mps=v).drawbar_pull_n, ref.drawbar_pull_n,
+                               rtol=1e-12)
+    assert h.available(CTX, True)  # no recorded speed: not tried
