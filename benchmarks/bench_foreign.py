@@ -151,26 +151,28 @@ def main() -> None:
     ap.add_argument("--only", default="", help="comma list of case names (default: all)")
     ap.add_argument("--keep", type=Path, default=None, help="keep logs, recordings and reports here")
     args = ap.parse_args()
+    if args.stress and args.generator != "foreign2":
+        ap.error("--stress needs --generator foreign2")
     only = set(filter(None, args.only.split(",")))
     base = args.keep or Path(tempfile.mkdtemp(prefix="bench_foreign_"))
     base.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()
     rows = []
-    print(f"{'case':<5} {'fronts':<6} {'truth':<34} {'verdict (model, confidence)':<44} {'score':<6} latency ms (true): method, reliable")
-    if args.stress and args.generator != "foreign2":
-        ap.error("--stress needs --generator foreign2")
-    for c in (CASES if args.generator == "foreign" else STRESS if args.stress else CASES2):
+    cases = CASES if args.generator == "foreign" else STRESS if args.stress else CASES2
+    w = max(len(c[0]) for c in cases)
+    print(f"{'case':<{w}} {'fronts':<6} {'truth':<34} {'verdict (model, confidence)':<44} {'score':<6} latency ms (true): method, reliable")
+    for c in cases:
         if only and c[0] not in only:
             continue
         try:
             r = run_case(*c, base) if args.generator == "foreign" else run_case2(*c[:5], base, *c[5:])
         except subprocess.CalledProcessError as e:  # the generator refused (e.g. a run the vehicle cannot drive)
-            print(f"{c[0]:<5} generator failed: {e.stderr.decode(errors='replace').strip().splitlines()[-1:]}")
+            print(f"{c[0]:<{w}} generator failed: {e.stderr.decode(errors='replace').strip().splitlines()[-1:]}")
             continue
         rows.append(r)
         lat = "n/a" if r["latency_s"] is None else f"{1e3 * r['latency_s']:.0f}"
         form = "" if r["form"] is None else (" form right" if r["form"] else " form wrong")
-        print(f"{r['name']:<5} {r['fronts']:<6} {r['truth'][:34]:<34} "
+        print(f"{r['name']:<{w}} {r['fronts']:<6} {r['truth'][:34]:<34} "
               f"{r['effect'] + ' (' + str(r['model']) + ', ' + str(r['confidence']) + ')':<44} {r['score'] + form:<6} "
               f"{lat} ({1e3 * r['latency_true_s']:.0f}): {r['latency_method']}, {r['latency_reliable']}", flush=True)
     fam = [r for r in rows if r["listed"]]

@@ -1928,6 +1928,8 @@ def _not_improved(pr: dict, target, target_txt: str) -> str:
     the ``target`` channels: no lower held-out error, a gain under ``MIN_GAIN``, or a gain the folds
     do not show consistently (the held-out error is lower, the paired test is not significant)."""
     miss = [pr[c] for c in target if not pr[c]["improves"]]
+    if any(not np.isfinite(r["p_improve"]) for r in miss):
+        return f"cannot be tested out of sample on the {target_txt} (fewer than 3 cross-validation folds)"
     if any(r["gain_noise_var"] <= 0 for r in miss):
         return f"does not lower the {target_txt} error out of sample"
     if any(r["gain_noise_var"] < MIN_GAIN for r in miss):

@@ -46,7 +46,7 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
-from wheelsoil.sim.effects import (ACCEPTABLE, ALL_HELD_OUT, EFFECTS, HELD_OUT, HELD_OUT_2, HELD_OUT_3,
+from wheelsoil.sim.effects import (ACCEPTABLE, ALL_HELD_OUT, EFFECTS, GNSS_OFFSET_FADE_MPS, HELD_OUT, HELD_OUT_2, HELD_OUT_3,
                                    HELD_OUT_4, HELD_OUT_5, HELD_OUT_6, HELD_OUT_7, HELD_OUT_8, HELD_OUT_9,
                                    HELD_OUT_10, HELD_OUT_11, HELD_OUT_12, HELD_OUT_13, HELD_OUT_BATCHES, IN_FAMILY, OUT_OF_FAMILY,
                                    PARAM_NAMES, SENSOR_EFFECTS, VERDICTS, TruthModel, draw_effect, family_of)
@@ -251,20 +251,13 @@ def speed_channel_errors(effect: str, params: Mapping[str, Any], load_n: np.ndar
     shrinking with the load, 1 - e (W/W0 - 1); None: none) and its delay [s] (0: none).
     ``static_load_n`` W0 [N].  Used by :func:`simulate_run` for the frames and by the benchmark's
     imprint for the slip the fit sees.  Raises KeyError when ``params`` lacks the effect's parameter."""
-    from wheelsoil.sim.effects import GNSS_OFFSET_FADE_MPS
+    g = float(params["gain"]) if effect == "gnss_gain" else 1.0
+    b = float(params["offset_mps"]) if effect == "gnss_offset" else 0.0
 
-    if effect == "gnss_gain":
-        g = float(params["gain"])
-        def gnss_read(v):
-            return g * np.asarray(v, float)
-    elif effect == "gnss_offset":
-        b = float(params["offset_mps"])
-        def gnss_read(v):
-            v = np.asarray(v, float)
-            return v + b * np.clip(np.abs(v) / GNSS_OFFSET_FADE_MPS, 0.0, 1.0)
-    else:
-        def gnss_read(v):
-            return np.asarray(v, float)
+    def gnss_read(v):
+        v = np.asarray(v, float)
+        return g * v + b * np.clip(np.abs(v) / GNSS_OFFSET_FADE_MPS, 0.0, 1.0)
+
     rl_gain = 1.0 - params["e"] * (np.asarray(load_n, float) / static_load_n - 1.0) if effect == "load_radius" else None
     rl_delay_s = float(params["delay_s"]) if effect == "wheel_latency" else 0.0
     return gnss_read, rl_gain, rl_delay_s
