@@ -1884,7 +1884,8 @@ def _summary(d: Diagnosis) -> str:
     elif d.effect == "unexplained":
         parts.append("The cause is unexplained: " + "; ".join(r for r in d.notes if r in d.confidence_reasons) + ".")
         if d.alternatives or d.model:
-            parts.append("Candidates: " + ", ".join(TITLES[k] for k in [d.model, *d.alternatives] if k) + ".")
+            parts.append("Candidates (supported out of sample): "
+                         + ", ".join(TITLES[k] for k in [d.model, *d.alternatives] if k) + ".")
         top = max(d.probabilities, key=d.probabilities.get, default=None)
         if top in d.why_not and top in d.paired:
             parts.append(_top_unsupported(d, top))
