@@ -1951,11 +1951,21 @@ def _top_unsupported(d: Diagnosis, top: str) -> str:
         scale, unit = {"torque_nm": (1.0, "N m"), "sinkage_m": (1e3, "mm")}.get(c, (1.0, "N"))
         txt.append(f"{CHANNEL_TITLES[c]} {_fmt(scale * r['wong_cv_rmse'], unit)} -> {_fmt(scale * r['cv_rmse'], unit)} "
                    f"({p})")
+    more = d.fits[top].success and _fold_limited(d.paired[top], d.target_channels)
     return (f"The most probable hypothesis, {TITLES[top]} ({d.probabilities[top]:.3g}), predicts new data with "
             + ", ".join(txt) + f" against Wong's model; it {d.why_not[top]}"
-            + (", so it is not named." if "folds" not in d.why_not[top] else
+            + (", so it is not named." if not more else
                ", so it is not named: more test points would tell." if d.data.kind == "table" else
                ", so it is not named: a run with more accelerate cycles would tell."))
+
+
+def _fold_limited(pr: dict, target) -> bool:
+    """True when what keeps step 2 from finding an improvement in the ``target`` channels is the
+    folds, not the held-out error: every channel that fails has a held-out gain of at least
+    ``MIN_GAIN`` the paired test does not confirm, or too few folds to test (the last two reasons
+    of :func:`_not_improved`); more independent units could then confirm it."""
+    miss = [pr[c] for c in target if not pr[c]["improves"]]
+    return bool(miss) and all(not np.isfinite(r["p_improve"]) or r["gain_noise_var"] >= MIN_GAIN for r in miss)
 
 
 def _grouped(why: dict) -> str:

@@ -619,6 +619,8 @@ class TruthModel:
         kw: dict[str, Any] = {}
         r = self.radius_m
         b = self.width_m
+        # the tread's speed r omega from V and s (Eq. 6), for the effects that follow it
+        rw = None if speed_mps is None else np.abs(np.asarray(speed_mps, float)) / np.maximum(1.0 - s, 0.03)
         if e == "vasilev":
             kw["H"] = p["H"]
         elif e == "slip_sinkage_lag":  # z0 + H s_lag: H scaled per sample so that H_eff s = H s_lag
@@ -655,13 +657,11 @@ class TruthModel:
             kw["depth_power"] = (float(self.static_sinkage(self.static_load_n)), p["a"])
         elif e == "interface":
             kw["interface"] = (0.5 * self.static_peak_stress(), p["f"])
-        elif e == "speed_sinkage" and speed_mps is not None:  # z0 + H r omega / V_ref (Eq. 11's H s form)
-            rw = np.abs(np.asarray(speed_mps, float)) / np.maximum(1.0 - s, 0.03)  # r omega from V and s
+        elif e == "speed_sinkage" and rw is not None:  # z0 + H r omega / V_ref (Eq. 11's H s form)
             kw["H"] = p["H"] * (rw / SPEED_SINKAGE_REF_MPS) / np.maximum(s, 1e-6)
-        elif e in ("mud_buildup", "radius_error") or (e == "tyre_growth" and speed_mps is not None):
+        elif e in ("mud_buildup", "radius_error") or (e == "tyre_growth" and rw is not None):
             # another wheel; slip is computed with the configured r
             if e == "tyre_growth":
-                rw = np.abs(np.asarray(speed_mps, float)) / np.maximum(1.0 - s, 0.03)
                 g = 1.0 + p["kappa"] * (rw / TYRE_GROWTH_REF_MPS) ** 2
             else:
                 g = 1.0 + p["e"] * (np.asarray(frac, float) if e == "mud_buildup" else 1.0)
