@@ -33,7 +33,8 @@ with ``--terrains``, the next soil of the list).
     python benchmarks/bench_diagnosis.py --effects held-out-10      # ... a tenth
     python benchmarks/bench_diagnosis.py --effects held-out-11      # ... an eleventh
     python benchmarks/bench_diagnosis.py --effects held-out-12      # ... a twelfth
-    python benchmarks/bench_diagnosis.py --effects held-out-13      # ... and a thirteenth
+    python benchmarks/bench_diagnosis.py --effects held-out-13      # ... a thirteenth
+    python benchmarks/bench_diagnosis.py --effects held-out-14      # ... and a fourteenth
 
 A held-out batch is scored once with the rule as it stands when the batch is added: that first
 score measures how the rule meets causes it was not developed on; anything changed because of it
@@ -141,8 +142,9 @@ def imprint(run, n_max: int = 300) -> dict | None:
     r = run.wheel[0]
     speed, omega, load = (tr[k].to_numpy() for k in ("speed_mps", "omega_radps", "load_n"))
     t = tr["t_s"].to_numpy()
-    gnss_read, rl_gain, rl_delay_s = speed_channel_errors(e, p, load, STATIC_LOAD_N + run.info["added_load_n"])
-    speed = gnss_read(speed)
+    gnss_read, rl_gain, rl_delay_s = speed_channel_errors(e, p, load, STATIC_LOAD_N + run.info["added_load_n"],
+                                                          float(t[-1]))
+    speed = gnss_read(speed, t)
     if rl_gain is not None:
         omega = omega * rl_gain
     if rl_delay_s:
@@ -405,7 +407,8 @@ def main(argv=None) -> int:
                     "unexplained acceptable); 'held-out-12' a twelfth (the wheel in the front wheel's rut, a tyre "
                     "losing pressure along the run, the soil's moisture changing k_eq, c and phi together "
                     "along the run: terrain_drift or unexplained acceptable); 'held-out-13' a thirteenth (a "
-                    "sinkage growing with the tread's speed, a GNSS speed offset, a tyre growing with its speed)")
+                    "sinkage growing with the tread's speed, a GNSS speed offset, a tyre growing with its speed); "
+                    "'held-out-14' a fourteenth (an out-of-round tyre, bursts of GNSS speed error, a tyre warming up)")
     ap.add_argument("--json", default=None, metavar="FILE", help="also write the rows as JSON")
     ap.add_argument("--keep", default=None, metavar="DIR", help="keep recordings, truths and reports here")
     args = ap.parse_args(argv)

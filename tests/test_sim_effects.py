@@ -182,9 +182,9 @@ def test_held_out_13_speed_sinkage_gnss_offset_and_tyre_growth(wong):
         assert np.all(ss["drawbar_pull_n"][1:] < wong["drawbar_pull_n"][1:])
     np.testing.assert_allclose(_tm("speed_sinkage", H=0.02).drive_forces(LOAD, SLIP)["sinkage_m"], wong["sinkage_m"])
     read = speed_channel_errors("gnss_offset", {"offset_mps": -0.1}, LOAD, W0)[0]
-    np.testing.assert_allclose(read(np.array([0.0, 0.25, 0.5, 3.0])), [0.0, 0.2, 0.4, 2.9])
-    assert speed_channel_errors("gnss_gain", {"gain": 1.02}, LOAD, W0)[0](3.0) == pytest.approx(3.06)
-    assert speed_channel_errors("none", {}, LOAD, W0)[0](3.0) == 3.0
+    np.testing.assert_allclose(read(np.array([0.0, 0.25, 0.5, 3.0]), np.zeros(4)), [0.0, 0.2, 0.4, 2.9])
+    assert speed_channel_errors("gnss_gain", {"gain": 1.02}, LOAD, W0)[0](3.0, 0.0) == pytest.approx(3.06)
+    assert speed_channel_errors("none", {}, LOAD, W0)[0](3.0, 0.0) == 3.0
     tg = _tm("tyre_growth", kappa=0.03)
     np.testing.assert_allclose(tg.drive_forces(LOAD, SLIP, speed_mps=np.zeros(12))["drawbar_pull_n"],
                                wong["drawbar_pull_n"], rtol=1e-9)
@@ -194,6 +194,31 @@ def test_held_out_13_speed_sinkage_gnss_offset_and_tyre_growth(wong):
     same = _tm("radius_error", e=g - 1).drive_forces(LOAD[5:6], SLIP[5:6])
     np.testing.assert_allclose(grown["drawbar_pull_n"], same["drawbar_pull_n"], rtol=1e-9)
     assert ACCEPTABLE["speed_sinkage"] == ACCEPTABLE["gnss_offset"] == ACCEPTABLE["tyre_growth"] == ("unexplained",)
+
+
+def test_held_out_14_runout_gnss_multipath_and_tyre_warmup(wong, base_run):
+    """Held-out batch 14.  The warming tyre adds f W r exp(-x/L) to the torque only; the GNSS reads
+    V + b inside a burst and V outside; an out-of-round tyre of e = 0 is the round wheel, and of e = 0.04
+    changes the soil's forces (not the vehicle's dynamics) about them once per revolution."""
+    from wheelsoil.simulate import speed_channel_errors
+
+    for x in (0.0, 0.5):
+        tw = _tm("tyre_warmup", f=0.02, length=0.1).drive_forces(LOAD, SLIP, frac=x)
+        np.testing.assert_allclose(tw["torque_nm"] - wong["torque_nm"], 0.02 * np.exp(-x / 0.1) * W0 * R, rtol=1e-9)
+        np.testing.assert_allclose(tw["drawbar_pull_n"], wong["drawbar_pull_n"], rtol=1e-12)
+    read = speed_channel_errors("gnss_multipath", {"bursts": [[0.5, 2.0, 0.3], [0.1, 1.0, -0.2]]}, LOAD, W0,
+                                100.0)[0]
+    np.testing.assert_allclose(read(np.full(5, 3.0), np.array([5.0, 10.5, 49.9, 50.0, 51.9])),
+                               [3.0, 2.8, 3.0, 3.3, 3.3])
+    assert read(3.0, 52.0) == 3.0
+    kw = dict(seed=31, duration_s=30.0, added_load_n=5000.0, soil_variability=0.0)
+    round_ = simulate_run("sand", effect="runout", params={"e": 0.0}, **kw).truth
+    np.testing.assert_allclose(round_.drawbar_pull_n, base_run.truth.drawbar_pull_n, rtol=1e-9, atol=1e-9)
+    out = simulate_run("sand", effect="runout", params={"e": 0.04}, **kw).truth
+    np.testing.assert_allclose(out.speed_mps, base_run.truth.speed_mps)
+    d = (out.drawbar_pull_n - base_run.truth.drawbar_pull_n).to_numpy()
+    assert np.abs(d).max() > 50.0 and abs(np.mean(d)) < np.abs(d).max() / 5  # it oscillates about the round wheel's
+    assert ACCEPTABLE["runout"] == ACCEPTABLE["gnss_multipath"] == ("none", "unexplained")
 
 
 def test_out_of_family_soil_and_tyre_effects(wong):

@@ -48,7 +48,7 @@ import numpy as np
 
 from wheelsoil.sim.effects import (ACCEPTABLE, ALL_HELD_OUT, EFFECTS, GNSS_OFFSET_FADE_MPS, HELD_OUT, HELD_OUT_2, HELD_OUT_3,
                                    HELD_OUT_4, HELD_OUT_5, HELD_OUT_6, HELD_OUT_7, HELD_OUT_8, HELD_OUT_9,
-                                   HELD_OUT_10, HELD_OUT_11, HELD_OUT_12, HELD_OUT_13, HELD_OUT_BATCHES, IN_FAMILY, OUT_OF_FAMILY,
+                                   HELD_OUT_10, HELD_OUT_11, HELD_OUT_12, HELD_OUT_13, HELD_OUT_14, HELD_OUT_BATCHES, IN_FAMILY, OUT_OF_FAMILY,
                                    PARAM_NAMES, SENSOR_EFFECTS, VERDICTS, TruthModel, draw_effect, family_of)
 from wheelsoil.sim.physics import bandlimited as _bandlimited
 from wheelsoil.sim.terra import soil_dict
@@ -56,7 +56,7 @@ from wheelsoil.sim.vehicle import PROCEDURES
 
 __all__ = ["EFFECTS", "IN_FAMILY", "OUT_OF_FAMILY", "HELD_OUT", "HELD_OUT_2", "HELD_OUT_3", "HELD_OUT_4",
            "HELD_OUT_5", "HELD_OUT_6", "HELD_OUT_7", "HELD_OUT_8", "HELD_OUT_9", "HELD_OUT_10", "HELD_OUT_11",
-           "HELD_OUT_12", "HELD_OUT_13",
+           "HELD_OUT_12", "HELD_OUT_13", "HELD_OUT_14",
            "HELD_OUT_BATCHES", "ALL_HELD_OUT", "ACCEPTABLE", "VERDICTS",
            "SimulatedRun", "simulate_run", "write_simulation", "write_truth", "write_vehicle_config", "judge",
            "draw_case", "pack_signals", "vehicle_config_for", "SIMULATOR"]
@@ -243,20 +243,28 @@ def pack_signals(message, values: Mapping[str, Any], n: int) -> tuple[np.ndarray
 
 
 # ------------------------------------------------------------------- simulation
-def speed_channel_errors(effect: str, params: Mapping[str, Any], load_n: np.ndarray, static_load_n: float):
+def speed_channel_errors(effect: str, params: Mapping[str, Any], load_n: np.ndarray, static_load_n: float,
+                         duration_s: float = 0.0):
     """What a sensor effect does to the speed channels slip is computed from: ``(gnss_read,
-    rl_gain, rl_delay_s)``: ``gnss_read(v)``, what the GNSS reads for the true forward speed v (m/s,
-    any shape): g v for ``gnss_gain``, v + b min(v / 0.5 m/s, 1) for ``gnss_offset``, else v; the
-    left-rear wheel-speed reading's gain per sample (``(N,)`` like ``load_n`` [N], a rolling radius
-    shrinking with the load, 1 - e (W/W0 - 1); None: none) and its delay [s] (0: none).
-    ``static_load_n`` W0 [N].  Used by :func:`simulate_run` for the frames and by the benchmark's
-    imprint for the slip the fit sees.  Raises KeyError when ``params`` lacks the effect's parameter."""
+    rl_gain, rl_delay_s)``: ``gnss_read(v, t_s)``, what the GNSS reads for the true forward speed v (m/s,
+    any shape) at run time t_s (s from the start, v's shape): g v for ``gnss_gain``, v + b min(v / 0.5 m/s, 1)
+    for ``gnss_offset``, v + b within each burst of ``gnss_multipath`` (its start a fraction of
+    ``duration_s`` [s]), else v; the left-rear wheel-speed reading's gain per sample (``(N,)`` like
+    ``load_n`` [N], a rolling radius shrinking with the load, 1 - e (W/W0 - 1); None: none) and its
+    delay [s] (0: none).  ``static_load_n`` W0 [N].  Used by :func:`simulate_run` for the frames and by
+    the benchmark's imprint for the slip the fit sees.  Raises KeyError when ``params`` lacks the
+    effect's parameter."""
     g = float(params["gain"]) if effect == "gnss_gain" else 1.0
     b = float(params["offset_mps"]) if effect == "gnss_offset" else 0.0
+    bursts = [(x * duration_s, x * duration_s + d, o) for x, d, o in params["bursts"]] \
+        if effect == "gnss_multipath" else []
 
-    def gnss_read(v):
+    def gnss_read(v, t_s):
         v = np.asarray(v, float)
-        return g * v + b * np.clip(np.abs(v) / GNSS_OFFSET_FADE_MPS, 0.0, 1.0)
+        out = g * v + b * np.clip(np.abs(v) / GNSS_OFFSET_FADE_MPS, 0.0, 1.0)
+        for t0, t1, o in bursts:
+            out = out + o * ((t_s >= t0) & (t_s < t1))
+        return out
 
     rl_gain = 1.0 - params["e"] * (np.asarray(load_n, float) / static_load_n - 1.0) if effect == "load_radius" else None
     rl_delay_s = float(params["delay_s"]) if effect == "wheel_latency" else 0.0
@@ -418,7 +426,7 @@ def simulate_run(
             w_meas = lag(w_meas)
         else:
             my = lag(my)
-    gnss_read, rl_gain, rl_delay_s = speed_channel_errors(effect, params, load, static)
+    gnss_read, rl_gain, rl_delay_s = speed_channel_errors(effect, params, load, static, float(t_rel[-1]))
 
     start_s = 1765416600 + int(seed % 5000) * 3607 + rng.uniform(0, 1)  # a December morning, seeded
     gps_offset_s = float(rng.uniform(-2.0, 2.0))       # GPS - (host UTC + leap) at the start
@@ -672,7 +680,7 @@ def _vehicle_bus_frames(dbs, rng, t_rel, speed, omega, slip, r, latency_s, start
     the wheel speeds differ by that). ``front_wheels="reference"`` puts an
     idealised undriven reference wheel (r omega = V, rolling slip -0.8 %) on the
     FL/FR channels instead (the dynamics stay 4x4); GNSS velocities are of the fix epoch
-    and arrive ``latency_s`` later (their speeds read ``gnss_read(v)`` of the true ones, None: v); ``rl_gain``
+    and arrive ``latency_s`` later (their speeds read ``gnss_read(v, t)`` of the true ones, None: v); ``rl_gain``
     (on the ``t_rel`` grid, or None) multiplies the left-rear wheel-speed reading only, which
     reads the omega of ``rl_delay_s`` earlier (a late channel, 0: none);
     ``RT_SB_GPS_Time`` carries the fix's GPS week and time of week on the GPS clock (host
@@ -722,7 +730,7 @@ def _vehicle_bus_frames(dbs, rng, t_rel, speed, omega, slip, r, latency_s, start
     ng = len(t_fix)
     v_fix = np.interp(t_fix, t_rel, speed)
     if gnss_read is not None:
-        v_fix = gnss_read(v_fix)
+        v_fix = gnss_read(v_fix, t_fix)
     t_rx = t_fix + latency_s + np.abs(rng.normal(0, 1.5e-3, ng))
     m_spd = gps.get_message_by_name("RT_SB_GPS_Speed")
     m_vel = gps.get_message_by_name("RT_SB_INS_Vel_Body_Axes")
@@ -1064,6 +1072,9 @@ effects (--effect; parameters with --param NAME=VALUE, the others drawn at --siz
     speed_sinkage        sinkage z0 + H r omega / (5 m/s): growing with the tread's speed, not with slip
     gnss_offset          the GNSS speed reads V + offset_mps (faded in over the first 0.5 m/s)
     tyre_growth          the rolling radius grows with speed, r (1 + kappa (r omega / 10 m/s)^2)
+    runout               an out-of-round tyre: rolling radius r (1 + e sin psi), psi the wheel's angle
+    gnss_multipath       bursts of GNSS speed error: [start fraction, duration s, offset m/s] per burst
+    tyre_warmup          torque + f W r exp(-x/length): a cold tyre's rolling resistance fading along the run
 
 The recording holds only what a logger would record plus a provenance record
 (kind "simulated", the seed): the effect and its parameters go to --truth FILE

@@ -216,6 +216,20 @@ once).  Causes that act through the wheel's or the vehicle's speed in ways no st
                        with r, the soil sees the grown wheel at its own slip.
 As for the tenth batch, the vehicle's dynamics use Wong's forces for the two tyre/soil effects.
 
+Held out, fourteenth batch (``--effects held-out-14``; added with the rule of ``459ed20`` unchanged, scored
+once).  A wheel that is not round, a speed reading with bursts of error, a tyre warming up:
+  ``runout``           an out-of-round tyre or an eccentric rim: the rolling radius is r (1 + e sin psi), psi
+                       the wheel's angle, e 0.005-0.05, so the slip the soil sees, 1 - V / (r (1 + e sin psi)
+                       omega), oscillates once per revolution about the slip computed with r; its mean
+                       effect on the forces follows their curvature in slip.  ``none`` or ``unexplained``.
+  ``gnss_multipath``   the GNSS speed jumps by b for a few seconds at times (multipath off trees or buildings,
+                       a receiver re-acquiring) and is still flagged valid: 3-10 bursts of 1-5 s at random
+                       times, each b = +-(0.5-1) b_max, b_max 0.05-0.5 m/s.  ``none`` or ``unexplained``.
+  ``tyre_warmup``      a cold tyre's rolling resistance fading as the tyre warms: the torque plus
+                       f W r exp(-x / L) (x the distance fraction, L 0.05-0.3 of the run, f 0.005-0.05;
+                       ``tyre_hysteresis`` fading along the run).  ``unexplained``.
+The vehicle's dynamics use Wong's forces for the out-of-round tyre (the force table has no angle axis).
+
 Sensor effects (``fx_gain``, ``my_gain``, ``load_gain``, ``angle_offset``, ``zero_drift``) change only
 what the transducer reports; the soil forces (and the vehicle) are Wong's.
 """
@@ -232,7 +246,7 @@ from .terra import sinkage_eq10, wheel_forces
 
 __all__ = ["EFFECTS", "IN_FAMILY", "OUT_OF_FAMILY", "HELD_OUT", "HELD_OUT_2", "HELD_OUT_3", "HELD_OUT_4",
            "HELD_OUT_5", "HELD_OUT_6", "HELD_OUT_7", "HELD_OUT_8", "HELD_OUT_9", "HELD_OUT_10", "HELD_OUT_11",
-           "HELD_OUT_12", "HELD_OUT_13",
+           "HELD_OUT_12", "HELD_OUT_13", "HELD_OUT_14",
            "HELD_OUT_BATCHES", "ALONG_RUN",
            "ALL_HELD_OUT", "ACCEPTABLE", "VERDICTS", "SENSOR_EFFECTS", "draw_effect", "TruthModel", "family_of"]
 
@@ -271,16 +285,20 @@ HELD_OUT_12 = ("rut", "tyre_pressure_loss", "moisture")
 #: the thirteenth, scored once with the rule of e4fa602 (speed-driven sinkage, a GNSS speed offset, a
 #: tyre growing with its speed)
 HELD_OUT_13 = ("speed_sinkage", "gnss_offset", "tyre_growth")
+#: the fourteenth, scored once with the rule of 459ed20 (an out-of-round tyre, bursts of GNSS speed error,
+#: a tyre warming up)
+HELD_OUT_14 = ("runout", "gnss_multipath", "tyre_warmup")
 #: the batches by their ``bench_diagnosis.py --effects`` name, and all held-out effects
 HELD_OUT_BATCHES = {"held-out": HELD_OUT, "held-out-2": HELD_OUT_2, "held-out-3": HELD_OUT_3,
                     "held-out-4": HELD_OUT_4, "held-out-5": HELD_OUT_5, "held-out-6": HELD_OUT_6,
                     "held-out-7": HELD_OUT_7, "held-out-8": HELD_OUT_8, "held-out-9": HELD_OUT_9,
                     "held-out-10": HELD_OUT_10, "held-out-11": HELD_OUT_11,
-                    "held-out-12": HELD_OUT_12, "held-out-13": HELD_OUT_13}
+                    "held-out-12": HELD_OUT_12, "held-out-13": HELD_OUT_13,
+                    "held-out-14": HELD_OUT_14}
 ALL_HELD_OUT = tuple(e for batch in HELD_OUT_BATCHES.values() for e in batch)
 SENSOR_EFFECTS = ("fx_gain", "my_gain", "load_gain", "angle_offset", "zero_drift", "gnss_gain", "inertia_error",
                   "fz_crosstalk", "load_radius", "wheel_latency", "fx_gain_drift", "load_lag",
-                  "fz_zero_drift", "my_crosstalk", "fx_saturation", "my_lag", "gnss_offset")
+                  "fz_zero_drift", "my_crosstalk", "fx_saturation", "my_lag", "gnss_offset", "gnss_multipath")
 #: effects whose truth changes along the run (the simulator tabulates their forces against distance too)
 ALONG_RUN = ("terrain_drift", "mud_buildup", "tyre_pressure_loss", "moisture") + HELD_OUT_11
 
@@ -354,6 +372,9 @@ ACCEPTABLE: dict[str, tuple[str, ...]] = {
     "speed_sinkage": ("unexplained",),
     "gnss_offset": ("unexplained",),
     "tyre_growth": ("unexplained",),
+    "runout": ("none", "unexplained"),
+    "gnss_multipath": ("none", "unexplained"),
+    "tyre_warmup": ("unexplained",),
 }
 
 #: Terrain parameters a mismatch / drift may change, with the relative (or absolute) range
@@ -412,6 +433,7 @@ _ONE_PARAM: dict[str, tuple[str, float, float, bool, str]] = {
     "speed_sinkage": ("H", 0.005, 0.04, True, "plain"),
     "gnss_offset": ("offset_mps", 0.02, 0.3, True, "signed"),
     "tyre_growth": ("kappa", 0.005, 0.05, True, "plain"),
+    "runout": ("e", 0.005, 0.05, True, "plain"),
 }
 
 
@@ -422,7 +444,7 @@ PARAM_NAMES: dict[str, tuple[str, ...]] = {
     "stress_distribution": ("a1", "a2"), "vertical_balance": (), "slip_sinkage_lag": ("H", "tau_s"),
     "saturating_drift": ("changes", "length"), "gradual_patch": ("changes", "change_at", "width"),
     "patchy_ground": ("changes", "cycles", "phase"), "moisture": ("changes",),
-    "rut": ("load_ratio", "R"),
+    "rut": ("load_ratio", "R"), "gnss_multipath": ("bursts",), "tyre_warmup": ("f", "length"),
     **{e: (v[0],) for e, v in _ONE_PARAM.items()},
 }
 
@@ -510,6 +532,13 @@ def draw_effect(effect: str, rng: np.random.Generator, *, size: float | None = N
                          "phi": {"kind": "delta_deg", "value": sign * m["phi"]}}}
     elif effect == "slip_sinkage_lag":
         p = {"H": _mag(u, 0.01, 0.10, log=True), "tau_s": float(rng.uniform(0.3, 2.0))}
+    elif effect == "gnss_multipath":  # [start (fraction of the run), duration [s], offset [m/s]] per burst
+        b_max = _mag(u, 0.05, 0.5, log=True)
+        p = {"bursts": [[float(rng.uniform(0.02, 0.98)), float(rng.uniform(1.0, 5.0)),
+                         float((1.0 if rng.random() < 0.5 else -1.0) * b_max * rng.uniform(0.5, 1.0))]
+                        for _ in range(int(rng.integers(3, 11)))]}
+    elif effect == "tyre_warmup":
+        p = {"f": _mag(u, 0.005, 0.05, log=True), "length": float(rng.uniform(0.05, 0.3))}
     else:  # one parameter: _ONE_PARAM's range at size u
         name, lo, hi, log, form = _ONE_PARAM[effect]
         m = _mag(u, lo, hi, log=log)
@@ -688,6 +717,8 @@ class TruthModel:
             out["drawbar_pull_n"] = out["drawbar_pull_n"] - p["e"] * w * (np.asarray(speed_mps) / SPEED_REF_MPS) ** 2
         if e == "tyre_hysteresis":
             out["torque_nm"] = out["torque_nm"] + p["f"] * w * r
+        if e == "tyre_warmup":  # the hysteresis of a cold tyre, fading with the distance rolled
+            out["torque_nm"] = out["torque_nm"] + p["f"] * np.exp(-np.asarray(frac, float) / p["length"]) * w * r
         if e == "bulldozing":
             out["drawbar_pull_n"] = out["drawbar_pull_n"] - p["factor"] * _bulldozing_resistance(
                 soil, b, out["sinkage_m"])

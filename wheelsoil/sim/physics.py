@@ -136,8 +136,13 @@ def simulate_physics(truth: TruthModel, rng: np.random.Generator, *, added_load_
     dp = np.zeros(n)
     tq = np.zeros(n)
     z = np.full(n, np.nan)
-    drive = ~standstill & np.isfinite(slip) & (slip >= 0)
-    s_drive = np.clip(slip[drive], 0.0, 0.97)
+    s_soil = slip  # the slip the soil sees: the computed one but for an out-of-round tyre
+    if truth.effect == "runout":  # rolling radius r (1 + e sin psi), psi the wheel's angle
+        psi = np.cumsum(om) * dt + rng.uniform(0.0, 2.0 * math.pi)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            s_soil = np.where(np.isfinite(slip), 1.0 - (1.0 - slip) / (1.0 + truth.params["e"] * np.sin(psi)), np.nan)
+    drive = ~standstill & np.isfinite(s_soil) & (s_soil >= 0)
+    s_drive = np.clip(s_soil[drive], 0.0, 0.97)
     lag = None
     if truth.effect == "slip_sinkage_lag":  # the excavation's slip memory: a first-order lag of the slip
         from scipy.signal import lfilter
@@ -148,11 +153,11 @@ def simulate_physics(truth: TruthModel, rng: np.random.Generator, *, added_load_
     f = truth.drive_forces(load[drive], s_drive, frac=frac[drive], variability=var[drive], slip_lag=lag,
                            speed_mps=V[drive])
     dp[drive], tq[drive], z[drive] = f["drawbar_pull_n"], f["torque_nm"], f["sinkage_m"]
-    skid = ~standstill & np.isfinite(slip) & (slip < 0)
+    skid = ~standstill & np.isfinite(s_soil) & (s_soil < 0)
     if skid.any():
         f0 = truth.drive_forces(load[skid], np.zeros(skid.sum()), frac=frac[skid], variability=var[skid],
                                 speed_mps=V[skid])
-        dp[skid], tq[skid] = skid_forces(f0["drawbar_pull_n"], f0["torque_nm"], load[skid], slip[skid], r,
+        dp[skid], tq[skid] = skid_forces(f0["drawbar_pull_n"], f0["torque_nm"], load[skid], s_soil[skid], r,
                                          veh.rolling_skid)
         z[skid] = f0["sinkage_m"]
     # pull-away from standstill: the soil forces build up over the first cm/s
