@@ -34,7 +34,8 @@ with ``--terrains``, the next soil of the list).
     python benchmarks/bench_diagnosis.py --effects held-out-11      # ... an eleventh
     python benchmarks/bench_diagnosis.py --effects held-out-12      # ... a twelfth
     python benchmarks/bench_diagnosis.py --effects held-out-13      # ... a thirteenth
-    python benchmarks/bench_diagnosis.py --effects held-out-14      # ... and a fourteenth
+    python benchmarks/bench_diagnosis.py --effects held-out-14      # ... a fourteenth
+    python benchmarks/bench_diagnosis.py --effects held-out-15      # ... and a fifteenth
 
 A held-out batch is scored once with the rule as it stands when the batch is added: that first
 score measures how the rule meets causes it was not developed on; anything changed because of it
@@ -408,7 +409,9 @@ def main(argv=None) -> int:
                     "losing pressure along the run, the soil's moisture changing k_eq, c and phi together "
                     "along the run: terrain_drift or unexplained acceptable); 'held-out-13' a thirteenth (a "
                     "sinkage growing with the tread's speed, a GNSS speed offset, a tyre growing with its speed); "
-                    "'held-out-14' a fourteenth (an out-of-round tyre, bursts of GNSS speed error, a tyre warming up)")
+                    "'held-out-14' a fourteenth (an out-of-round tyre, bursts of GNSS speed error, a tyre warming up); "
+                    "'held-out-15' a fifteenth (a cohesive crust, a shear modulus growing with slip, a GNSS "
+                    "velocity smoothed by the receiver)")
     ap.add_argument("--json", default=None, metavar="FILE", help="also write the rows as JSON")
     ap.add_argument("--keep", default=None, metavar="DIR", help="keep recordings, truths and reports here")
     args = ap.parse_args(argv)

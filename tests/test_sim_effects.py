@@ -221,6 +221,33 @@ def test_held_out_14_runout_gnss_multipath_and_tyre_warmup(wong, base_run):
     assert ACCEPTABLE["runout"] == ACCEPTABLE["gnss_multipath"] == ("none", "unexplained")
 
 
+def test_held_out_15_crust_slip_k_and_gnss_lag(wong):
+    """Held-out batch 15.  A crust of no strength is the lab soil, and a real one adds to Dp and T, its share
+    larger where the wheel sinks less (a lighter load); a K growing with slip is, at each slip, the lab soil
+    with that K; the receiver's smoothing turns a step in speed into a first-order approach."""
+    from wheelsoil.simulate import speed_channel_errors
+
+    np.testing.assert_allclose(_tm("crust", a=0.0, depth_ratio=0.3).drive_forces(LOAD, SLIP)["torque_nm"],
+                               wong["torque_nm"], rtol=1e-9)
+    cr = _tm("crust", a=0.5, depth_ratio=0.3)
+    hard = cr.drive_forces(LOAD, SLIP)
+    assert np.all(hard["torque_nm"] > wong["torque_nm"]) and np.all(hard["drawbar_pull_n"] > wong["drawbar_pull_n"])
+    light = cr.drive_forces(LOAD * 0.5, SLIP)
+    light0 = _tm("none").drive_forces(LOAD * 0.5, SLIP)
+    assert np.all(light["torque_nm"] / light0["torque_nm"] > hard["torque_nm"] / wong["torque_nm"])
+    sk = _tm("slip_k", a=2.0).drive_forces(LOAD, SLIP)
+    for i in (2, 8):
+        one = TruthModel({**SOIL, "K": SOIL["K"] * (1 + 2.0 * SLIP[i])}, R, B, "none", {}, W0)
+        np.testing.assert_allclose(sk["drawbar_pull_n"][i], one.drive_forces(LOAD[i:i + 1], SLIP[i:i + 1])
+                                   ["drawbar_pull_n"][0], rtol=1e-9)
+    t = np.arange(0.0, 3.0, 0.05)
+    v = np.where(t >= 1.0, 2.0, 0.0)
+    read = speed_channel_errors("gnss_lag", {"tau_s": 0.2}, LOAD, W0)[0](v, t)
+    np.testing.assert_allclose(read[t < 1.0], 0.0)
+    after = t >= 1.0
+    np.testing.assert_allclose(read[after], 2.0 * (1.0 - np.exp(-(t[after] - 0.95) / 0.2)), rtol=1e-9)
+
+
 def test_out_of_family_soil_and_tyre_effects(wong):
     ty = _tm("tyre_deflection", kappa=0.2).drive_forces(LOAD, SLIP)
     assert np.all(ty["sinkage_m"] < wong["sinkage_m"])  # a larger equivalent wheel sinks less

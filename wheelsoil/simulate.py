@@ -48,7 +48,7 @@ import numpy as np
 
 from wheelsoil.sim.effects import (ACCEPTABLE, ALL_HELD_OUT, EFFECTS, GNSS_OFFSET_FADE_MPS, HELD_OUT, HELD_OUT_2, HELD_OUT_3,
                                    HELD_OUT_4, HELD_OUT_5, HELD_OUT_6, HELD_OUT_7, HELD_OUT_8, HELD_OUT_9,
-                                   HELD_OUT_10, HELD_OUT_11, HELD_OUT_12, HELD_OUT_13, HELD_OUT_14, HELD_OUT_BATCHES, IN_FAMILY, OUT_OF_FAMILY,
+                                   HELD_OUT_10, HELD_OUT_11, HELD_OUT_12, HELD_OUT_13, HELD_OUT_14, HELD_OUT_15, HELD_OUT_BATCHES, IN_FAMILY, OUT_OF_FAMILY,
                                    PARAM_NAMES, SENSOR_EFFECTS, VERDICTS, TruthModel, draw_effect, family_of)
 from wheelsoil.sim.physics import bandlimited as _bandlimited
 from wheelsoil.sim.terra import soil_dict
@@ -56,7 +56,7 @@ from wheelsoil.sim.vehicle import PROCEDURES
 
 __all__ = ["EFFECTS", "IN_FAMILY", "OUT_OF_FAMILY", "HELD_OUT", "HELD_OUT_2", "HELD_OUT_3", "HELD_OUT_4",
            "HELD_OUT_5", "HELD_OUT_6", "HELD_OUT_7", "HELD_OUT_8", "HELD_OUT_9", "HELD_OUT_10", "HELD_OUT_11",
-           "HELD_OUT_12", "HELD_OUT_13", "HELD_OUT_14",
+           "HELD_OUT_12", "HELD_OUT_13", "HELD_OUT_14", "HELD_OUT_15",
            "HELD_OUT_BATCHES", "ALL_HELD_OUT", "ACCEPTABLE", "VERDICTS",
            "SimulatedRun", "simulate_run", "write_simulation", "write_truth", "write_vehicle_config", "judge",
            "draw_case", "pack_signals", "vehicle_config_for", "SIMULATOR"]
@@ -258,12 +258,18 @@ def speed_channel_errors(effect: str, params: Mapping[str, Any], load_n: np.ndar
     b = float(params["offset_mps"]) if effect == "gnss_offset" else 0.0
     bursts = [(x * duration_s, x * duration_s + d, o) for x, d, o in params["bursts"]] \
         if effect == "gnss_multipath" else []
+    tau = float(params["tau_s"]) if effect == "gnss_lag" else 0.0
 
     def gnss_read(v, t_s):
         v = np.asarray(v, float)
         out = g * v + b * np.clip(np.abs(v) / GNSS_OFFSET_FADE_MPS, 0.0, 1.0)
         for t0, t1, o in bursts:
             out = out + o * ((t_s >= t0) & (t_s < t1))
+        if tau and out.ndim == 1 and out.size > 1:  # the receiver's smoothing: a first-order lag on its grid
+            from scipy.signal import lfilter
+
+            a = -math.expm1(-float(np.median(np.diff(t_s))) / tau)
+            out = lfilter([a], [1.0, a - 1.0], out, zi=[(1.0 - a) * out[0]])[0]
         return out
 
     rl_gain = 1.0 - params["e"] * (np.asarray(load_n, float) / static_load_n - 1.0) if effect == "load_radius" else None
@@ -1075,6 +1081,9 @@ effects (--effect; parameters with --param NAME=VALUE, the others drawn at --siz
     runout               an out-of-round tyre: rolling radius r (1 + e sin psi), psi the wheel's angle
     gnss_multipath       bursts of GNSS speed error: [start fraction, duration s, offset m/s] per burst
     tyre_warmup          torque + f W r exp(-x/length): a cold tyre's rolling resistance fading along the run
+    crust                a cohesive crust: strength + a (c + sigma0 tan phi) exp(-d / (depth_ratio z0))
+    slip_k               a shear deformation modulus growing with slip, K (1 + a s)
+    gnss_lag             the GNSS velocity through a first-order lag of tau_s (the receiver's smoothing)
 
 The recording holds only what a logger would record plus a provenance record
 (kind "simulated", the seed): the effect and its parameters go to --truth FILE

@@ -230,6 +230,17 @@ once).  A wheel that is not round, a speed reading with bursts of error, a tyre 
                        ``tyre_hysteresis`` fading along the run).  ``unexplained``.
 The vehicle's dynamics use Wong's forces for the out-of-round tyre (the force table has no angle axis).
 
+Held out, fifteenth batch (``--effects held-out-15``; added with the rule of ``459ed20`` unchanged after batch
+14's score, scored once).  Causes chosen to look like a listed one:
+  ``crust``            a cohesive surface crust (dried, cemented or frozen): the shear strength plus
+                       dc exp(-d / d_c), d the depth below the original surface, dc = a (c + sigma0 tan phi),
+                       a 0.1-1 (sigma0 the static peak stress), d_c 0.1-0.5 z0: more strength where the contact
+                       is shallow, so its share falls as the wheel sinks (a cohesion mismatch's look-alike).
+  ``slip_k``           a shear deformation modulus growing with slip, K (1 + a s), a 0.3-3 (the shear band
+                       thickening as the wheel spins; a K mismatch's look-alike).
+  ``gnss_lag``         the receiver smooths the velocity it reports: a first-order filter of time constant
+                       0.05-0.5 s on top of its latency (processing estimates a pure delay).
+
 Sensor effects (``fx_gain``, ``my_gain``, ``load_gain``, ``angle_offset``, ``zero_drift``) change only
 what the transducer reports; the soil forces (and the vehicle) are Wong's.
 """
@@ -246,7 +257,7 @@ from .terra import sinkage_eq10, wheel_forces
 
 __all__ = ["EFFECTS", "IN_FAMILY", "OUT_OF_FAMILY", "HELD_OUT", "HELD_OUT_2", "HELD_OUT_3", "HELD_OUT_4",
            "HELD_OUT_5", "HELD_OUT_6", "HELD_OUT_7", "HELD_OUT_8", "HELD_OUT_9", "HELD_OUT_10", "HELD_OUT_11",
-           "HELD_OUT_12", "HELD_OUT_13", "HELD_OUT_14",
+           "HELD_OUT_12", "HELD_OUT_13", "HELD_OUT_14", "HELD_OUT_15",
            "HELD_OUT_BATCHES", "ALONG_RUN",
            "ALL_HELD_OUT", "ACCEPTABLE", "VERDICTS", "SENSOR_EFFECTS", "draw_effect", "TruthModel", "family_of"]
 
@@ -288,17 +299,20 @@ HELD_OUT_13 = ("speed_sinkage", "gnss_offset", "tyre_growth")
 #: the fourteenth, scored once with the rule of 459ed20 (an out-of-round tyre, bursts of GNSS speed error,
 #: a tyre warming up)
 HELD_OUT_14 = ("runout", "gnss_multipath", "tyre_warmup")
+#: the fifteenth, scored once with the rule of 459ed20 (a cohesive crust, a K growing with slip, a GNSS
+#: velocity smoothed by the receiver)
+HELD_OUT_15 = ("crust", "slip_k", "gnss_lag")
 #: the batches by their ``bench_diagnosis.py --effects`` name, and all held-out effects
 HELD_OUT_BATCHES = {"held-out": HELD_OUT, "held-out-2": HELD_OUT_2, "held-out-3": HELD_OUT_3,
                     "held-out-4": HELD_OUT_4, "held-out-5": HELD_OUT_5, "held-out-6": HELD_OUT_6,
                     "held-out-7": HELD_OUT_7, "held-out-8": HELD_OUT_8, "held-out-9": HELD_OUT_9,
                     "held-out-10": HELD_OUT_10, "held-out-11": HELD_OUT_11,
                     "held-out-12": HELD_OUT_12, "held-out-13": HELD_OUT_13,
-                    "held-out-14": HELD_OUT_14}
+                    "held-out-14": HELD_OUT_14, "held-out-15": HELD_OUT_15}
 ALL_HELD_OUT = tuple(e for batch in HELD_OUT_BATCHES.values() for e in batch)
 SENSOR_EFFECTS = ("fx_gain", "my_gain", "load_gain", "angle_offset", "zero_drift", "gnss_gain", "inertia_error",
                   "fz_crosstalk", "load_radius", "wheel_latency", "fx_gain_drift", "load_lag",
-                  "fz_zero_drift", "my_crosstalk", "fx_saturation", "my_lag", "gnss_offset", "gnss_multipath")
+                  "fz_zero_drift", "my_crosstalk", "fx_saturation", "my_lag", "gnss_offset", "gnss_multipath", "gnss_lag")
 #: effects whose truth changes along the run (the simulator tabulates their forces against distance too)
 ALONG_RUN = ("terrain_drift", "mud_buildup", "tyre_pressure_loss", "moisture") + HELD_OUT_11
 
@@ -375,6 +389,9 @@ ACCEPTABLE: dict[str, tuple[str, ...]] = {
     "runout": ("none", "unexplained"),
     "gnss_multipath": ("none", "unexplained"),
     "tyre_warmup": ("unexplained",),
+    "crust": ("unexplained",),
+    "slip_k": ("unexplained",),
+    "gnss_lag": ("unexplained",),
 }
 
 #: Terrain parameters a mismatch / drift may change, with the relative (or absolute) range
@@ -434,6 +451,8 @@ _ONE_PARAM: dict[str, tuple[str, float, float, bool, str]] = {
     "gnss_offset": ("offset_mps", 0.02, 0.3, True, "signed"),
     "tyre_growth": ("kappa", 0.005, 0.05, True, "plain"),
     "runout": ("e", 0.005, 0.05, True, "plain"),
+    "slip_k": ("a", 0.3, 3.0, True, "plain"),
+    "gnss_lag": ("tau_s", 0.05, 0.5, True, "plain"),
 }
 
 
@@ -445,6 +464,7 @@ PARAM_NAMES: dict[str, tuple[str, ...]] = {
     "saturating_drift": ("changes", "length"), "gradual_patch": ("changes", "change_at", "width"),
     "patchy_ground": ("changes", "cycles", "phase"), "moisture": ("changes",),
     "rut": ("load_ratio", "R"), "gnss_multipath": ("bursts",), "tyre_warmup": ("f", "length"),
+    "crust": ("a", "depth_ratio"),
     **{e: (v[0],) for e, v in _ONE_PARAM.items()},
 }
 
@@ -539,6 +559,8 @@ def draw_effect(effect: str, rng: np.random.Generator, *, size: float | None = N
                         for _ in range(int(rng.integers(3, 11)))]}
     elif effect == "tyre_warmup":
         p = {"f": _mag(u, 0.005, 0.05, log=True), "length": float(rng.uniform(0.05, 0.3))}
+    elif effect == "crust":
+        p = {"a": _mag(u, 0.1, 1.0, log=True), "depth_ratio": float(rng.uniform(0.1, 0.5))}
     else:  # one parameter: _ONE_PARAM's range at size u
         name, lo, hi, log, form = _ONE_PARAM[effect]
         m = _mag(u, lo, hi, log=log)
@@ -686,6 +708,13 @@ class TruthModel:
             kw["depth_power"] = (float(self.static_sinkage(self.static_load_n)), p["a"])
         elif e == "interface":
             kw["interface"] = (0.5 * self.static_peak_stress(), p["f"])
+        elif e == "crust":  # dc = a (c + sigma0 tan phi) at the surface, fading over d_c = depth_ratio z0
+            sig0 = self.static_peak_stress()
+            kw["crust"] = (p["depth_ratio"] * float(self.static_sinkage(self.static_load_n)),
+                           p["a"] * (float(self.soil["c"]) + sig0 * math.tan(float(self.soil["phi"]))))
+        elif e == "slip_k":  # the shear band thickening with slip
+            soil = dict(soil)
+            soil["K"] = soil["K"] * (1.0 + p["a"] * s)
         elif e == "speed_sinkage" and rw is not None:  # z0 + H r omega / V_ref (Eq. 11's H s form)
             kw["H"] = p["H"] * (rw / SPEED_SINKAGE_REF_MPS) / np.maximum(s, 1e-6)
         elif e in ("mud_buildup", "radius_error") or (e == "tyre_growth" and rw is not None):

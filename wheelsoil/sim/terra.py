@@ -54,6 +54,8 @@ z_r, up to sigma_f at depth z_r, and then follows the virgin curve (kc/b + kphi)
 (Wong, *Theory of Ground Vehicles*, 4th ed., ch. 2, response to repetitive loading: unloading and
 reloading follow a line far stiffer than the virgin curve).  The contact and the shear displacement
 (Eq. 5) start at the rut's bottom; the sinkage below it comes from the vertical balance (Eq. 7 = W).
+``crust`` ``(d_c, dc)``: a cohesive surface crust (a dried, cemented or frozen top layer): the strength
+plus dc exp(-d / d_c), d the depth below the original surface as for ``depth_power``.
 
 Quadrature. ``scipy.integrate.quad_vec`` (adaptive Gauss-Kronrod 21, all
 samples and the five integrals of one call in one vector) over a normalised
@@ -131,15 +133,15 @@ def _shear_factor(j, K, hump):
 
 def _integrals(soil, r, b, z, s, n, theta_m_frac, epsrel, exit_frac=0.0, hump=None, tau_scale=1.0,
                slip_angle=0.0, grouser=0.0, envelope=None, k_pressure=None, depth_power=None, interface=None,
-               rut=None):
+               rut=None, crust=None):
     """The five integrals of Eqs. (7)-(9) for each sample: returns W, Dp, T, theta1 (all (N,)).
 
     ``exit_frac``: the soil's rebound behind the wheel, exit angle theta2 = exit_frac theta1 (the
     rear region runs from theta_m to -theta2); ``hump``: see :func:`_shear_factor`; ``tau_scale``
     (N,) or scalar multiplies the shear strength; ``slip_angle`` [rad], ``grouser`` (lug height h
     [m]), ``envelope`` ``(sigma0 [Pa], beta)``, ``k_pressure`` ``(sigma0 [Pa], gamma)``,
-    ``depth_power`` ``(d0 [m], a)``, ``interface`` ``(sigma_x [Pa], f)`` and ``rut`` ``(z_f (N,) [m], R)``
-    (``z`` is then the sinkage below the rut's bottom): see the module doc."""
+    ``depth_power`` ``(d0 [m], a)``, ``interface`` ``(sigma_x [Pa], f)``, ``crust`` ``(d_c [m], dc [Pa])``
+    and ``rut`` ``(z_f (N,) [m], R)`` (``z`` is then the sinkage below the rut's bottom): see the module doc."""
     from scipy.integrate import quad_vec
 
     size = len(z)
@@ -166,7 +168,7 @@ def _integrals(soil, r, b, z, s, n, theta_m_frac, epsrel, exit_frac=0.0, hump=No
 
     # scales: the largest normal stress and shear stress (for relative error control)
     sig_max = np.maximum(pressure(z), 1e-300)
-    tau_max = c + sig_max * tanphi
+    tau_max = c + sig_max * tanphi + (0.0 if crust is None else crust[1])
     s_sig = np.maximum(sig_max * th1, 1e-300)
     s_tau = np.maximum(tau_max * th1, 1e-300)
 
@@ -207,6 +209,10 @@ def _integrals(soil, r, b, z, s, n, theta_m_frac, epsrel, exit_frac=0.0, hump=No
         if k_pressure is not None:
             k_j = K * (np.maximum(sigma, 1e-9 * k_pressure[0]) / k_pressure[0]) ** k_pressure[1]
         strength = c + sigma_f * tanphi  # Eq. (4)'s Mohr-Coulomb strength
+        if crust is not None:  # a cohesive crust: more cohesion near the original surface (the depth at
+            # theta itself, also in the rear region, whose stress follows the mirrored front profile)
+            depth = 2.0 * r * np.sin(th1 - 0.5 * d) * np.sin(0.5 * d)
+            strength = strength + crust[1] * np.exp(-np.maximum(depth, 0.0) / crust[0])
         if interface is not None:  # the tyre-soil interface: friction f tan phi above sigma_x, joined smoothly
             sx, f = interface
             kx = 0.25 * sx  # softplus(sigma - sigma_x) - softplus(-sigma_x): 0 at sigma = 0, sigma - sigma_x far above
@@ -304,7 +310,7 @@ def wheel_forces(soil: Mapping[str, Any], radius_m: float, width_m: float, load_
                  sinkage: str = "eq10", H=None, m1=None, m2=None, n1=None, stress=None,
                  exit_frac: float = 0.0, hump=None, tau_scale=1.0, z_cap=None, slip_angle: float = 0.0,
                  grouser: float = 0.0, envelope=None, k_pressure=None, depth_power=None, interface=None,
-                 rut=None, epsrel: float = EPSREL) -> dict[str, np.ndarray]:
+                 rut=None, crust=None, epsrel: float = EPSREL) -> dict[str, np.ndarray]:
     """Reference forces of a rigid wheel on soil per sample (paper Eqs. 1-13, Wong-Reece stress).
 
     Parameters
@@ -334,6 +340,7 @@ def wheel_forces(soil: Mapping[str, Any], radius_m: float, width_m: float, load_
         into the soil, reloading R times stiffer than the virgin soil's secant (module doc); the
         sinkage then comes from the vertical balance whatever ``sinkage`` says, and ``sinkage_m``
         is measured from the original surface. None: virgin soil (paper).
+    crust : ``(d_c, dc)``: a cohesive crust, the strength + dc [Pa] exp(-d/d_c [m]) (module doc), or None.
     epsrel : quadrature tolerance.
 
     Returns
@@ -391,7 +398,7 @@ def wheel_forces(soil: Mapping[str, Any], radius_m: float, width_m: float, load_
         i = int(np.flatnonzero(~np.isfinite(z) | (z <= 0) | (z >= r))[0])
         raise ValueError(f"sinkage[{i}] = {z[i]:.4g} m outside (0, r = {r[i]:.4g} m): the wheel buries itself")
     w_m, dp, t, th1 = _integrals(soil_n, r, b, z, s, n, tm, epsrel, exit_frac, hump, tau_scale, slip_angle, grouser,
-                                 envelope, k_pressure, depth_power, interface, rut_n)
+                                 envelope, k_pressure, depth_power, interface, rut_n, crust)
     if rut_n is not None:  # below the original surface: the rut's permanent depth z_f (1 - 1/R) added
         z = z + rut_n[0] * (1.0 - 1.0 / rut_n[1])
     return {"sinkage_m": z, "static_sinkage_m": z0, "theta1_rad": th1, "load_model_n": w_m,
