@@ -139,8 +139,7 @@ def simulate_physics(truth: TruthModel, rng: np.random.Generator, *, added_load_
     s_soil = slip  # the slip the soil sees: the computed one but for an out-of-round tyre
     if truth.effect == "runout":  # rolling radius r (1 + e sin psi), psi the wheel's angle
         psi = np.cumsum(om) * dt + rng.uniform(0.0, 2.0 * math.pi)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            s_soil = np.where(np.isfinite(slip), 1.0 - (1.0 - slip) / (1.0 + truth.params["e"] * np.sin(psi)), np.nan)
+        s_soil = 1.0 - (1.0 - slip) / (1.0 + truth.params["e"] * np.sin(psi))  # NaN stays NaN
     drive = ~standstill & np.isfinite(s_soil) & (s_soil >= 0)
     s_drive = np.clip(s_soil[drive], 0.0, 0.97)
     lag = None
