@@ -1,6 +1,6 @@
 """The diagnosis on runs of two independent generators (``benchmarks/foreign/``, ``benchmarks/foreign2/``).
 
-    python benchmarks/bench_foreign.py [--generator foreign|foreign2 [--stress]] [--only a1,v15] [--keep DIR]
+    python benchmarks/bench_foreign.py [--generator foreign|foreign2 [--stress|--round2]] [--only a1,v15] [--keep DIR]
 
 Each generator was written from the hardware contract, the DBC files and the paper alone, by a
 session that did not read wheelsoil's code (nor, for the second, the first generator), and imports
@@ -22,7 +22,8 @@ around the generator's defaults, which change Dp at s = 0.5 by 13-30 %; a 4x4 wi
 differentials; soil varying along the track) were each chosen once, before the pipeline was run on
 them. ``--stress`` runs eight of the second generator's cases under conditions its 36 do not cover (4
 accelerate cycles, 3x the sensor noise, 3x the soil variability; seeds 401-424), chosen after its 36 were
-scored. Prints one row per case (verdict, latency found against the truth, its method and
+scored. ``--round2`` is its second round: 25 cases on fresh seeds 501-525, every listed effect at a clear size
+and the causes on no list between their earlier two sizes, written down before any of them was run. Prints one row per case (verdict, latency found against the truth, its method and
 reliability) and the totals, and the wall time.
 """
 
@@ -83,6 +84,27 @@ _STRESS_CONDITIONS = [("short", ["--cycles", "4"]), ("noise3", ["--noise", "3"])
 STRESS = [(f"{cond}_{name}", case, 401 + 8 * i + j, round(0.03 + ((401 + 8 * i + j) * 37 % 170) / 1000, 3), params,
            extra)
           for i, (cond, extra) in enumerate(_STRESS_CONDITIONS) for j, (name, case, params) in enumerate(_STRESS_BASE)]
+#: the second generator's second round (``--round2``): fresh seeds 501-530 and sizes of our own choosing,
+#: written down before the pipeline met any of them: every listed effect at a size a field engineer would
+#: call clear (Dp at s = 0.5 changed by roughly 10-40 %), both signs of the terrain mismatches, and the
+#: causes on no list between their two earlier sizes
+ROUND2 = [
+    ("none3", "none", 501, 0.080, {}), ("none4", "none", 502, 0.150, {}),
+    ("vas3", "vasilev", 503, 0.120, {"H": 0.03}), ("lya3", "lyasko", 504, 0.045, {"m1": 0.3, "m2": 0.02}),
+    ("ding3", "ding", 505, 0.170, {"n1": 0.15}),
+    ("tk3", "terrain_k", 506, 0.100, {"k_factor": 0.80}), ("tk4", "terrain_k", 507, 0.060, {"k_factor": 1.25}),
+    ("tn3", "terrain_n", 508, 0.140, {"n": 0.96}), ("tn4", "terrain_n", 509, 0.090, {"n": 1.12}),
+    ("tc3", "terrain_c", 510, 0.190, {"c_kPa": 3.0}), ("tphi3", "terrain_phi", 511, 0.070, {"phi_deg": 22.0}),
+    ("tphi4", "terrain_phi", 512, 0.110, {"phi_deg": 28.0}), ("tK3", "terrain_K", 513, 0.050, {"K_m": 0.012}),
+    ("tK4", "terrain_K", 514, 0.160, {"K_m": 0.05}),
+    ("wr3", "wong_reece", 515, 0.130, {"a1": 0.15, "a2": 0.10}), ("wr4", "wong_reece", 516, 0.040, {"a1": 0.30, "a2": 0.0}),
+    ("dr3", "drift", 517, 0.180, {"param": "k", "mode": "linear", "end_factor": 0.80}),
+    ("dr4", "drift", 518, 0.095, {"param": "phi", "mode": "step", "end_dphi_deg": -2.0}),
+    ("tyre3", "tyre_deflection", 519, 0.120, {"r_eq": 0.50}), ("fz3", "fz_gain", 520, 0.065, {"gain": 1.08}),
+    ("vg3", "speed_gain", 521, 0.150, {"gain": 1.05}), ("bd3", "bulldozing", 522, 0.085, {"f_b": 0.25}),
+    ("lug3", "lugs", 523, 0.140, {"h": 0.012}), ("lk3", "load_k", 524, 0.055, {"beta": 0.7}),
+    ("xt3", "fx_crosstalk", 525, 0.105, {"fz_to_fx": 0.008}),
+]
 NAMED = ("slip_sinkage", "terrain_mismatch", "stress_distribution", "terrain_drift")
 
 
@@ -148,17 +170,22 @@ def main() -> None:
     ap.add_argument("--stress", action="store_true",
                     help="with --generator foreign2: 24 runs of eight of its cases as short runs (4 cycles), with 3x "
                          "the sensor noise and with 3x the soil variability, instead of its 36 cases")
+    ap.add_argument("--round2", action="store_true",
+                    help="with --generator foreign2: its second round, 25 runs on fresh seeds (501-525) at sizes "
+                         "chosen before any was run (every listed effect clearly above the noise)")
     ap.add_argument("--only", default="", help="comma list of case names (default: all)")
     ap.add_argument("--keep", type=Path, default=None, help="keep logs, recordings and reports here")
     args = ap.parse_args()
-    if args.stress and args.generator != "foreign2":
-        ap.error("--stress needs --generator foreign2")
+    if (args.stress or args.round2) and args.generator != "foreign2":
+        ap.error("--stress and --round2 need --generator foreign2")
+    if args.stress and args.round2:
+        ap.error("choose one of --stress and --round2")
     only = set(filter(None, args.only.split(",")))
     base = args.keep or Path(tempfile.mkdtemp(prefix="bench_foreign_"))
     base.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()
     rows = []
-    cases = CASES if args.generator == "foreign" else STRESS if args.stress else CASES2
+    cases = CASES if args.generator == "foreign" else STRESS if args.stress else ROUND2 if args.round2 else CASES2
     w = max(len(c[0]) for c in cases)
     print(f"{'case':<{w}} {'fronts':<6} {'truth':<34} {'verdict (model, confidence)':<44} {'score':<6} latency ms (true): method, reliable")
     for c in cases:
