@@ -11,7 +11,7 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
-from bench_foreign import CASES, CASES2, GEN, GEN2, NAMED, generate, run_case, run_case2  # noqa: E402
+from bench_foreign import CASES, CASES2, GEN, GEN2, NAMED, ROUND2, STRESS, generate, run_case, run_case2  # noqa: E402
 
 
 @pytest.mark.parametrize("folder", [GEN.parent, GEN2.parent], ids=["foreign", "foreign2"])
@@ -21,6 +21,29 @@ def test_the_independent_generators_import_nothing_from_wheelsoil(folder):
     for f in files:
         lines = [ln.strip() for ln in f.read_text().splitlines()]
         assert not [ln for ln in lines if ln.startswith(("import wheelsoil", "from wheelsoil"))], f
+
+
+def test_every_case_of_the_third_generators_rounds_is_one_of_its_cases_with_its_parameters():
+    """``bench_foreign.py --generator foreign2`` (its 36, ``--stress``, ``--round2``): each case names a case
+    of the generator and sets only that case's parameters, and no seed is used twice (a case re-run alone
+    by its seed is the run scored)."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("foreign2_gen", GEN2)
+    gen = importlib.util.module_from_spec(spec)
+    sys.path.insert(0, str(GEN2.parent))
+    try:
+        spec.loader.exec_module(gen)
+    finally:
+        sys.path.remove(str(GEN2.parent))
+    rows = CASES2 + STRESS + ROUND2
+    for name, case, _seed, latency_s, params, *_ in rows:
+        assert case in gen.CASES, name
+        assert set(params) <= set(gen.CASES[case][2]), (name, params)
+        assert 0.0 < latency_s < 1.0, name
+    seeds = [r[2] for r in rows]
+    assert len(seeds) == len(set(seeds))
+    assert len({r[0] for r in rows}) == len(rows)
 
 
 def test_slip_sinkage_and_the_latency_found_on_an_independent_generators_run(tmp_path):
