@@ -1393,6 +1393,8 @@ def diagnose(
                         + " times less evidence")
             else:
                 lead = f"only {TITLES[best]} explains the data, no re-fit of a single lab value does"
+            if fits[best].name == "terrain":  # what it found, against the lab's values
+                lead += "; its values: " + ", ".join(_lab_text(fits[best], q) for q in fits[best].prior)
             reasons.append(lead + ": Wong with the lab's terrain errs, but the data do not show which value is "
                            "wrong, nor that a soil value is what is wrong (" + _LOOK_ALIKES[fits[best].effect][0] + ")")
         else:
@@ -1645,6 +1647,15 @@ def _changed_terrain(f: HypFit) -> list:
         if abs(_on_prior_scale(p, f.params[p]) - mu) > WALD_Z * min(se, sd):
             out.append(p)
     return out
+
+
+def _lab_text(f: HypFit, p: str) -> str:
+    """'name = value +/- se unit (lab L)' of terrain parameter ``p`` of ``f`` (the lab value is the
+    prior's centre, on the value's own scale)."""
+    mu = f.prior[p][0]
+    lab = math.exp(mu) if p in ("k_eq", "K") else mu
+    k = {"phi": 180 / math.pi, "k_eq": 1e-3, "c": 1e-3}.get(p, 1.0)
+    return f"{_param_text(p, f.params[p], f.stderr.get(p))} (lab {_fmt(lab * k, '', 3)})"
 
 
 def _loose(tests_w: dict) -> list:

@@ -110,3 +110,5 @@ def test_a_clean_one_value_mismatch_the_five_value_refit_outscores_is_reported_w
     assert d["model"] == "terrain", d["summary"]
     assert "the best re-fit of a single lab value, terrain mismatch in phi alone" in d["summary"], d["summary"]
     assert "no re-fit of a single lab value does" not in d["summary"]
+    # and the five-value re-fit's own values beside the lab's, so the reader sees what it moved
+    assert "its values: k_eq = " in d["summary"] and "(lab 25)" in d["summary"], d["summary"]
