@@ -249,7 +249,8 @@ def speed_channel_errors(effect: str, params: Mapping[str, Any], load_n: np.ndar
     rl_gain, rl_delay_s)``: ``gnss_read(v, t_s)``, what the GNSS reads for the true forward speed v (m/s,
     any shape) at run time t_s (s from the start, v's shape): g v for ``gnss_gain``, v + b min(v / 0.5 m/s, 1)
     for ``gnss_offset``, v + b within each burst of ``gnss_multipath`` (its start a fraction of
-    ``duration_s`` [s]), else v; the left-rear wheel-speed reading's gain per sample (``(N,)`` like
+    ``duration_s`` [s]), v through a first-order lag of ``tau_s`` for ``gnss_lag`` (a series on a uniform
+    grid t_s), else v; the left-rear wheel-speed reading's gain per sample (``(N,)`` like
     ``load_n`` [N], a rolling radius shrinking with the load, 1 - e (W/W0 - 1); None: none) and its
     delay [s] (0: none).  ``static_load_n`` W0 [N].  Used by :func:`simulate_run` for the frames and by
     the benchmark's imprint for the slip the fit sees.  Raises KeyError when ``params`` lacks the
