@@ -948,6 +948,11 @@ def _on_prior_scale(p, v):
     return math.log(v) if p in ("k_eq", "K") and v > 0 else v
 
 
+def _from_prior_scale(p, u):
+    """The inverse of :func:`_on_prior_scale`: a value on the prior's scale back on its own."""
+    return math.exp(u) if p in ("k_eq", "K") else u
+
+
 def _se_prior_scale(p, f):
     se = f.stderr[p]
     return se / f.params[p] if p in ("k_eq", "K") and f.params[p] > 0 else se
@@ -1652,10 +1657,8 @@ def _changed_terrain(f: HypFit) -> list:
 def _lab_text(f: HypFit, p: str) -> str:
     """'name = value +/- se unit (lab L)' of terrain parameter ``p`` of ``f`` (the lab value is the
     prior's centre, on the value's own scale)."""
-    mu = f.prior[p][0]
-    lab = math.exp(mu) if p in ("k_eq", "K") else mu
-    k = {"phi": 180 / math.pi, "k_eq": 1e-3, "c": 1e-3}.get(p, 1.0)
-    return f"{_param_text(p, f.params[p], f.stderr.get(p))} (lab {_fmt(lab * k, '', 3)})"
+    k = _FIELD_UNITS.get(p, (1.0, ""))[0]
+    return f"{_param_text(p, f.params[p], f.stderr.get(p))} (lab {_fmt(_from_prior_scale(p, f.prior[p][0]) * k, '', 3)})"
 
 
 def _loose(tests_w: dict) -> list:
@@ -1815,11 +1818,14 @@ def _fmt(v, unit="N", nd=3):
     return f"{v:.{nd}g} {unit}".strip()
 
 
+#: SI -> field units of the parameters the summary quotes: name -> (factor, unit)
+_FIELD_UNITS = {"phi": (180 / math.pi, " deg"), "k_eq": (1e-3, " kN/m^(n+2)"), "c": (1e-3, " kPa"),
+                "g_phi": (180 / math.pi, " deg"), "H": (1.0, " m"), "K": (1.0, " m")}
+
+
 def _param_text(name, value, se) -> str:
     """'name = value +/- se unit' in field units (phi in deg, k_eq in kN/m^(n+2), c in kPa)."""
-    k, unit = {"phi": (180 / math.pi, " deg"), "k_eq": (1e-3, " kN/m^(n+2)"), "c": (1e-3, " kPa"),
-               "g_phi": (180 / math.pi, " deg"),
-               "H": (1.0, " m"), "K": (1.0, " m")}.get(name, (1.0, ""))
+    k, unit = _FIELD_UNITS.get(name, (1.0, ""))
     se_txt = _fmt(se * k, "", 2) if se is not None and np.isfinite(se) else "n/a"
     return f"{name} = {_fmt(value * k, '', 3)} +/- {se_txt}{unit}"
 
