@@ -56,6 +56,11 @@ CHANNELS: dict[str, str] = {
 #: one accelerate cycle of a slip sweep (6-9 s of sweep in a 10-15 s cycle), so a run gives as many
 #: units whatever its procedure.
 BLOCK_S = 10.0
+#: Fitted data [s] per accelerate cycle above which the cycles processing found are not the units:
+#: a cycle of a slip sweep holds 3-9 s of data at s > 0.1; a "cycle" with more than two blocks' worth
+#: spans several sweeps and several patches of soil (a towed run whose tractor speeds up now and then),
+#: so blocks of ``BLOCK_S`` are the independent units instead.
+MAX_CYCLE_DATA_S = 2 * BLOCK_S
 
 #: Phases of a processed recording (``phase`` column) that are driving the steady-state model
 #: describes outside an accelerate cycle (:func:`wheelsoil.processing.slip.classify_phases`).
@@ -257,7 +262,8 @@ def prepare_data(df, *, slip_min: float = 0.1, source: str = "data", n_blocks: i
     (s < 0) and rows with s ~ 0 are excluded from a driving model with a note.
 
     Cross-validation groups: accelerate cycles (``cycle >= 0``; samples outside a
-    cycle join the previous one), else for a table interleaved folds by slip rank
+    cycle join the previous one) unless they hold more than ``MAX_CYCLE_DATA_S`` of
+    fitted data each (then blocks, as without cycles), else for a table interleaved folds by slip rank
     (leave-one-out up to 20 rows, else 10 folds, each spanning the slip range, so
     the held-out error measures interpolation, not extrapolation to unseen slips),
     and for a time series without cycles contiguous blocks of about ``BLOCK_S`` of data each (at
@@ -483,6 +489,21 @@ def _static_load(w: np.ndarray, ok: np.ndarray, run: np.ndarray) -> float | None
     return float(np.mean(w[ok]))
 
 
+def _kept_duration(df, keep, run) -> float:
+    """Seconds of kept data over all runs (kept samples x each run's median sampling step); NaN without ``t_s``."""
+    import pandas as pd
+
+    if "t_s" not in df.columns:
+        return float("nan")
+    t = pd.to_numeric(df["t_s"], errors="coerce").to_numpy(float)[keep]
+    total = 0.0
+    for r in np.unique(run):
+        dt = np.diff(t[run == r])
+        dt = dt[np.isfinite(dt) & (dt > 0)]
+        total += (run == r).sum() * float(np.median(dt)) if dt.size else float("nan")
+    return total
+
+
 def _cv_groups(df, keep, run, kind, n_blocks):
     """Cross-validation groups for the kept rows: (groups (N,), description)."""
     import pandas as pd
@@ -502,7 +523,15 @@ def _cv_groups(df, keep, run, kind, n_blocks):
                     filled[i] = last if last >= 0 else key[ok][0]
                 last = filled[i]
             _, g = np.unique(filled, return_inverse=True)
-            return g, "accelerate cycles"
+            per_cycle = _kept_duration(df, keep, run) / (g.max() + 1)
+            if not per_cycle > MAX_CYCLE_DATA_S:
+                return g, "accelerate cycles"
+            # fewer, longer "cycles" than sweeps (a towed run whose tractor speeds up now and then, slip
+            # swept by the wheel): each holds many sweeps and patches of soil, so blocks are the units
+            cycles_note = (f" ({g.max() + 1} accelerate cycles found, {per_cycle:.0f} s of fitted data each: "
+                           "more than a slip sweep's worth)")
+            blocks, kind_txt = _cv_groups(df.drop(columns="cycle"), keep, run, kind, n_blocks)
+            return blocks, kind_txt + cycles_note
     if kind == "table" and n_blocks is None:
         k = n if n <= 20 else 10
         rank = np.empty(n, int)

@@ -281,6 +281,24 @@ def test_a_recording_without_accelerate_cycles_gets_units_of_about_a_cycle(durat
     assert prepare_data(_table(1)).group_kind != "contiguous blocks"
 
 
+def test_cycles_longer_than_a_sweep_are_not_the_units():
+    """A towed run whose tractor sped up three times: processing finds 3 "accelerate cycles", each with
+    minutes of slip sweeps in it. They are not the independent units (too few, each spanning many sweeps
+    and patches of soil): blocks of about BLOCK_S are, as without cycles, and the description says why.
+    Cycles holding a sweep's worth of data stay the units."""
+    from wheelsoil.model.data import BLOCK_S, MAX_CYCLE_DATA_S
+
+    df = synthetic_data(SAND, DEFAULT_WHEEL, "wong", {}, kind="timeseries", duration_s=180.0, seed=2)
+    dt = float(np.median(np.diff(df["t_s"])))
+    df["cycle"] = np.minimum(np.arange(len(df)) * 3 // len(df), 2)
+    d = prepare_data(df)
+    assert d.n * dt / 3 > MAX_CYCLE_DATA_S
+    assert d.group_kind.startswith("contiguous blocks (3 accelerate cycles found"), d.group_kind
+    assert np.unique(d.groups).size == max(5, round(d.n * dt / BLOCK_S))
+    short = prepare_data(synthetic_data(SAND, DEFAULT_WHEEL, "wong", {}, kind="timeseries", duration_s=60.0, seed=2))
+    assert short.group_kind == "accelerate cycles"
+
+
 def test_noise_estimate_is_not_inflated_by_a_load_varying_under_one_percent():
     """Load transfer moves a wheel's load by well under 1 % in a sweep, and the torque (about
     proportional to the load) by many times its noise: the smooth the noise is measured about
