@@ -113,6 +113,10 @@ ROUND2 = [
 #: paper's clay, seeds 601-630, name, case, seed, params, log format; written down by the generator's author
 #: before any was scored
 ROUND3 = json.loads((GEN3.parent / "round1.json").read_text())
+#: its second round (``--generator foreign3 --round2``, ``foreign3/round2.json``): seeds 631-660, written by the
+#: project after the first was scored and before any of these was run: sizes between about half and the full
+#: first round's, the terrain mismatches' other signs, drifts in c and k (linear and a step from 35 %)
+ROUND3B = json.loads((GEN3.parent / "round2.json").read_text())
 NAMED = ("slip_sinkage", "terrain_mismatch", "stress_distribution", "terrain_drift")
 
 
@@ -196,12 +200,13 @@ def main() -> None:
                          "the sensor noise and with 3x the soil variability, instead of its 36 cases")
     ap.add_argument("--round2", action="store_true",
                     help="with --generator foreign2: its second round, 25 runs on fresh seeds (501-525) at sizes "
-                         "chosen before any was run (every listed effect clearly above the noise)")
+                         "chosen before any was run (every listed effect clearly above the noise); with foreign3: "
+                         "its second round, 30 runs on seeds 631-660 (foreign3/round2.json)")
     ap.add_argument("--only", default="", help="comma list of case names (default: all)")
     ap.add_argument("--keep", type=Path, default=None, help="keep logs, recordings and reports here")
     args = ap.parse_args()
-    if (args.stress or args.round2) and args.generator != "foreign2":
-        ap.error("--stress and --round2 need --generator foreign2")
+    if args.stress and args.generator != "foreign2" or args.round2 and args.generator == "foreign":
+        ap.error("--stress needs --generator foreign2, --round2 foreign2 or foreign3")
     if args.stress and args.round2:
         ap.error("choose one of --stress and --round2")
     only = set(filter(None, args.only.split(",")))
@@ -209,7 +214,8 @@ def main() -> None:
     base.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()
     rows = []
-    cases = {"foreign": CASES, "foreign3": [(r["name"], r["case"], r["seed"], r["params"], r["format"]) for r in ROUND3]}.get(
+    r3 = ROUND3B if args.round2 else ROUND3
+    cases = {"foreign": CASES, "foreign3": [(r["name"], r["case"], r["seed"], r["params"], r["format"]) for r in r3]}.get(
         args.generator) or (STRESS if args.stress else ROUND2 if args.round2 else CASES2)
     w = max(len(c[0]) for c in cases)
     print(f"{'case':<{w}} {'fronts':<6} {'truth':<34} {'verdict (model, confidence)':<44} {'score':<6} latency ms (true): method, reliable")

@@ -11,7 +11,7 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
-from bench_foreign import (CASES, CASES2, GEN, GEN2, GEN3, NAMED, ROUND2, ROUND3, STRESS, generate,  # noqa: E402
+from bench_foreign import (CASES, CASES2, GEN, GEN2, GEN3, NAMED, ROUND2, ROUND3, ROUND3B, STRESS, generate,  # noqa: E402
                            run_case, run_case2)
 
 
@@ -53,15 +53,16 @@ def test_every_case_of_the_third_generators_rounds_is_one_of_its_cases_with_its_
 
 
 def test_every_run_of_the_fourth_generators_round_is_one_of_its_cases_with_its_parameters():
-    """``bench_foreign.py --generator foreign3`` (``foreign3/round1.json``): each run names a case of the
-    generator, sets only that case's parameters, in a log format the pipeline reads directly; no seed or
-    name twice."""
+    """``bench_foreign.py --generator foreign3 [--round2]`` (``foreign3/round1.json``, ``round2.json``): each
+    run names a case of the generator, sets only that case's parameters, in a log format the pipeline reads
+    directly; no seed or name twice."""
     gen = _load(GEN3, "foreign3_gen")
-    for r in ROUND3:
+    for r in ROUND3 + ROUND3B:
         assert r["case"] in gen.CASES, r
         assert set(r["params"]) <= set(gen.CASES[r["case"]]["defaults"]), r
         assert r["format"] in ("asc", "blf", "log"), r
-    assert len({r["seed"] for r in ROUND3}) == len(ROUND3) == len({r["name"] for r in ROUND3})
+    rows = ROUND3 + ROUND3B
+    assert len({r["seed"] for r in rows}) == len(rows) == len({r["name"] for r in rows})
 
 
 @pytest.mark.parametrize("run", ["r1_01", "r1_07"])
