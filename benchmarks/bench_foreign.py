@@ -1,6 +1,6 @@
 """The diagnosis on runs of three independent generators (``benchmarks/foreign/``, ``foreign2/``, ``foreign3/``).
 
-    python benchmarks/bench_foreign.py [--generator foreign|foreign2 [--stress|--round2]|foreign3] [--only a1,v15] [--keep DIR]
+    python benchmarks/bench_foreign.py [--generator foreign|foreign2 [--stress|--round2]|foreign3 [--round2]] [--only a1,v15] [--keep DIR]
 
 Each generator was written from the hardware contract, the DBC files and the paper alone, by a
 session that did not read wheelsoil's code (nor, for the second, the first generator), and imports
@@ -25,8 +25,10 @@ accelerate cycles, 3x the sensor noise, 3x the soil variability; seeds 401-424),
 scored. ``foreign3`` (30 runs, ``foreign3/round1.json``): the paper's clay, on which a vehicle on such
 wheels cannot drive itself, so a tractor tows it while the driver holds and ramps the rear wheels' slip;
 a tone-wheel speed module, clocks drifting, the logs written as Vector ASC, BLF and candump files and
-fitted directly (``wheelsoil fit run.asc --terrain clay``). ``--round2`` is the second generator's second round: 25 cases on fresh seeds 501-525, every listed effect at a clear size
-and the causes on no list between their earlier two sizes, written down before any of them was run. Prints one row per case (verdict, latency found against the truth, its method and
+fitted directly (``wheelsoil fit run.asc --terrain clay``). ``--round2`` is a generator's second round:
+for ``foreign2`` 25 cases on fresh seeds 501-525, every listed effect at a clear size and the causes on no
+list between their earlier two sizes; for ``foreign3`` 30 runs on seeds 631-660 (``foreign3/round2.json``);
+each written down before any of its runs was run. Prints one row per case (verdict, latency found against the truth, its method and
 reliability) and the totals, and the wall time.
 """
 
@@ -214,9 +216,12 @@ def main() -> None:
     base.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()
     rows = []
-    r3 = ROUND3B if args.round2 else ROUND3
-    cases = {"foreign": CASES, "foreign3": [(r["name"], r["case"], r["seed"], r["params"], r["format"]) for r in r3]}.get(
-        args.generator) or (STRESS if args.stress else ROUND2 if args.round2 else CASES2)
+    if args.generator == "foreign":
+        cases = CASES
+    elif args.generator == "foreign3":
+        cases = [(r["name"], r["case"], r["seed"], r["params"], r["format"]) for r in (ROUND3B if args.round2 else ROUND3)]
+    else:
+        cases = STRESS if args.stress else ROUND2 if args.round2 else CASES2
     w = max(len(c[0]) for c in cases)
     print(f"{'case':<{w}} {'fronts':<6} {'truth':<34} {'verdict (model, confidence)':<44} {'score':<6} latency ms (true): method, reliable")
     for c in cases:

@@ -58,7 +58,7 @@ CV_MAX_ITER = 4  #: Gauss-Newton iterations of a warm-started fold refit (one fo
 #: little and Gauss-Newton converges quadratically near it: 2-3 steps reach the fold's optimum)
 MAX_FOLDS = 20  #: more accelerate cycles than this are merged into this many contiguous folds.
 #: The cycles are the independent units of the diagnosis' paired test over folds: merging them
-#: only lowers its power (an exact signed-rank p over n folds is at least 2**-n, and an effect
+#: only lowers its power (its t over the folds has n - 1 degrees of freedom, and an effect
 #: confined to the end of a run gains in few folds); the cap bounds the cost of the refits
 #: (linear in the folds) for long recordings
 
