@@ -489,19 +489,12 @@ def _static_load(w: np.ndarray, ok: np.ndarray, run: np.ndarray) -> float | None
     return float(np.mean(w[ok]))
 
 
-def _kept_duration(df, keep, run) -> float:
-    """Seconds of kept data over all runs (kept samples x each run's median sampling step); NaN without ``t_s``."""
-    import pandas as pd
-
-    if "t_s" not in df.columns:
-        return float("nan")
-    t = pd.to_numeric(df["t_s"], errors="coerce").to_numpy(float)[keep]
-    total = 0.0
-    for r in np.unique(run):
-        dt = np.diff(t[run == r])
-        dt = dt[np.isfinite(dt) & (dt > 0)]
-        total += (run == r).sum() * float(np.median(dt)) if dt.size else float("nan")
-    return total
+def _run_seconds(t, idx) -> float:
+    """Seconds of data in the kept rows ``idx`` of one run: their count x the run's median positive time
+    step of ``t`` (N,) [s]; NaN without ``t`` or without a positive step."""
+    dt = np.diff(t[idx]) if t is not None else np.zeros(0)
+    dt = dt[np.isfinite(dt) & (dt > 0)]
+    return idx.size * float(np.median(dt)) if dt.size else float("nan")
 
 
 def _cv_groups(df, keep, run, kind, n_blocks):
@@ -509,6 +502,9 @@ def _cv_groups(df, keep, run, kind, n_blocks):
     import pandas as pd
 
     n = int(keep.sum())
+    t = pd.to_numeric(df["t_s"], errors="coerce").to_numpy(float)[keep] if "t_s" in df.columns else None
+    runs = [np.flatnonzero(run == r) for r in np.unique(run)]
+    note = ""
     if "cycle" in df.columns:
         cyc = pd.to_numeric(df["cycle"], errors="coerce").to_numpy(float)[keep]  # a text cycle: none
         cyc = np.where(np.isfinite(cyc), cyc, -1).astype(int)
@@ -523,15 +519,13 @@ def _cv_groups(df, keep, run, kind, n_blocks):
                     filled[i] = last if last >= 0 else key[ok][0]
                 last = filled[i]
             _, g = np.unique(filled, return_inverse=True)
-            per_cycle = _kept_duration(df, keep, run) / (g.max() + 1)
+            per_cycle = sum(_run_seconds(t, idx) for idx in runs) / (g.max() + 1)
             if not per_cycle > MAX_CYCLE_DATA_S:
                 return g, "accelerate cycles"
             # fewer, longer "cycles" than sweeps (a towed run whose tractor speeds up now and then, slip
             # swept by the wheel): each holds many sweeps and patches of soil, so blocks are the units
-            cycles_note = (f" ({g.max() + 1} accelerate cycles found, {per_cycle:.0f} s of fitted data each: "
-                           "more than a slip sweep's worth)")
-            blocks, kind_txt = _cv_groups(df.drop(columns="cycle"), keep, run, kind, n_blocks)
-            return blocks, kind_txt + cycles_note
+            note = (f" ({g.max() + 1} accelerate cycles found, {per_cycle:.0f} s of fitted data each: "
+                    "more than a slip sweep's worth)")
     if kind == "table" and n_blocks is None:
         k = n if n <= 20 else 10
         rank = np.empty(n, int)
@@ -539,22 +533,19 @@ def _cv_groups(df, keep, run, kind, n_blocks):
         return rank % k, "leave-one-out" if k == n else f"{k} interleaved slip-rank folds"
     k = n_blocks or (max(2, min(5, n // 3)) if kind == "table" else 5)
     k = max(1, min(k, n))
-    t = (pd.to_numeric(df["t_s"], errors="coerce").to_numpy(float)[keep]
-         if kind != "table" and n_blocks is None and "t_s" in df.columns else None)
+    t_blocks = t if kind != "table" and n_blocks is None else None
     g = np.zeros(n, int)
     nxt = 0
-    for r in np.unique(run):
-        idx = np.flatnonzero(run == r)
-        kr = k if np.unique(run).size == 1 else max(1, min(k, idx.size // 2))
-        dt = np.diff(t[idx]) if t is not None else np.zeros(0)
-        dt = dt[np.isfinite(dt) & (dt > 0)]
-        if dt.size:
+    for idx in runs:
+        kr = k if len(runs) == 1 else max(1, min(k, idx.size // 2))
+        secs = _run_seconds(t_blocks, idx)
+        if np.isfinite(secs):
             # a recording without accelerate cycles (steady holds, gentle ramps): blocks of about
             # BLOCK_S of data, as many independent units as a sweep test's cycles would give
-            kr = max(kr, min(int(round(idx.size * float(np.median(dt)) / BLOCK_S)), idx.size // 2))
+            kr = max(kr, min(int(round(secs / BLOCK_S)), idx.size // 2))
         g[idx] = nxt + (np.arange(idx.size) * kr) // idx.size
         nxt += kr
-    return g, "contiguous blocks"
+    return g, "contiguous blocks" + note
 
 
 

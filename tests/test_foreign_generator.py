@@ -57,11 +57,11 @@ def test_every_run_of_the_fourth_generators_round_is_one_of_its_cases_with_its_p
     run names a case of the generator, sets only that case's parameters, in a log format the pipeline reads
     directly; no seed or name twice."""
     gen = _load(GEN3, "foreign3_gen")
-    for r in ROUND3 + ROUND3B:
+    rows = ROUND3 + ROUND3B
+    for r in rows:
         assert r["case"] in gen.CASES, r
         assert set(r["params"]) <= set(gen.CASES[r["case"]]["defaults"]), r
         assert r["format"] in ("asc", "blf", "log"), r
-    rows = ROUND3 + ROUND3B
     assert len({r["seed"] for r in rows}) == len(rows) == len({r["name"] for r in rows})
 
 
