@@ -8,7 +8,10 @@ Steps (each in its own module):
    one sample, report lost frames, rotate to the hub frame (:mod:`.wft`);
    lost runs of at most ``MAX_FILL_SAMPLES`` samples are interpolated,
    longer ones split the data into segments;
-3. clocks: host->GPS time mapping, and the GNSS latency (:mod:`.timesync`)
+3. clocks: host->GPS time mapping; the wheel-speed module's lag behind the
+   transducer's clock, from the WFT's wheel angle (:func:`_wheel_speed_lag`;
+   removed from the wheel speeds' times when determined and over 5 ms, so
+   slip belongs to the moment of the forces); and the GNSS latency (:mod:`.timesync`)
    from up to three estimators: the free-rolling front wheels' r*omega (or,
    when none is logged or the 4x4 drives them, the measured wheel where it
    transmits no torque: coasting, another axle braking), the measured wheel's
@@ -88,6 +91,24 @@ WFT_RIPPLE_REL = 0.03
 #: GNSS latency search range [s] (hardware.md: typically 20-200 ms); an estimate within 4 ms of
 #: either end is an edge hit (unreliable).
 LATENCY_MAX_S = 0.5
+#: Lower end [s] of the search for the wheel-reference and slip-traction estimates: they measure
+#: the GNSS speed's delay *relative to the wheel-speed readings*, which is what slip (Eq. 6) needs,
+#: and a wheel-speed module can itself read late (a tone wheel reporting its last tooth period:
+#: ~30 ms at 4 rad/s with 48 teeth, more at walking pace), so a short GNSS latency is negative
+#: relative to it. An independent generator's towed runs (GNSS 25-48 ms, module ~30-60 ms) hit the
+#: old lower end 0 and got no estimate, or a wrong slip-traction one. The dynamics estimate (GNSS
+#: against the transducer's own clock) keeps 0.
+LATENCY_MIN_S = -0.1
+#: The wheel-speed module's lag behind the transducer's clock (:func:`_wheel_speed_lag`) is removed
+#: from the wheel speeds' timestamps when it is determined to this standard error [s] ...
+WSS_LAG_SE_S = 0.005
+#: ... and at least this large [s]: half the 100 Hz module's frame period (hardware.md), under which a
+#: lag is within the reading's own time resolution (recordings without one stay as they were) ...
+WSS_LAG_MIN_S = 0.005
+#: ... and the module's speed matches the angle's derivative within this gain (the same wheel).
+WSS_LAG_GAIN_TOL = 0.05
+#: Search range [s] of that lag (negative: the transducer's frames arrive later than the module's).
+WSS_LAG_RANGE_S = (-0.1, 0.3)
 #: Wheel load [N] below which the traction coefficient T/(rW) is not formed (wheel lifted).
 LATENCY_MIN_LOAD_N = 500.0
 #: Highest output rate [Hz] processing resamples to.
@@ -417,6 +438,39 @@ def _agree(a: LatencyEstimate, b: LatencyEstimate) -> bool:
     return abs(a.latency_s - b.latency_s) <= LATENCY_AGREE_SIGMAS * math.hypot(a.stderr_s, b.stderr_s)
 
 
+def _wheel_speed_lag(t_w: np.ndarray, angle_rad: np.ndarray, period_w: float, t_wss: np.ndarray,
+                     omega_wss: np.ndarray, radius_m: float) -> LatencyEstimate:
+    """How late the wheel-speed module reads the measured wheel against the transducer's clock.
+
+    The WFT's wheel angle (500 Hz, hardware.md ``WFT_RL_Angle``) is sampled on the transducer's own
+    clock, the forces' time base; its derivative is the speed of the wheel whose speed the module
+    reports (``WheelSpeed_RL``). A module that averages over its last tooth period or is read
+    through a gateway reports that speed late, and slip (Eq. 6) from it then belongs to an earlier
+    moment than the forces it is paired with; during a spin-up of a few tenths of a second a lag of
+    30 ms moves slip by several hundredths. The lag is found as the GNSS latency is
+    (:func:`.timesync.estimate_latency`, the module's r*omega aligned with the angle's, 2 ms grid
+    over :data:`WSS_LAG_RANGE_S`).
+
+    ``t_w`` (N,) transducer sample times [s], ``angle_rad`` (N,) wheel angle [rad] (NaN where lost,
+    wrapping at 2 pi), ``period_w`` its sample period [s]; ``t_wss`` (M,) the module's frame times
+    [s], ``omega_wss`` (M,) its speed of the measured wheel [rad/s]; ``radius_m`` r [m]. Returns the
+    :class:`.timesync.LatencyEstimate` (``latency_s`` > 0: the module late). Raises ``ValueError``
+    when the angle gives no speed or the two do not overlap (the estimator's messages).
+    """
+    step = np.angle(np.exp(1j * np.diff(angle_rad)))  # wrapped to (-pi, pi]: one sample turns < half a turn
+    dt = np.diff(t_w)
+    ok = np.isfinite(step) & (dt > 0) & (dt < 1.5 * period_w)
+    if np.count_nonzero(ok) < 100:
+        raise ValueError("fewer than 100 consecutive wheel-angle samples")
+    om = np.where(ok, step / np.where(dt > 0, dt, 1.0), np.nan)
+    if np.nanmedian(om) < 0:  # the angle counting the other way
+        om = -om
+    t_mid = 0.5 * (t_w[1:] + t_w[:-1])
+    ref = filter_to_grid(t_mid, om, period_w, t_mid, LATENCY_REF_CUTOFF_HZ) * radius_m
+    return estimate_latency(t_wss, np.abs(omega_wss) * radius_m, t_mid, ref, usable_ref=np.isfinite(ref),
+                            min_latency_s=WSS_LAG_RANGE_S[0], max_latency_s=WSS_LAG_RANGE_S[1])
+
+
 def _with_systematic(name: str, c: LatencyEstimate) -> LatencyEstimate:
     """``c`` with its standard error raised by :data:`LATENCY_SYSTEMATIC_S` (quadrature)."""
     from dataclasses import replace
@@ -550,7 +604,7 @@ def _choose_latency(cands: dict, errs: dict, *, coupled: bool, wheel_ref_label: 
          "method": method or None, "reliable": bool(reliable), "reasons": reasons,
          "fronts_driven": bool(coupled) or (fronts and not wr_info.get("usable", False)
                                             and "do not roll freely" in wr_info.get("note", "")),
-         "candidates": info, "search_range_s": [0.0, LATENCY_MAX_S]}
+         "candidates": info, "search_range_s": [LATENCY_MIN_S, LATENCY_MAX_S]}
     label = {"wheel_reference": wheel_ref_label, "traction": _LATENCY_METHODS["traction"],
              "dynamics": _LATENCY_METHODS["dynamics"],
              "traction+dynamics": _LATENCY_METHODS["traction"] + " and " + _LATENCY_METHODS["dynamics"]}.get(method, "")
@@ -1045,6 +1099,7 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
     # ---- 2. WFT -------------------------------------------------------------------------
     load = dp = torque = fx_f = my_f = nan
     wft_period = None
+    wft_angle = None  # (t_w, angle) for the wheel-speed module's lag
     streams = {}
     for ckey, cols in (("wft_counter_force", ("wft_fx_w", "wft_fz_w")), ("wft_counter_moment", ("wft_my",)),
                        ("wft_counter_angle", ("wft_angle",))):
@@ -1128,6 +1183,7 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
                 fz[bad] = np.nan
                 ripple = rotation_ripple(fx, fz, cols["wft_angle"], t_w)
                 quality["wft_ripple"] = ripple
+                wft_angle = (t_w, np.where(bad, np.nan, cols["wft_angle"]))
                 w_mean = float(np.nanmean(fz)) if np.isfinite(fz).any() else float("nan")
                 for order in (2, 1) if ripple is not None and w_mean > 0 else ():
                     amp = max(ripple[f"fx_{order}x_n"], ripple[f"fz_{order}x_n"])
@@ -1181,6 +1237,7 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
     ws_ref = sig["wheel_speed"]
     got = get("wheel_speed", measured=True)
     wss_t = wss_rel = None
+    wss_shift_ns = 0  # the module's lag behind the transducer's clock, when removed
     if got is not None and got[0].shape[0] < 3:
         warns.append(f"only {got[0].shape[0]} wheel speed frames ({label('wheel_speed')}): not used")
         got = None
@@ -1193,6 +1250,27 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
                                  parts=tb_parts.get(ws_ref.message))
         lost_frames[ws_ref.message] = rep
         wss_rel = rel_s(wss_t)
+        if wft_angle is not None:
+            try:
+                lag = _wheel_speed_lag(*wft_angle, wft_period, wss_rel, w_rl, r)
+            except ValueError as exc:
+                quality["wheel_speed_lag"] = {"estimate_s": None, "applied": False, "note": str(exc)}
+            else:
+                why = lag.note or (
+                    f"standard error {lag.stderr_s * 1e3:.1f} ms > {WSS_LAG_SE_S * 1e3:g} ms"
+                    if not lag.stderr_s <= WSS_LAG_SE_S else
+                    f"speed gain {lag.gain:.3f}: not the same wheel's speed" if abs(lag.gain - 1) > WSS_LAG_GAIN_TOL
+                    else f"under {WSS_LAG_MIN_S * 1e3:g} ms" if abs(lag.latency_s) < WSS_LAG_MIN_S else "")
+                quality["wheel_speed_lag"] = {"estimate_s": lag.latency_s, "stderr_s": lag.stderr_s,
+                                              "gain": lag.gain, "applied": not why, "note": why}
+                if not why:
+                    wss_shift_ns = int(round(lag.latency_s * 1e9))
+                    wss_t = wss_t - wss_shift_ns
+                    wss_rel = rel_s(wss_t)
+                    warns.append(f"the wheel speeds ({ws_ref.message}) read {lag.latency_s * 1e3:.1f} +- "
+                                 f"{lag.stderr_s * 1e3:.1f} ms late against the transducer's clock (its wheel "
+                                 "angle): their times moved back by that much, so slip belongs to the moment "
+                                 "of the forces; ProcessResult.quality['wheel_speed_lag']")
         omega, domega = filter_to_grid(wss_rel, w_rl, period, t_grid, cutoff, derivative=True)
 
     # ---- 3a'. inertia: T = My - I_w domega/dt (hardware.md) ------------------------------
@@ -1255,7 +1333,8 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
         errs: dict[str, str] = {}
         ref_t = ref_v = usable = None
         wheel_ref_label = ""
-        f_series = [s for s in (get(f, measured=True) for f in fronts) if s is not None and s[0].shape[0] >= 3]
+        f_series = [(s[0] - (wss_shift_ns if f.message == ws_ref.message else 0), s[1])
+                    for f, s in ((f, get(f, measured=True)) for f in fronts) if s is not None and s[0].shape[0] >= 3]
         coupled = False
         if f_series:
             ft = f_series[0][0]
@@ -1282,7 +1361,8 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
                 usable = np.gradient(np.nan_to_num(ref_f), ref_t) > -LATENCY_MAX_DECEL_MPS2
             try:
                 cands["wheel_reference"] = estimate_latency(g_rel, g_v, ref_t, ref_f, usable_ref=usable,
-                                                            max_latency_s=LATENCY_MAX_S)
+                                                            max_latency_s=LATENCY_MAX_S,
+                                                            min_latency_s=LATENCY_MIN_S)
             except ValueError as exc:
                 errs["wheel_reference"] = str(exc)
         else:
@@ -1292,7 +1372,8 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
                 coeff = np.where(load > LATENCY_MIN_LOAD_N, torque / (r * load), np.nan)
             try:
                 cands["traction"] = estimate_latency_traction(g_rel, g_v, t_grid, r * omega, coeff, load_n=load,
-                                                              max_latency_s=LATENCY_MAX_S)
+                                                              max_latency_s=LATENCY_MAX_S,
+                                                              min_latency_s=LATENCY_MIN_S)
             except ValueError as exc:
                 errs["traction"] = str(exc)
         else:

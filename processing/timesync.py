@@ -119,7 +119,7 @@ def _fit_at(tau: float, t_g: np.ndarray, v_g: np.ndarray, t_ref: np.ndarray, v_r
 
 def estimate_latency(t_gnss_s: np.ndarray, v_gnss: np.ndarray, t_ref_s: np.ndarray, v_ref: np.ndarray,
                      *, usable_ref: np.ndarray | None = None, max_latency_s: float = 0.5,
-                     min_speed_mps: float = 0.3) -> LatencyEstimate:
+                     min_speed_mps: float = 0.3, min_latency_s: float = 0.0) -> LatencyEstimate:
     """Estimate how late the GNSS velocity arrives relative to a reference speed.
 
     Parameters: ``t_gnss_s`` (N,) host receive times [s] of the GNSS speed,
@@ -128,7 +128,9 @@ def estimate_latency(t_gnss_s: np.ndarray, v_gnss: np.ndarray, t_ref_s: np.ndarr
     filtered), ``v_ref`` (M,) [m/s]; ``usable_ref`` (M,) bool: where the
     reference may be trusted (e.g. no hard braking); points with reference
     speed below ``min_speed_mps`` are not used; search range
-    ``0..max_latency_s``.
+    ``min_latency_s..max_latency_s`` (negative: the reference is itself read
+    later than the GNSS speed, e.g. a tone-wheel module reporting the last
+    tooth period).
 
     Returns :class:`LatencyEstimate` (``latency_s`` positive = GNSS late).
     Raises ``ValueError`` when fewer than 10 usable points overlap or the
@@ -141,7 +143,7 @@ def estimate_latency(t_gnss_s: np.ndarray, v_gnss: np.ndarray, t_ref_s: np.ndarr
     keep = np.isfinite(v_r) & (v_r >= min_speed_mps)
     if usable_ref is not None:
         keep &= np.asarray(usable_ref, dtype=bool)
-    taus = np.arange(0.0, max_latency_s + 1e-9, 0.002)
+    taus = _lag_grid(min_latency_s, max_latency_s)
     sse = np.array([_fit_at(t, t_g, v_g, t_r, v_r, keep)[0] for t in taus])
     if not np.isfinite(sse).any():
         raise ValueError("fewer than 10 GNSS samples overlap a usable reference speed")
@@ -170,9 +172,20 @@ def estimate_latency(t_gnss_s: np.ndarray, v_gnss: np.ndarray, t_ref_s: np.ndarr
     rho = min(max(rho, 0.0), 0.95) if np.isfinite(rho) else 0.0
     stderr = float(np.sqrt(s2 * np.linalg.inv(jtj)[2, 2] * (1 + rho) / (1 - rho)))
     note = ""
-    if tau <= 0.004 or tau >= max_latency_s - 0.004:
-        note = f"latency at the edge of the search range 0..{max_latency_s:g} s"
+    if tau <= min_latency_s + 0.004 or tau >= max_latency_s - 0.004:
+        note = _edge_note(min_latency_s, max_latency_s)
     return LatencyEstimate(tau, stderr, a, b, float(np.sqrt(mse)), n, note)
+
+
+def _lag_grid(lo_s: float, hi_s: float) -> np.ndarray:
+    """The 2 ms grid of lags [s] over ``lo_s..hi_s`` that both estimators search first."""
+    if not hi_s > lo_s:
+        raise ValueError(f"empty latency search range {lo_s:g}..{hi_s:g} s")
+    return lo_s + np.arange(0.0, hi_s - lo_s + 1e-9, 0.002)
+
+
+def _edge_note(lo_s: float, hi_s: float) -> str:
+    return f"latency at the edge of the search range {lo_s:g}..{hi_s:g} s"
 
 
 #: Slip range [-] used by :func:`estimate_latency_traction` (outside: locked or spinning wheel).
@@ -225,7 +238,7 @@ def estimate_latency_traction(t_gnss_s: np.ndarray, v_gnss: np.ndarray, t_ref_s:
                               wheel_speed_mps: np.ndarray, traction_coeff: np.ndarray, *,
                               load_n: np.ndarray | None = None, usable_ref: np.ndarray | None = None,
                               max_latency_s: float = 0.5, min_speed_mps: float = 1.0,
-                              n_knots: int = 10) -> LatencyEstimate:
+                              n_knots: int = 10, min_latency_s: float = 0.0) -> LatencyEstimate:
     """GNSS latency from slip-traction consistency: needs no free-rolling wheel.
 
     A wheel's torque at a given load is a function of its slip (the paper's
@@ -237,7 +250,7 @@ def estimate_latency_traction(t_gnss_s: np.ndarray, v_gnss: np.ndarray, t_ref_s:
     curve (hysteresis loops). The latency is the lag that minimises the scatter
     ``sum (x - g(s))^2`` of the traction coefficient ``x = T/(r W)`` about a
     cubic least-squares spline ``g`` of slip (``n_knots`` interior knots at
-    quantiles of s), on a 2 ms grid over ``0..max_latency_s`` refined by a
+    quantiles of s), on a 2 ms grid over ``min_latency_s..max_latency_s`` refined by a
     bounded scalar minimisation. With ``load_n`` the model is ``g(s) + h(s)
     (W/mean(W) - 1)`` (a second spline ``h``): the load transfer onto the wheel
     while accelerating changes ``T/(rW)`` at a given slip (``T`` is not
@@ -288,7 +301,7 @@ def estimate_latency_traction(t_gnss_s: np.ndarray, v_gnss: np.ndarray, t_ref_s:
     def sse(t):
         return _traction_sse(t, t_g, v_g, t_r, w_r, x_r, keep, n_knots, min_speed_mps, dw_r)[0]
 
-    taus = np.arange(0.0, max_latency_s + 1e-9, 0.002)
+    taus = _lag_grid(min_latency_s, max_latency_s)
     prof = np.array([sse(t) for t in taus])
     if not np.isfinite(prof).any():
         raise ValueError("too few GNSS samples overlap the wheel's traction data")
@@ -306,6 +319,6 @@ def estimate_latency_traction(t_gnss_s: np.ndarray, v_gnss: np.ndarray, t_ref_s:
     stderr = float(np.sqrt(2 * s2 / curv * (1 + rho) / (1 - rho))) if curv > 0 else float("inf")
     note = ""
     edge = max(TRACTION_EDGE_S, 2 * stderr) if np.isfinite(stderr) else TRACTION_EDGE_S
-    if tau <= edge or tau >= max_latency_s - edge:
-        note = f"latency at the edge of the search range 0..{max_latency_s:g} s"
+    if tau <= min_latency_s + edge or tau >= max_latency_s - edge:
+        note = _edge_note(min_latency_s, max_latency_s)
     return LatencyEstimate(tau, stderr, 1.0, 0.0, float(np.sqrt(s0 / max(n, 1))), n, note)

@@ -127,7 +127,8 @@ def write_recording(path, truth: Truth, *, latency_s: float = 0.1, seed: int = 0
                     wheel_mass_kg: float = WHEEL_MASS_KG, wheel_inertia_kgm2: float = WHEEL_INERTIA_KGM2,
                     config=None, ts_edit=None, drop_wft_runs=(), drop_frames: dict | None = None,
                     burst_s: float = 0.0, fronts_coupled: bool = False, at_max: dict | None = None,
-                    fx_w_gain: float = 1.0, fx_w_offset_n: float = 0.0) -> dict:
+                    fx_w_gain: float = 1.0, fx_w_offset_n: float = 0.0,
+                    wheel_speed_lag_s: float = 0.0) -> dict:
     """Encode ``truth`` as frames and write an MCAP recording.
 
     ``drop_wft_bursts``: that many runs of 1..12 lost WFT samples;
@@ -151,7 +152,8 @@ def write_recording(path, truth: Truth, *, latency_s: float = 0.1, seed: int = 0
     differentials) instead of rolling freely; ``at_max`` ``{signal name: (t0_s, t1_s)}``:
     ``Fx_w`` or ``WheelSpeed_RL`` reads its DBC maximum in that window (a clipped sensor, or
     the all-ones "not available" code); ``fx_w_gain``, ``fx_w_offset_n``: the rotating Fx_w
-    bridge reads with that gain and offset (a calibration fault).
+    bridge reads with that gain and offset (a calibration fault); ``wheel_speed_lag_s``: every
+    wheel speed is the speed that long before its frame (a module that reads late).
 
     Returns ``{"path", "lost_samples", "start_ns", "dropped_frames"}``
     (``dropped_frames``: message -> frames removed by ``drop_frames``).
@@ -215,8 +217,8 @@ def write_recording(path, truth: Truth, *, latency_s: float = 0.1, seed: int = 0
     m_ws = wss.get_message_by_name("WSS_WheelSpeeds")
     if not no_wheel_speed:
         for tw in np.arange(0.003, t[-1], 0.01):
-            v = np.interp(tw, t, truth.speed_mps)
-            om = np.interp(tw, t, truth.omega_radps)
+            v = np.interp(tw - wheel_speed_lag_s, t, truth.speed_mps)
+            om = np.interp(tw - wheel_speed_lag_s, t, truth.omega_radps)
             if fronts_coupled:
                 v = om * truth.radius_m
             if wheel_speed_zero and wheel_speed_zero[0] <= tw < wheel_speed_zero[1]:

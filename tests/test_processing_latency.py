@@ -58,3 +58,44 @@ def test_lost_reference_samples_leave_a_finite_standard_error():
     est = estimate_latency(t_g, v_g, t_ref, v_ref)
     assert np.isfinite(est.stderr_s) and 0 < est.stderr_s < 0.01
     assert abs(est.latency_s - 0.12) < 3 * est.stderr_s + 0.002
+
+
+def test_wheel_speeds_read_later_than_the_gnss_speed(truth, tmp_path):
+    """A wheel-speed module that reads 60 ms late (a tone wheel reporting its last tooth period, a
+    gateway) while the GNSS speed arrives 20 ms late: the module's lag is found against the
+    transducer's wheel angle (its own clock, the forces' time base) and removed, so the GNSS latency
+    found is its own and slip belongs to the moment of the forces. Before, the latency was sought
+    from 0 against the late wheel speeds: none was found (-40 ms relative), or a wrong one."""
+    info = write_recording(tmp_path / "late_wheels.mcap", truth, latency_s=0.02, wheel_speed_lag_s=0.06, seed=7)
+    res = process_recording(info["path"])
+    lag = res.quality["wheel_speed_lag"]
+    assert lag["applied"] and lag["estimate_s"] == pytest.approx(0.06, abs=0.003)
+    assert any("read" in w and "late against the transducer's clock" in w for w in res.warnings)
+    assert res.gnss_latency_s == pytest.approx(0.02, abs=0.005)
+    assert res.quality["latency"]["reliable"], res.quality["latency"]["reasons"]
+    s = res.signals
+    m = s["valid"].to_numpy() & (s["phase"] == "accel").to_numpy()
+    err = s["slip"].to_numpy()[m] - np.interp(s["t_s"].to_numpy()[m], truth.t_s, truth.slip)
+    assert np.sqrt(np.mean(err ** 2)) < 0.01
+
+
+def test_no_module_lag_leaves_the_wheel_speeds_as_they_are(truth, tmp_path):
+    info = write_recording(tmp_path / "plain.mcap", truth, latency_s=0.1, seed=7)
+    lag = process_recording(info["path"]).quality["wheel_speed_lag"]
+    assert abs(lag["estimate_s"]) < 0.003 and not lag["applied"]
+
+
+def test_a_reference_read_later_than_the_gnss_speed_gives_a_negative_latency():
+    """Without the transducer's angle the wheel speeds cannot be put on its clock, and the GNSS
+    speed is aligned with them as they are: its delay relative to them may be negative."""
+    from wheelsoil.processing.timesync import estimate_latency
+
+    rng = np.random.default_rng(5)
+    t_ref = np.arange(0.0, 120.0, 0.01)
+    speed = lambda t: 5.0 + 2.0 * np.sin(0.5 * t) + np.sin(1.3 * t)  # noqa: E731
+    v_ref = speed(t_ref - 0.05)  # the reference reads 50 ms late
+    t_g = np.arange(0.0, 120.0, 0.05)
+    v_g = speed(t_g - 0.02) + rng.normal(0.0, 0.02, t_g.size)  # the GNSS 20 ms late
+    est = estimate_latency(t_g, v_g, t_ref, v_ref, min_latency_s=-0.1)
+    assert est.latency_s == pytest.approx(-0.03, abs=0.003) and not est.note
+    assert "edge" in estimate_latency(t_g, v_g, t_ref, v_ref).note  # searched from 0: an edge hit
