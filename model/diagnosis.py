@@ -1492,9 +1492,11 @@ def diagnose(
         sink_ev["significant"] = bool(np.isfinite(sink_ev["p_positive"]) and sink_ev["p_positive"] < ALPHA)
         sink_ev["z_range_m"] = [float(np.nanmin(zc)), float(np.nanmax(zc))]
     # forms
+    # forms of the named effect (or of slip sinkage, the candidate) that explain the data about as well: a
+    # Lyasko form against Vasil'ev's, a c re-fit against a phi re-fit (on one load c and phi act alike)
     forms_dist, tie_forms = None, []
-    if model in SLIP_SINKAGE_MODELS or (model and fits[model].effect == "slip_sinkage"):
-        tie_forms = [k for k in alternatives if fits[k].effect == "slip_sinkage"]
+    if model in fits and (fits[model].effect == "slip_sinkage" or effect == fits[model].effect):
+        tie_forms = [k for k in alternatives if fits[k].effect == fits[model].effect]
         forms_dist = not tie_forms
     # confidence
     confidence, creasons = _confidence(effect, model, fits, eprobs, consistency, data, tests_w, sink_ev, reasons,

@@ -45,6 +45,9 @@ def _invariants(d):
             assert (route is None) == (k in d.alternatives) and out["holds_against"][k] == route
         if any(d.holds_against.values()):
             assert "Named over the other supported causes" in d.summary
+        # forms of the named effect that explain the data as well are listed as such (c against phi)
+        same = [k for k in d.alternatives if d.fits[k].effect == d.effect]
+        assert d.indistinguishable_forms == same and d.forms_distinguishable == (not same)
     # every hypothesis tried is either supported or says why not, in the summary's words
     for k, m in out["models"].items():
         if k != "wong":
