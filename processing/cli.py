@@ -69,9 +69,20 @@ def register(subparsers) -> None:
                    "(a different value is reported as a conflict); 'wheelsoil fit --wheel-radius' uses it too")
     p.add_argument("--no-inertia", action="store_true",
                    help="do not compensate the wheel's inertia (drawbar_pull_n = Fx, torque_nm = My as measured)")
+    wheel_mass_args(p)
     p.add_argument("--progress", action="store_true", help="show a progress bar while decoding")
     p.add_argument("--overwrite", action="store_true", help="replace OUTPUT if it exists (default: keep it, refuse)")
     p.set_defaults(func=_cmd_process)
+
+
+def wheel_mass_args(p) -> None:
+    """Add ``--wheel-mass`` and ``--wheel-inertia`` to the parser ``p`` (``process`` and ``fit`` share them)."""
+    p.add_argument("--wheel-mass", type=float, default=None, metavar="KG",
+                   help="recordings: mass m_w [kg] of the wheel outboard of the transducer (rim + tyre) for the "
+                   "inertia compensation Dp = Fx + m_w dV/dt (default: the vehicle configuration's, 80 kg)")
+    p.add_argument("--wheel-inertia", type=float, default=None, metavar="KGM2",
+                   help="recordings: its polar moment of inertia I_w [kg m^2] for T = My - I_w domega/dt "
+                   "(default: the vehicle configuration's, 11.5 kg m^2); give both with another wheel")
 
 
 def _cmd_process(args) -> int:
@@ -87,7 +98,8 @@ def _cmd_process(args) -> int:
         raise ValueError(f"output {out} exists (--overwrite replaces it)")
     res = process_recording(args.recording, config=args.config, rate_hz=args.rate,
                             cutoff_hz=args.cutoff, progress=args.progress,
-                            wheel_radius_m=args.wheel_radius, inertia=not args.no_inertia)
+                            wheel_radius_m=args.wheel_radius, inertia=not args.no_inertia,
+                            wheel_mass_kg=args.wheel_mass, wheel_inertia_kgm2=args.wheel_inertia)
     tmp = out.with_name(f".{out.name}.part")  # a table is complete or absent, never half-written
     try:
         if suffix == ".csv":

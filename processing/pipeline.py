@@ -339,6 +339,22 @@ def check_wheel_radius(value, what: str = "wheel radius") -> float:
     return _check_length(value, what, "radius", RADIUS_RANGE_M)
 
 
+def _check_wheel_number(key: str, value) -> float:
+    """``value`` of ``wheel_mass_kg`` [kg] or ``wheel_inertia_kgm2`` [kg m^2] as a float, finite and within
+    the vehicle configuration's plausible range (``daq.config.VEHICLE_RANGES``); ``ValueError`` naming it."""
+    from wheelsoil.daq.config import VEHICLE_RANGES
+
+    lo, hi, unit, what = VEHICLE_RANGES[key]
+    flag = "--" + key.rsplit("_", 1)[0].replace("_", "-")
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{flag}: {value!r} is not a number ({what} [{unit}])") from None
+    if not (math.isfinite(v) and lo <= v <= hi):
+        raise ValueError(f"{flag}: {value!r} {unit} is not a plausible {what} ({lo:g}..{hi:g} {unit})")
+    return v
+
+
 def check_wheel_width(value, what: str = "wheel width") -> float:
     """``value`` as a float width [m], checked finite and within :data:`WIDTH_RANGE_M`.
 
@@ -861,7 +877,7 @@ LOG_SUFFIXES = (".log", ".asc", ".blf", ".trc")
 
 
 def _process_log(path: Path, *, config, rate_hz, cutoff_hz, progress, wheel_radius_m=None,
-                 inertia=True) -> "ProcessResult":
+                 inertia=True, **wheel) -> "ProcessResult":
     """Import a candump/ASC/BLF/TRC log into a temporary MCAP, then process that."""
     import tempfile
     import warnings as _w
@@ -876,7 +892,7 @@ def _process_log(path: Path, *, config, rate_hz, cutoff_hz, progress, wheel_radi
             _w.simplefilter("ignore", RuntimeWarning)  # listed in conv.warnings
             conv = import_log(path, mcap, config=cfg)
         res = process_recording(mcap, config=cfg, rate_hz=rate_hz, cutoff_hz=cutoff_hz, progress=progress,
-                                wheel_radius_m=wheel_radius_m, inertia=inertia)
+                                wheel_radius_m=wheel_radius_m, inertia=inertia, **wheel)
     res.warnings[:0] = [f"{path}: imported {sum(conv.frames.values())} frames "
                         f"({', '.join(f'{b}: {n}' for b, n in conv.frames.items())})"] + list(conv.warnings)
     return res
@@ -885,7 +901,8 @@ def _process_log(path: Path, *, config, rate_hz, cutoff_hz, progress, wheel_radi
 # --------------------------------------------------------------------------- main entry
 def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: float | None = None,
                       wheel_radius_m: float | None = None, inertia: bool = True,
-                      progress: bool = False) -> ProcessResult:
+                      progress: bool = False, wheel_mass_kg: float | None = None,
+                      wheel_inertia_kgm2: float | None = None) -> ProcessResult:
     """Decode, synchronise, filter and compute slip for one MCAP recording.
 
     Parameters: ``path`` ``.mcap`` recording (``wheelsoil log``/``import``), or a
@@ -901,8 +918,9 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
     must use the same r: ``wheelsoil fit --wheel-radius`` passes it here);
     ``inertia`` compensate the wheel assembly's inertia (hardware.md:
     ``Dp = Fx + m_w dV/dt``, ``T = My - I_w domega/dt``, ``m_w``/``I_w`` from
-    the configuration; default on); ``progress`` shows a tqdm bar over the
-    frames read.
+    the configuration, or ``wheel_mass_kg`` [kg] and ``wheel_inertia_kgm2``
+    [kg m^2] when given: a wheel other than the configured one; default on);
+    ``progress`` shows a tqdm bar over the frames read.
 
     Returns :class:`ProcessResult` (columns :data:`COLUMNS`, one row per grid
     point from the first to the last frame of the messages processing reads,
@@ -912,7 +930,7 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
     r = ``wheel_radius_m`` or ``config.wheel_radius_m``.
 
     Raises: ``OSError`` unreadable file; ``ValueError`` not an MCAP
-    recording, bad options (an implausible ``wheel_radius_m``), or a recording
+    recording, bad options (an implausible ``wheel_radius_m``, wheel mass or inertia), or a recording
     holding none of the configured messages (names what was looked for), parts
     of joined logs that overlap in time (names the message, bus and frames), or
     a run longer than :data:`~.timebase.MAX_GRID_ROWS` grid rows (memory bound). Missing parts (no GNSS, no wheel
@@ -935,12 +953,18 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
         cutoff = 0.4 * rate_hz
     if wheel_radius_m is not None:
         wheel_radius_m = check_wheel_radius(wheel_radius_m, "wheel_radius_m (--wheel-radius)")
+    wheel = {k: _check_wheel_number(k, v) for k, v in (("wheel_mass_kg", wheel_mass_kg),
+                                                      ("wheel_inertia_kgm2", wheel_inertia_kgm2)) if v is not None}
     if not path.exists():
         raise OSError(f"{path}: no such file")
     if path.suffix.lower() in LOG_SUFFIXES:
         return _process_log(path, config=config, rate_hz=rate_hz, cutoff_hz=cutoff_hz, progress=progress,
-                            wheel_radius_m=wheel_radius_m, inertia=inertia)
+                            wheel_radius_m=wheel_radius_m, inertia=inertia, **wheel)
     cfg, cfg_where = _resolve_config(path, config, warns)
+    if wheel:  # the wheel outboard of the transducer is not the configured one
+        import dataclasses as _dc
+
+        cfg = _dc.replace(cfg, **wheel)
     warns.extend(f"{cfg_where}: {n}" for n in (getattr(cfg, "notes", None) or []))
     cfg_r = float(cfg.wheel_radius_m)
     if wheel_radius_m is None:
@@ -1405,7 +1429,7 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
             "max_abs_torque_nm": float(np.max(np.abs(corr_t))) if corr_t.size else None,
             "method": "Dp = Fx + m_w dV/dt, T = My - I_w domega/dt; dV/dt and domega/dt are derivatives "
                       "(cubic spline) of V and omega after the same zero-phase low-pass as Fx and My",
-            "source": cfg_where,
+            "source": cfg_where if not wheel else f"{', '.join(k for k in wheel)} given, else {cfg_where}",
         }
     else:
         inertia_info = {"applied": False, "wheel_mass_kg": m_w, "wheel_inertia_kgm2": i_w,

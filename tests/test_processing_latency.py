@@ -99,3 +99,25 @@ def test_a_reference_read_later_than_the_gnss_speed_gives_a_negative_latency():
     est = estimate_latency(t_g, v_g, t_ref, v_ref, min_latency_s=-0.1)
     assert est.latency_s == pytest.approx(-0.03, abs=0.003) and not est.note
     assert "edge" in estimate_latency(t_g, v_g, t_ref, v_ref).note  # searched from 0: an edge hit
+
+
+def test_another_wheel_mass_and_inertia_given(truth, tmp_path):
+    """A wheel of 40 kg and 5 kg m^2 instead of the configured 80 kg and 11.5 kg m^2: with the
+    configured values the compensation adds (11.5 - 5) domega/dt of torque that is not there;
+    given (--wheel-mass, --wheel-inertia) the compensated torque is what the configured wheel's
+    recording of the same run (same noise) gives."""
+    light = write_recording(tmp_path / "light.mcap", truth, wheel_mass_kg=40.0, wheel_inertia_kgm2=5.0, seed=3)
+    usual = write_recording(tmp_path / "usual.mcap", truth, seed=3)
+    ref = process_recording(usual["path"]).signals
+    given = process_recording(light["path"], wheel_mass_kg=40.0, wheel_inertia_kgm2=5.0)
+    assumed = process_recording(light["path"]).signals
+    assert given.inertia["wheel_inertia_kgm2"] == 5.0 and "given" in given.inertia["source"]
+
+    def off(s, col):
+        d = s[col].to_numpy() - ref[col].to_numpy()
+        return np.sqrt(np.nanmean(d ** 2))
+
+    for col in ("torque_nm", "drawbar_pull_n"):
+        assert off(given.signals, col) < 0.15 * off(assumed, col), col  # (quantisation differs)
+    with pytest.raises(ValueError, match="--wheel-inertia"):
+        process_recording(light["path"], wheel_inertia_kgm2=-1.0)

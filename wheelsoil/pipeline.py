@@ -41,7 +41,8 @@ def _read_table(path: Path):
 
 
 def load_inputs(inputs, *, progress: bool = False, rate_hz: float = 100.0, cutoff_hz: float | None = None,
-                wheel_radius_m: float | None = None, inertia: bool = True):
+                wheel_radius_m: float | None = None, inertia: bool = True, wheel_mass_kg: float | None = None,
+                wheel_inertia_kgm2: float | None = None):
     """Read every input into one DataFrame for fitting.
 
     Returns ``(df, info)``: ``df`` has the fit columns plus ``run`` (input
@@ -53,8 +54,9 @@ def load_inputs(inputs, *, progress: bool = False, rate_hz: float = 100.0, cutof
     the report draws its overview and data quality from it) and ``tables``
     (per input the table's DataFrame, None for a recording).
 
-    ``rate_hz``, ``cutoff_hz``, ``wheel_radius_m`` (slip radius, Eq. 6) and
-    ``inertia`` are passed to ``process_recording`` for recordings.
+    ``rate_hz``, ``cutoff_hz``, ``wheel_radius_m`` (slip radius, Eq. 6),
+    ``inertia``, ``wheel_mass_kg`` and ``wheel_inertia_kgm2`` (the wheel outboard of the
+    transducer, when not the configured one) are passed to ``process_recording`` for recordings.
     ``wheel_radius_m`` [m], when given, is the radius recordings compute slip
     with (Eq. 6; ``process_recording(wheel_radius_m=...)``), so the fit's radius
     is the slip radius; radius conflicts (recordings whose configurations
@@ -81,7 +83,8 @@ def load_inputs(inputs, *, progress: bool = False, rate_hz: float = 100.0, cutof
             from wheelsoil.processing import process_recording
 
             res = process_recording(path, progress=progress, rate_hz=rate_hz, cutoff_hz=cutoff_hz,
-                                    wheel_radius_m=wheel_radius_m, inertia=inertia)
+                                    wheel_radius_m=wheel_radius_m, inertia=inertia, wheel_mass_kg=wheel_mass_kg,
+                                    wheel_inertia_kgm2=wheel_inertia_kgm2)
             df = res.signals.copy()
             df["cycle"] = res.cycle
             kinds.append("recording")
@@ -479,7 +482,7 @@ def _terrain_setting(terrain, ter, wheel) -> dict:
 
 
 def _equivalent_command(inputs, terrain, out_dir, *, wheel_radius, wheel_width, slip_min, models, fit_terrain,
-                        sinkage, rate_hz, cutoff_hz, inertia) -> list | None:
+                        sinkage, rate_hz, cutoff_hz, inertia, wheel_mass=None, wheel_inertia=None) -> list | None:
     """The ``wheelsoil fit`` argument list that repeats a library call (None: the terrain is an object)."""
     if not isinstance(terrain, str):
         return None
@@ -492,6 +495,10 @@ def _equivalent_command(inputs, terrain, out_dir, *, wheel_radius, wheel_width, 
         cmd += ["--wheel-radius", repr(float(wheel_radius))]
     if wheel_width is not None:
         cmd += ["--wheel-width", repr(float(wheel_width))]
+    if wheel_mass is not None:
+        cmd += ["--wheel-mass", repr(float(wheel_mass))]
+    if wheel_inertia is not None:
+        cmd += ["--wheel-inertia", repr(float(wheel_inertia))]
     if fit_terrain:
         cmd.append("--fit-terrain")
     if not inertia:
@@ -607,6 +614,8 @@ def run_fit(
     inertia: bool = True,
     progress: bool = False,
     command: list | None = None,
+    wheel_mass: float | None = None,
+    wheel_inertia: float | None = None,
 ) -> dict:
     """Fit Wong's model and the candidates to the inputs, diagnose, write the report.
 
@@ -629,6 +638,9 @@ def run_fit(
     rate_hz, cutoff_hz, inertia : processing of recordings (grid rate [Hz],
         low-pass cutoff [Hz], None = processing's default; wheel inertia
         compensation on/off).
+    wheel_mass, wheel_inertia : the wheel outboard of the transducer [kg], [kg m^2] for the
+        inertia compensation of recordings; default: the vehicle configuration's (80 kg,
+        11.5 kg m^2 in hardware.md's).
     progress : tqdm progress bars on stderr.
     command : the argument list that ran this (the CLI passes it); None: the
         equivalent ``wheelsoil fit`` command is recorded.
@@ -681,9 +693,11 @@ def run_fit(
     if command is None:
         command = _equivalent_command(inputs, terrain, out_dir, wheel_radius=wheel_radius, wheel_width=wheel_width,
                                       slip_min=slip_min, models=models, fit_terrain=fit_terrain, sinkage=sinkage,
-                                      rate_hz=rate_hz, cutoff_hz=cutoff_hz, inertia=inertia)
+                                      rate_hz=rate_hz, cutoff_hz=cutoff_hz, inertia=inertia,
+                                      wheel_mass=wheel_mass, wheel_inertia=wheel_inertia)
     df, info = load_inputs(inputs, progress=progress, rate_hz=rate_hz, cutoff_hz=cutoff_hz,
-                           wheel_radius_m=wheel_radius, inertia=inertia)
+                           wheel_radius_m=wheel_radius, inertia=inertia, wheel_mass_kg=wheel_mass,
+                           wheel_inertia_kgm2=wheel_inertia)
     recording = "recording" in info["kinds"]
     stated = "vehicle configuration" if recording else info["table_wheel_source"]
     r = next(v for v in (wheel_radius, info["wheel_radius_m"], DEFAULT_WHEEL.radius) if v is not None)
@@ -701,6 +715,8 @@ def run_fit(
         "rate_hz": float(rate_hz),
         "cutoff_hz": None if cutoff_hz is None else float(cutoff_hz),
         "inertia": bool(inertia),
+        "wheel_mass_kg": None if wheel_mass is None else float(wheel_mass),  # None: the vehicle configuration's
+        "wheel_inertia_kgm2": None if wheel_inertia is None else float(wheel_inertia),
         "wheel_radius_m": wheel.radius,
         "wheel_width_m": wheel.width,
     }
@@ -777,6 +793,8 @@ def _handler(args) -> int:
         rate_hz=args.rate,
         cutoff_hz=args.cutoff,
         inertia=not args.no_inertia,
+        wheel_mass=args.wheel_mass,
+        wheel_inertia=args.wheel_inertia,
         progress=not args.quiet,
         command=["wheelsoil", *getattr(args, "argv", None)] if getattr(args, "argv", None) is not None else None,
     )
@@ -877,5 +895,8 @@ def register(subparsers) -> None:
                    help="recordings: zero-phase low-pass cutoff [Hz] (default: processing's 5 Hz)")
     p.add_argument("--no-inertia", action="store_true",
                    help="recordings: do not compensate the wheel's inertia (Dp = Fx, T = My as measured)")
+    from wheelsoil.processing.cli import wheel_mass_args
+
+    wheel_mass_args(p)
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bars")
     p.set_defaults(func=_handler)
