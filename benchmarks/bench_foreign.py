@@ -1,6 +1,8 @@
-"""The diagnosis on runs of three independent generators (``benchmarks/foreign/``, ``foreign2/``, ``foreign3/``).
+"""The diagnosis on runs of four independent generators (``benchmarks/foreign/``, ``foreign2/``, ``foreign3/``,
+``foreign4/``).
 
-    python benchmarks/bench_foreign.py [--generator foreign|foreign2 [--stress|--round2]|foreign3 [--round2]] [--only a1,v15] [--keep DIR]
+    python benchmarks/bench_foreign.py [--generator foreign|foreign2 [--stress|--round2]|foreign3 [--round2]|foreign4]
+                                       [--only a1,v15] [--keep DIR]
 
 Each generator was written from the hardware contract, the DBC files and the paper alone, by a
 session that did not read wheelsoil's code (nor, for the second, the first generator), and imports
@@ -28,7 +30,11 @@ a tone-wheel speed module, clocks drifting, the logs written as Vector ASC, BLF 
 fitted directly (``wheelsoil fit run.asc --terrain clay``). ``--round2`` is a generator's second round:
 for ``foreign2`` 25 cases on fresh seeds 501-525, every listed effect at a clear size and the causes on no
 list between their earlier two sizes; for ``foreign3`` 30 runs on seeds 631-660 (``foreign3/round2.json``);
-each written down before any of its runs was run. Prints one row per case (verdict, latency found against the truth, its method and
+each written down before any of its runs was run. ``foreign4`` (30 runs, ``foreign4/round1.json``, seeds
+701-730): a clay loam of the generator's own lab values (``foreign4/lab_soil.toml``), a 0.41 x 0.26 m wheel of
+62 kg and 6.4 kg m^2, launches from rest and slip staircases held against the other axle's brakes, fitted
+as a user with that wheel would (``wheelsoil fit run.asc --terrain foreign4/lab_soil.toml --wheel-radius 0.41
+--wheel-width 0.26 --wheel-mass 62 --wheel-inertia 6.4``). Prints one row per case (verdict, latency found against the truth, its method and
 reliability) and the totals, and the wall time.
 """
 
@@ -46,6 +52,7 @@ from pathlib import Path
 GEN = Path(__file__).resolve().parent / "foreign" / "gen.py"
 GEN2 = Path(__file__).resolve().parent / "foreign2" / "gen.py"
 GEN3 = Path(__file__).resolve().parent / "foreign3" / "gen.py"
+GEN4 = Path(__file__).resolve().parent / "foreign4" / "gen.py"
 
 #: name, generator case, fronts, seed, latency [s], effect options
 CASES = [
@@ -119,6 +126,9 @@ ROUND3 = json.loads((GEN3.parent / "round1.json").read_text())
 #: project after the first was scored and before any of these was run: sizes between about half and the full
 #: first round's, the terrain mismatches' other signs, drifts in c and k (linear and a step from 35 %)
 ROUND3B = json.loads((GEN3.parent / "round2.json").read_text())
+#: the fifth generator's first round (``--generator foreign4``, ``foreign4/round1.json``): seeds 701-730, written
+#: down by its author before any run was generated
+ROUND4 = json.loads((GEN4.parent / "round1.json").read_text())
 NAMED = ("slip_sinkage", "terrain_mismatch", "stress_distribution", "terrain_drift")
 
 
@@ -165,8 +175,21 @@ def run_case3(name: str, case: str, seed: int, params: dict, fmt: str, out: Path
                          acceptable=truth["acceptable_verdicts"])
 
 
+def run_case4(name: str, case: str, seed: int, params: dict, fmt: str, out: Path) -> dict:
+    """Generate one run of the fifth generator (``foreign4``: its own clay loam and wheel) and fit the log with
+    its lab terrain file and wheel (radius, width, mass and inertia from the run's truth file, as the user who
+    mounted that wheel knows them); returns a row dict as :func:`run_case`."""
+    args = [case, "--seed", str(seed), "--format", fmt, *[a for k, v in params.items() for a in ("--p", f"{k}={json.dumps(v)}")]]
+    truth = _run_generator(GEN4, args, name, out)
+    wheel = {"wheel_radius": truth["wheel_radius_m"], "wheel_width": truth["wheel_width_m"],
+             "wheel_mass": truth["wheel_mass_kg"], "wheel_inertia": truth["wheel_inertia_kgm2"]}
+    return fit_and_score(name, truth, out, "free", log=out / f"{name}.{fmt}",
+                         terrain=str(GEN4.parent / truth["terrain_toml"]), acceptable=truth["acceptable_verdicts"],
+                         wheel=wheel)
+
+
 def fit_and_score(name: str, truth: dict, out: Path, fronts: str, log: Path | None = None,
-                  terrain: str = "sand", acceptable: list | None = None) -> dict:
+                  terrain: str = "sand", acceptable: list | None = None, wheel: dict | None = None) -> dict:
     """Fit ``log`` (default: ``out/NAME.log`` imported to MCAP first) on ``terrain`` and score the verdict
     against ``acceptable`` (default: the verdict of ``truth``'s effect; a cause on no list: ``unexplained``)."""
     from wheelsoil.daq.convert import import_log
@@ -175,7 +198,7 @@ def fit_and_score(name: str, truth: dict, out: Path, fronts: str, log: Path | No
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         rec = log or import_log(out / f"{name}.log", out / f"{name}.mcap", overwrite=True).output
-        rep = run_fit([rec], terrain, out / f"rep_{name}")
+        rep = run_fit([rec], terrain, out / f"rep_{name}", **(wheel or {}))
     d = rep["diagnosis"]
     ok = truth["effect"] if truth["effect"] in ("none", *NAMED) else "unexplained"
     acceptable = acceptable or [ok]
@@ -193,10 +216,10 @@ def fit_and_score(name: str, truth: dict, out: Path, fronts: str, log: Path | No
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--generator", choices=("foreign", "foreign2", "foreign3"), default="foreign",
+    ap.add_argument("--generator", choices=("foreign", "foreign2", "foreign3", "foreign4"), default="foreign",
                     help="which independent generator's cases (default: foreign, 14 cases; foreign2: 36; foreign3: "
                          "its first round, 30 runs on the paper's clay from a towed vehicle, logs in ASC, BLF and "
-                         "candump format fitted directly)")
+                         "candump format fitted directly; foreign4: 30 runs of its own soil and wheel)")
     ap.add_argument("--stress", action="store_true",
                     help="with --generator foreign2: 24 runs of eight of its cases as short runs (4 cycles), with 3x "
                          "the sensor noise and with 3x the soil variability, instead of its 36 cases")
@@ -207,7 +230,7 @@ def main() -> None:
     ap.add_argument("--only", default="", help="comma list of case names (default: all)")
     ap.add_argument("--keep", type=Path, default=None, help="keep logs, recordings and reports here")
     args = ap.parse_args()
-    if args.stress and args.generator != "foreign2" or args.round2 and args.generator == "foreign":
+    if args.stress and args.generator != "foreign2" or args.round2 and args.generator in ("foreign", "foreign4"):
         ap.error("--stress needs --generator foreign2, --round2 foreign2 or foreign3")
     if args.stress and args.round2:
         ap.error("choose one of --stress and --round2")
@@ -220,6 +243,8 @@ def main() -> None:
         cases = CASES
     elif args.generator == "foreign3":
         cases = [(r["name"], r["case"], r["seed"], r["params"], r["format"]) for r in (ROUND3B if args.round2 else ROUND3)]
+    elif args.generator == "foreign4":
+        cases = [(r["name"], r["case"], r["seed"], r["params"], r["format"]) for r in ROUND4]
     else:
         cases = STRESS if args.stress else ROUND2 if args.round2 else CASES2
     w = max(len(c[0]) for c in cases)
@@ -229,7 +254,8 @@ def main() -> None:
             continue
         try:
             r = run_case(*c, base) if args.generator == "foreign" else run_case3(*c, base) if \
-                args.generator == "foreign3" else run_case2(*c[:5], base, *c[5:])
+                args.generator == "foreign3" else run_case4(*c, base) if args.generator == "foreign4" else \
+                run_case2(*c[:5], base, *c[5:])
         except subprocess.CalledProcessError as e:  # the generator refused (e.g. a run the vehicle cannot drive)
             print(f"{c[0]:<{w}} generator failed: {e.stderr.decode(errors='replace').strip().splitlines()[-1:]}")
             continue

@@ -130,7 +130,11 @@ LATENCY_SYSTEMATIC_S = {"wheel_reference": 0.0, "traction": 0.015, "dynamics": 0
 FREE_ROLLING_GAIN_TOL = 0.05
 #: ... and a residual RMS at most this fraction of the RMS GNSS speed (a driven wheel in a slip
 #: sweep, r*omega = V/(1 - s), leaves tens of per cent): then a slip-traction estimate that
-#: disagrees is the one that fails (the torque is not a static function of slip and load there).
+#: disagrees is the one that fails (the torque is not a static function of slip and load there),
+#: provided the wheel reference is itself precise (:data:`LATENCY_RELIABLE_SE_S`): fronts braked now
+#: and then while the rears hold a slip (an independent generator's staircases) still fit with a
+#: small residual overall, but their lag is poorly determined (300 +- 32 ms for a true 151 ms), and
+#: such an estimate is no ground to throw out a precise slip-traction one.
 FREE_ROLLING_RESID_REL = 0.05
 #: Two estimates agree when they differ by at most this many combined (total) standard errors.
 LATENCY_AGREE_SIGMAS = 2.0
@@ -511,8 +515,8 @@ def _choose_latency(cands: dict, errs: dict, *, coupled: bool, wheel_ref_label: 
     other wheel) unless the dynamics estimate sides with it: its wheels then do not
     roll freely (the measured wheel's own torque shows whether it does); but a wheel
     reference whose own fit shows it rolling freely (:data:`FREE_ROLLING_GAIN_TOL`,
-    :data:`FREE_ROLLING_RESID_REL`) makes a disagreeing slip-traction estimate unusable
-    instead. The choice: the wheel reference if usable and precise (total standard error
+    :data:`FREE_ROLLING_RESID_REL`) and is precise (:data:`LATENCY_RELIABLE_SE_S`) makes a
+    disagreeing slip-traction estimate unusable instead. The choice: the wheel reference if usable and precise (total standard error
     at most :data:`LATENCY_RELIABLE_SE_S`; a coasting wheel whose deceleration hardly
     changes tells little), else the inverse-variance mean of agreeing traction and
     dynamics estimates, else the usable one with the smaller standard error, else
@@ -557,7 +561,8 @@ def _choose_latency(cands: dict, errs: dict, *, coupled: bool, wheel_ref_label: 
                             "n": 0, "method": _LATENCY_METHODS[k]})
     wr, tr, dy = usable.get("wheel_reference"), usable.get("traction"), usable.get("dynamics")
     rolls_freely = (wr is not None and speed_rms_mps is not None and abs(wr.gain - 1.0) <= FREE_ROLLING_GAIN_TOL
-                    and wr.residual_rms_mps <= FREE_ROLLING_RESID_REL * speed_rms_mps)
+                    and wr.residual_rms_mps <= FREE_ROLLING_RESID_REL * speed_rms_mps
+                    and wr.stderr_s <= LATENCY_RELIABLE_SE_S)
     if rolls_freely and tr is not None and not _agree(wr, tr):
         info["traction"]["usable"] = False
         info["traction"]["note"] = (
