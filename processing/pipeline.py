@@ -11,7 +11,9 @@ Steps (each in its own module):
 3. clocks: host->GPS time mapping; the wheel-speed module's lag behind the
    transducer's clock, from the WFT's wheel angle (:func:`_wheel_speed_lag`;
    removed from the wheel speeds' times when determined and over 5 ms, so
-   slip belongs to the moment of the forces); and the GNSS latency (:mod:`.timesync`)
+   slip belongs to the moment of the forces; from the fronts' too when that
+   makes the GNSS latency against them agree better with the slip-traction
+   estimate); and the GNSS latency (:mod:`.timesync`)
    from up to three estimators: the free-rolling front wheels' r*omega (or,
    when none is logged or the 4x4 drives them, the measured wheel where it
    transmits no torque: coasting, another axle braking), the measured wheel's
@@ -1360,42 +1362,6 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
         # slip-traction consistency, and the vehicle dynamics; combined in _choose_latency
         cands: dict[str, LatencyEstimate] = {}
         errs: dict[str, str] = {}
-        ref_t = ref_v = usable = None
-        wheel_ref_label = ""
-        f_series = [(s[0] - (wss_shift_ns if f.message == ws_ref.message else 0), s[1])
-                    for f, s in ((f, get(f, measured=True)) for f in fronts) if s is not None and s[0].shape[0] >= 3]
-        coupled = False
-        if f_series:
-            ft = f_series[0][0]
-            with _w.catch_warnings():
-                _w.simplefilter("ignore", RuntimeWarning)  # every front wheel lost at a sample: NaN
-                fv = np.nanmean(np.vstack([np.interp(ft, s[0], s[1]) for s in f_series]), axis=0) * r
-            coupled = wss_t is not None and _fronts_coupled(ft, fv, wss_t, got[1] * r)
-        front_ref = bool(f_series) and not coupled
-        if front_ref:
-            ref_t, ref_v = rel_s(ft), fv
-            wheel_ref_label = "front wheels r*omega (" + ", ".join(f.signal for f in fronts) + ")"
-        elif wss_t is not None and np.isfinite(torque).any():
-            # no front wheel rolls freely (none logged, or the 4x4 drives them): the measured wheel
-            # where it transmits no torque does (coasting, another axle braking); its transducer
-            # reads a brake torque too, so no deceleration limit is needed
-            ref_t, ref_v = wss_rel, got[1] * r
-            tq = np.interp(ref_t, t_grid, np.nan_to_num(torque, nan=1e9))
-            usable = _sustained(np.abs(tq) < FREE_ROLLING_TORQUE_NM, ref_t, FREE_ROLLING_HOLD_S)
-            wheel_ref_label = f"measured wheel r*omega where |T| < {FREE_ROLLING_TORQUE_NM:g} N m"
-        if ref_t is not None:
-            _, ref_period = _time_gaps("ref", (ref_t * 1e9).astype(np.int64))
-            ref_f = filter_to_grid(ref_t, ref_v, ref_period, ref_t, LATENCY_REF_CUTOFF_HZ)
-            if front_ref:  # a braked front wheel may skid
-                usable = np.gradient(np.nan_to_num(ref_f), ref_t) > -LATENCY_MAX_DECEL_MPS2
-            try:
-                cands["wheel_reference"] = estimate_latency(g_rel, g_v, ref_t, ref_f, usable_ref=usable,
-                                                            max_latency_s=LATENCY_MAX_S,
-                                                            min_latency_s=LATENCY_MIN_S)
-            except ValueError as exc:
-                errs["wheel_reference"] = str(exc)
-        else:
-            errs["wheel_reference"] = "no free-rolling wheel speed to compare with"
         if np.isfinite(omega).any() and np.isfinite(torque).any() and np.isfinite(load).any():
             with np.errstate(invalid="ignore", divide="ignore"):
                 coeff = np.where(load > LATENCY_MIN_LOAD_N, torque / (r * load), np.nan)
@@ -1407,6 +1373,64 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
                 errs["traction"] = str(exc)
         else:
             errs["traction"] = "needs the measured wheel's speed, torque and load"
+        f_raw = [(f, s) for f, s in ((f, get(f, measured=True)) for f in fronts)
+                 if s is not None and s[0].shape[0] >= 3]
+        # the module's lag was measured on the measured wheel: its front channels share it (a common
+        # delay: a gateway, the frame's cycle) or not (a filter in one sensor, a tone wheel timed per
+        # tooth); both are tried when the fronts are in the module's message, and the one whose
+        # GNSS latency agrees better with the slip-traction estimate (which needs no front wheel) is kept
+        shared = [wss_shift_ns] + ([0] if wss_shift_ns and any(f.message == ws_ref.message for f, _ in f_raw) else [])
+        tr0 = cands.get("traction")
+        best = None
+        for shift in shared:
+            ref_t = ref_v = usable = None
+            wheel_ref_label = ""
+            f_series = [(s[0] - (shift if f.message == ws_ref.message else 0), s[1]) for f, s in f_raw]
+            coupled = False
+            if f_series:
+                ft = f_series[0][0]
+                with _w.catch_warnings():
+                    _w.simplefilter("ignore", RuntimeWarning)  # every front wheel lost at a sample: NaN
+                    fv = np.nanmean(np.vstack([np.interp(ft, s[0], s[1]) for s in f_series]), axis=0) * r
+                coupled = wss_t is not None and _fronts_coupled(ft, fv, wss_t, got[1] * r)
+            front_ref = bool(f_series) and not coupled
+            if front_ref:
+                ref_t, ref_v = rel_s(ft), fv
+                wheel_ref_label = "front wheels r*omega (" + ", ".join(f.signal for f, _ in f_raw) + ")"
+            elif wss_t is not None and np.isfinite(torque).any():
+                # no front wheel rolls freely (none logged, or the 4x4 drives them): the measured wheel
+                # where it transmits no torque does (coasting, another axle braking); its transducer
+                # reads a brake torque too, so no deceleration limit is needed
+                ref_t, ref_v = wss_rel, got[1] * r
+                tq = np.interp(ref_t, t_grid, np.nan_to_num(torque, nan=1e9))
+                usable = _sustained(np.abs(tq) < FREE_ROLLING_TORQUE_NM, ref_t, FREE_ROLLING_HOLD_S)
+                wheel_ref_label = f"measured wheel r*omega where |T| < {FREE_ROLLING_TORQUE_NM:g} N m"
+            est: LatencyEstimate | str = "no free-rolling wheel speed to compare with"
+            if ref_t is not None:
+                _, ref_period = _time_gaps("ref", (ref_t * 1e9).astype(np.int64))
+                ref_f = filter_to_grid(ref_t, ref_v, ref_period, ref_t, LATENCY_REF_CUTOFF_HZ)
+                if front_ref:  # a braked front wheel may skid
+                    usable = np.gradient(np.nan_to_num(ref_f), ref_t) > -LATENCY_MAX_DECEL_MPS2
+                try:
+                    est = estimate_latency(g_rel, g_v, ref_t, ref_f, usable_ref=usable,
+                                           max_latency_s=LATENCY_MAX_S, min_latency_s=LATENCY_MIN_S)
+                except ValueError as exc:
+                    est = str(exc)
+            off = (abs(est.latency_s - tr0.latency_s) if isinstance(est, LatencyEstimate) and tr0 is not None
+                   and not tr0.note else math.inf)
+            if best is None or off < best[0]:
+                best = (off, shift, est, coupled, front_ref, wheel_ref_label)
+        _, shift, est, coupled, front_ref, wheel_ref_label = best
+        if len(shared) > 1:
+            quality["wheel_speed_lag"]["fronts_shifted"] = bool(shift)
+            if not shift:
+                warns.append("the front wheels' speeds are not as late as the measured wheel's (the GNSS latency "
+                             "against them agrees with the slip-traction estimate only unshifted): only the "
+                             "measured wheel's times were moved back")
+        if isinstance(est, LatencyEstimate):
+            cands["wheel_reference"] = est
+        else:
+            errs["wheel_reference"] = est
         alt = _force_latency(g_rel, g_v, g_period, t_grid, fx_f, min(cutoff, 0.4 / g_period))
         if alt is not None:
             cands["dynamics"] = alt

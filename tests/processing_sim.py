@@ -128,7 +128,7 @@ def write_recording(path, truth: Truth, *, latency_s: float = 0.1, seed: int = 0
                     config=None, ts_edit=None, drop_wft_runs=(), drop_frames: dict | None = None,
                     burst_s: float = 0.0, fronts_coupled: bool = False, at_max: dict | None = None,
                     fx_w_gain: float = 1.0, fx_w_offset_n: float = 0.0,
-                    wheel_speed_lag_s: float = 0.0) -> dict:
+                    wheel_speed_lag_s: float = 0.0, rl_lag_s: float = 0.0) -> dict:
     """Encode ``truth`` as frames and write an MCAP recording.
 
     ``drop_wft_bursts``: that many runs of 1..12 lost WFT samples;
@@ -153,7 +153,8 @@ def write_recording(path, truth: Truth, *, latency_s: float = 0.1, seed: int = 0
     ``Fx_w`` or ``WheelSpeed_RL`` reads its DBC maximum in that window (a clipped sensor, or
     the all-ones "not available" code); ``fx_w_gain``, ``fx_w_offset_n``: the rotating Fx_w
     bridge reads with that gain and offset (a calibration fault); ``wheel_speed_lag_s``: every
-    wheel speed is the speed that long before its frame (a module that reads late).
+    wheel speed is the speed that long before its frame (a module that reads late); ``rl_lag_s``:
+    the measured (left-rear) wheel's channel alone lags that much more (a filter in its sensor).
 
     Returns ``{"path", "lost_samples", "start_ns", "dropped_frames"}``
     (``dropped_frames``: message -> frames removed by ``drop_frames``).
@@ -218,7 +219,7 @@ def write_recording(path, truth: Truth, *, latency_s: float = 0.1, seed: int = 0
     if not no_wheel_speed:
         for tw in np.arange(0.003, t[-1], 0.01):
             v = np.interp(tw - wheel_speed_lag_s, t, truth.speed_mps)
-            om = np.interp(tw - wheel_speed_lag_s, t, truth.omega_radps)
+            om = np.interp(tw - wheel_speed_lag_s - rl_lag_s, t, truth.omega_radps)
             if fronts_coupled:
                 v = om * truth.radius_m
             if wheel_speed_zero and wheel_speed_zero[0] <= tw < wheel_speed_zero[1]:

@@ -69,7 +69,7 @@ def test_wheel_speeds_read_later_than_the_gnss_speed(truth, tmp_path):
     info = write_recording(tmp_path / "late_wheels.mcap", truth, latency_s=0.02, wheel_speed_lag_s=0.06, seed=7)
     res = process_recording(info["path"])
     lag = res.quality["wheel_speed_lag"]
-    assert lag["applied"] and lag["estimate_s"] == pytest.approx(0.06, abs=0.003)
+    assert lag["applied"] and lag["estimate_s"] == pytest.approx(0.06, abs=0.003) and lag["fronts_shifted"]
     assert any("read" in w and "late against the transducer's clock" in w for w in res.warnings)
     assert res.gnss_latency_s == pytest.approx(0.02, abs=0.005)
     assert res.quality["latency"]["reliable"], res.quality["latency"]["reasons"]
@@ -121,3 +121,18 @@ def test_another_wheel_mass_and_inertia_given(truth, tmp_path):
         assert off(given.signals, col) < 0.15 * off(assumed, col), col  # (quantisation differs)
     with pytest.raises(ValueError, match="--wheel-inertia"):
         process_recording(light["path"], wheel_inertia_kgm2=-1.0)
+
+
+def test_a_lag_of_the_measured_wheels_channel_alone_leaves_the_fronts(truth, tmp_path):
+    """Only the measured wheel's channel lags (100 ms: a filter in its sensor): its times are moved
+    back, the fronts' are not (shifting them too would put the GNSS latency 100 ms off and make it
+    disagree with the slip-traction estimate, which needs no front wheel)."""
+    info = write_recording(tmp_path / "late_rl.mcap", truth, latency_s=0.12, rl_lag_s=0.1, seed=7)
+    res = process_recording(info["path"])
+    lag = res.quality["wheel_speed_lag"]
+    assert lag["applied"] and lag["estimate_s"] == pytest.approx(0.1, abs=0.003) and not lag["fronts_shifted"]
+    assert res.gnss_latency_s == pytest.approx(0.12, abs=0.005) and res.quality["latency"]["reliable"]
+    s = res.signals
+    m = s["valid"].to_numpy() & (s["phase"] == "accel").to_numpy()
+    err = s["slip"].to_numpy()[m] - np.interp(s["t_s"].to_numpy()[m], truth.t_s, truth.slip)
+    assert np.sqrt(np.mean(err ** 2)) < 0.01
