@@ -673,3 +673,18 @@ def test_a_patch_change_a_short_run_cannot_confirm_is_reported_with_its_numbers(
         r = d.paired[top]["drawbar_pull_n"]
         assert r["cv_rmse"] < r["wong_cv_rmse"]
         assert "a run with more accelerate cycles would tell" in d.summary
+
+
+def test_a_lab_value_far_beyond_its_stated_uncertainty_is_still_a_terrain_mismatch():
+    """A field soil far from the lab sample in one value: sand k_eq x3, about 3.7 of the lab's
+    stated standard deviations (30 %) of its logarithm. The one-value re-fit was refused as a prior-data conflict
+    and the run left `unexplained`; a mismatch of one lab value is what the cause says, and the
+    report says how far the value lies from the lab's."""
+    k_eq = SAND.kc / W.width + SAND.kphi
+    truth = SAND.replace(kc=SAND.kc * 3.0, kphi=SAND.kphi * 3.0)
+    d = diagnose(_table(truth=truth, seed=2), SAND, W)
+    _invariants(d)
+    assert d.effect == "terrain_mismatch" and d.model == "terrain_k_eq"
+    assert abs(d.fits[d.model].params["k_eq"] - 3.0 * k_eq) < abs(d.fits[d.model].params["k_eq"] - k_eq)
+    assert d.fits[d.model].chi2_prior > 10.83  # beyond the 0.999 quantile on one parameter
+    assert any("far from the lab value" in r for r in d.confidence_reasons)
