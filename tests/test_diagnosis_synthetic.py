@@ -534,7 +534,7 @@ def test_a_named_model_outweighed_by_a_turned_down_sibling_is_low():
     from wheelsoil.model.diagnosis import BF_ALTERNATIVE, MIN_UNITS_HIGH, _confidence
 
     def conf(p_sibling, p_named):
-        fits = {k: SimpleNamespace(effect="terrain_mismatch", cv={}) for k in ("terrain_n", "terrain_k_eq")}
+        fits = {k: SimpleNamespace(effect="terrain_mismatch", cv={}, prior={}, chi2_prior=0.0) for k in ("terrain_n", "terrain_k_eq")}
         paired = {"terrain_n": {"drawbar_pull_n": {"wong_cv_rmse": 46.0, "cv_rmse": 35.0, "p_improve": 0.003,
                                                    "folds": 13}}}
         probs = {"terrain_n": p_named, "terrain_k_eq": p_sibling}
@@ -557,7 +557,7 @@ def test_a_named_cause_is_high_only_when_its_look_alikes_are_excluded():
     from wheelsoil.model.diagnosis import MIN_UNITS_HIGH, _confidence
 
     def conf(effect, model, sink_ev):
-        fits = {model: SimpleNamespace(effect=effect, cv={})}
+        fits = {model: SimpleNamespace(effect=effect, cv={}, prior={}, chi2_prior=0.0)}
         paired = {model: {"drawbar_pull_n": {"wong_cv_rmse": 46.0, "cv_rmse": 35.0, "p_improve": 0.003, "folds": 17}}}
         return _confidence(effect, model, fits, {effect: 0.999}, {}, SimpleNamespace(n_units=MIN_UNITS_HIGH + 50),
                            {}, sink_ev, [], [model], {model: 0.999}, paired, ["drawbar_pull_n"])
