@@ -19,11 +19,18 @@ def _load(gen_path, name):
 
     spec = importlib.util.spec_from_file_location(name, gen_path)
     gen = importlib.util.module_from_spec(spec)
+    # the generators' sibling modules share names (terra.py in foreign3/ and foreign4/): each import
+    # must find its own folder's, not one another generator's loaded first
+    own = {f.stem for f in gen_path.parent.glob("*.py")}
+    saved = {m: sys.modules.pop(m) for m in list(sys.modules) if m in own}
     sys.path.insert(0, str(gen_path.parent))
     try:
         spec.loader.exec_module(gen)
     finally:
         sys.path.remove(str(gen_path.parent))
+        for m in own:
+            sys.modules.pop(m, None)
+        sys.modules.update(saved)
     return gen
 
 
