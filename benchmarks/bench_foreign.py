@@ -165,12 +165,17 @@ def run_case2(name: str, case: str, seed: int, latency_s: float, params: dict, o
     return fit_and_score(name, generate2(name, case, seed, latency_s, params, out, options), out, "locked")
 
 
+def _round_args(case: str, seed: int, params: dict, fmt: str) -> list:
+    """The command line of a round file's run for the fourth and fifth generators (the same CLI)."""
+    return [case, "--seed", str(seed), "--format", fmt,
+            *[a for k, v in params.items() for a in ("--p", f"{k}={json.dumps(v)}")]]
+
+
 def run_case3(name: str, case: str, seed: int, params: dict, fmt: str, out: Path) -> dict:
     """Generate one run of the fourth generator (``foreign3``: the paper's clay, a towed vehicle, a CAN log
     in ``fmt``: asc, blf or log) and fit the log as a user would (``wheelsoil fit NAME.asc --terrain
     clay``); returns a row dict as :func:`run_case`."""
-    args = [case, "--seed", str(seed), "--format", fmt, *[a for k, v in params.items() for a in ("--p", f"{k}={json.dumps(v)}")]]
-    truth = _run_generator(GEN3, args, name, out)
+    truth = _run_generator(GEN3, _round_args(case, seed, params, fmt), name, out)
     return fit_and_score(name, truth, out, "free", log=out / f"{name}.{fmt}", terrain="clay",
                          acceptable=truth["acceptable_verdicts"])
 
@@ -179,8 +184,7 @@ def run_case4(name: str, case: str, seed: int, params: dict, fmt: str, out: Path
     """Generate one run of the fifth generator (``foreign4``: its own clay loam and wheel) and fit the log with
     its lab terrain file and wheel (radius, width, mass and inertia from the run's truth file, as the user who
     mounted that wheel knows them); returns a row dict as :func:`run_case`."""
-    args = [case, "--seed", str(seed), "--format", fmt, *[a for k, v in params.items() for a in ("--p", f"{k}={json.dumps(v)}")]]
-    truth = _run_generator(GEN4, args, name, out)
+    truth = _run_generator(GEN4, _round_args(case, seed, params, fmt), name, out)
     wheel = {"wheel_radius": truth["wheel_radius_m"], "wheel_width": truth["wheel_width_m"],
              "wheel_mass": truth["wheel_mass_kg"], "wheel_inertia": truth["wheel_inertia_kgm2"]}
     return fit_and_score(name, truth, out, "free", log=out / f"{name}.{fmt}",

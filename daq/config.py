@@ -262,7 +262,7 @@ def vehicle_config_from_dict(doc: Mapping, *, source: Path | None = None, text: 
                              "for the inertia compensation")
             nums[key] = default
             continue
-        nums[key] = _vehicle_number(where, key, veh[key])
+        nums[key] = check_vehicle_number(where, key, veh[key])
 
     buses: dict[str, list[Path]] = {}
     bus_options: dict[str, dict] = {}
@@ -354,26 +354,29 @@ def vehicle_config_from_dict(doc: Mapping, *, source: Path | None = None, text: 
     return cfg
 
 
-def _vehicle_number(where: str, key: str, raw) -> float:
-    """One ``[vehicle]`` number, checked to be finite and within :data:`VEHICLE_RANGES`.
+def check_vehicle_number(where: str, key: str, raw, name: str | None = None) -> float:
+    """One ``[vehicle]`` number (``key`` of :data:`VEHICLE_RANGES`), checked to be finite and within
+    its range; returns it as a float [its unit].
 
-    Raises ``ValueError`` naming the file, the key and the value (with a hint when
-    the value looks like millimetres or grams).
+    Raises ``ValueError`` naming ``where`` (the file, or a command-line option), the value as
+    ``name`` (default ``[vehicle] <key>``) and the range (with a hint when the value looks like
+    millimetres or is negative).
     """
+    name = name or f"[vehicle] {key}"
     lo, hi, unit, what = VEHICLE_RANGES[key]
     try:
         if isinstance(raw, bool):
             raise TypeError
         val = float(raw)
     except (TypeError, ValueError):
-        raise ValueError(f"{where}: [vehicle] {key} = {raw!r}: must be a number in {unit}") from None
+        raise ValueError(f"{where}: {name} = {raw!r}: must be a number in {unit}") from None
     if not (math.isfinite(val) and lo <= val <= hi):
         hint = ""
         if math.isfinite(val) and unit == "m" and lo * 1e3 <= val <= hi * 1e3:
             hint = "; did you give mm?"
         elif math.isfinite(val) and val < 0:
             hint = "; it cannot be negative"
-        raise ValueError(f"{where}: [vehicle] {key} = {raw!r}: not a plausible {what} in {unit} "
+        raise ValueError(f"{where}: {name} = {raw!r}: not a plausible {what} in {unit} "
                          f"({lo:g}-{hi:g}){hint}")
     return val
 

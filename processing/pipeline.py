@@ -345,22 +345,6 @@ def check_wheel_radius(value, what: str = "wheel radius") -> float:
     return _check_length(value, what, "radius", RADIUS_RANGE_M)
 
 
-def _check_wheel_number(key: str, value) -> float:
-    """``value`` of ``wheel_mass_kg`` [kg] or ``wheel_inertia_kgm2`` [kg m^2] as a float, finite and within
-    the vehicle configuration's plausible range (``daq.config.VEHICLE_RANGES``); ``ValueError`` naming it."""
-    from wheelsoil.daq.config import VEHICLE_RANGES
-
-    lo, hi, unit, what = VEHICLE_RANGES[key]
-    flag = "--" + key.rsplit("_", 1)[0].replace("_", "-")
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{flag}: {value!r} is not a number ({what} [{unit}])") from None
-    if not (math.isfinite(v) and lo <= v <= hi):
-        raise ValueError(f"{flag}: {value!r} {unit} is not a plausible {what} ({lo:g}..{hi:g} {unit})")
-    return v
-
-
 def check_wheel_width(value, what: str = "wheel width") -> float:
     """``value`` as a float width [m], checked finite and within :data:`WIDTH_RANGE_M`.
 
@@ -493,6 +477,19 @@ def _wheel_speed_lag(t_w: np.ndarray, angle_rad: np.ndarray, period_w: float, t_
                             min_latency_s=WSS_LAG_RANGE_S[0], max_latency_s=WSS_LAG_RANGE_S[1])
 
 
+def _lag_not_applied(lag: LatencyEstimate) -> str:
+    """Why the wheel-speed lag ``lag`` (:func:`_wheel_speed_lag`) is not removed, or "" when it is."""
+    if lag.note:
+        return lag.note
+    if not lag.stderr_s <= WSS_LAG_SE_S:
+        return f"standard error {lag.stderr_s * 1e3:.1f} ms > {WSS_LAG_SE_S * 1e3:g} ms"
+    if abs(lag.gain - 1) > WSS_LAG_GAIN_TOL:
+        return f"speed gain {lag.gain:.3f}: not the same wheel's speed"
+    if abs(lag.latency_s) < WSS_LAG_MIN_S:
+        return f"under {WSS_LAG_MIN_S * 1e3:g} ms"
+    return ""
+
+
 def _with_systematic(name: str, c: LatencyEstimate) -> LatencyEstimate:
     """``c`` with its standard error raised by :data:`LATENCY_SYSTEMATIC_S` (quadrature)."""
     from dataclasses import replace
@@ -518,8 +515,9 @@ def _choose_latency(cands: dict, errs: dict, *, coupled: bool, wheel_ref_label: 
     roll freely (the measured wheel's own torque shows whether it does); but a wheel
     reference whose own fit shows it rolling freely (:data:`FREE_ROLLING_GAIN_TOL`,
     :data:`FREE_ROLLING_RESID_REL`) and is precise (:data:`LATENCY_RELIABLE_SE_S`) makes a
-    disagreeing slip-traction estimate unusable instead. The choice: the wheel reference if usable and precise (total standard error
-    at most :data:`LATENCY_RELIABLE_SE_S`; a coasting wheel whose deceleration hardly
+    disagreeing slip-traction estimate unusable instead. The choice: the wheel reference if
+    usable and precise (total standard error at most :data:`LATENCY_RELIABLE_SE_S`; a coasting
+    wheel whose deceleration hardly
     changes tells little), else the inverse-variance mean of agreeing traction and
     dynamics estimates, else the usable one with the smaller standard error, else
     (flagged) the best finite one;
@@ -960,8 +958,11 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
         cutoff = 0.4 * rate_hz
     if wheel_radius_m is not None:
         wheel_radius_m = check_wheel_radius(wheel_radius_m, "wheel_radius_m (--wheel-radius)")
-    wheel = {k: _check_wheel_number(k, v) for k, v in (("wheel_mass_kg", wheel_mass_kg),
-                                                      ("wheel_inertia_kgm2", wheel_inertia_kgm2)) if v is not None}
+    from wheelsoil.daq.config import check_vehicle_number
+
+    wheel = {k: check_vehicle_number("command line", k, v, name=flag) for k, v, flag in (
+        ("wheel_mass_kg", wheel_mass_kg, "--wheel-mass"), ("wheel_inertia_kgm2", wheel_inertia_kgm2, "--wheel-inertia"))
+        if v is not None}
     if not path.exists():
         raise OSError(f"{path}: no such file")
     if path.suffix.lower() in LOG_SUFFIXES:
@@ -969,9 +970,7 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
                             wheel_radius_m=wheel_radius_m, inertia=inertia, **wheel)
     cfg, cfg_where = _resolve_config(path, config, warns)
     if wheel:  # the wheel outboard of the transducer is not the configured one
-        import dataclasses as _dc
-
-        cfg = _dc.replace(cfg, **wheel)
+        cfg = dataclasses.replace(cfg, **wheel)
     warns.extend(f"{cfg_where}: {n}" for n in (getattr(cfg, "notes", None) or []))
     cfg_r = float(cfg.wheel_radius_m)
     if wheel_radius_m is None:
@@ -1287,11 +1286,7 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
             except ValueError as exc:
                 quality["wheel_speed_lag"] = {"estimate_s": None, "applied": False, "note": str(exc)}
             else:
-                why = lag.note or (
-                    f"standard error {lag.stderr_s * 1e3:.1f} ms > {WSS_LAG_SE_S * 1e3:g} ms"
-                    if not lag.stderr_s <= WSS_LAG_SE_S else
-                    f"speed gain {lag.gain:.3f}: not the same wheel's speed" if abs(lag.gain - 1) > WSS_LAG_GAIN_TOL
-                    else f"under {WSS_LAG_MIN_S * 1e3:g} ms" if abs(lag.latency_s) < WSS_LAG_MIN_S else "")
+                why = _lag_not_applied(lag)
                 quality["wheel_speed_lag"] = {"estimate_s": lag.latency_s, "stderr_s": lag.stderr_s,
                                               "gain": lag.gain, "applied": not why, "note": why}
                 if not why:
