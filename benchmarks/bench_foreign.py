@@ -118,17 +118,20 @@ ROUND2 = [
     ("lug3", "lugs", 523, 0.140, {"h": 0.012}), ("lk3", "load_k", 524, 0.055, {"beta": 0.7}),
     ("xt3", "fx_crosstalk", 525, 0.105, {"fz_to_fx": 0.008}),
 ]
-#: the fourth generator's first round (``--generator foreign3``, ``foreign3/round1.json``): 30 runs on the
-#: paper's clay, seeds 601-630, name, case, seed, params, log format; written down by the generator's author
-#: before any was scored
-ROUND3 = json.loads((GEN3.parent / "round1.json").read_text())
-#: its second round (``--generator foreign3 --round2``, ``foreign3/round2.json``): seeds 631-660, written by the
-#: project after the first was scored and before any of these was run: sizes between about half and the full
-#: first round's, the terrain mismatches' other signs, drifts in c and k (linear and a step from 35 %)
-ROUND3B = json.loads((GEN3.parent / "round2.json").read_text())
-#: the fifth generator's first round (``--generator foreign4``, ``foreign4/round1.json``): seeds 701-730, written
-#: down by its author before any run was generated
-ROUND4 = json.loads((GEN4.parent / "round1.json").read_text())
+#: the round files of the generators that write them (``--generator foreign3|foreign4 [--round2]``): name, case,
+#: seed, params, log format.  ``foreign3/round1.json`` (seeds 601-630, the paper's clay) and
+#: ``foreign4/round1.json`` (701-730) were written by the generators' authors before any run was scored;
+#: ``foreign3/round2.json`` (631-660: sizes between about half and the full first round's, the terrain mismatches'
+#: other signs, drifts in c and k) and ``foreign4/round2.json`` (731-760: the in-family effects at other clear
+#: sizes, every cause on no list at two sizes) by the project after the first was scored and before any of
+#: these was run
+ROUNDS = {(gen.parent.name, k): gen.parent / f"round{k}.json" for gen in (GEN3, GEN4) for k in (1, 2)}
+
+
+def round_runs(generator: str, k: int) -> list[dict]:
+    """Round ``k`` of ``generator`` (``foreign3``, ``foreign4``): its runs as written in the round file (dicts
+    with name, case, seed, params, format)."""
+    return json.loads(ROUNDS[generator, k].read_text())
 NAMED = ("slip_sinkage", "terrain_mismatch", "stress_distribution", "terrain_drift")
 
 
@@ -180,15 +183,15 @@ def run_case3(name: str, case: str, seed: int, params: dict, fmt: str, out: Path
                          acceptable=truth["acceptable_verdicts"])
 
 
-def run_case4(name: str, case: str, seed: int, params: dict, fmt: str, out: Path) -> dict:
+def run_case4(name: str, case: str, seed: int, params: dict, fmt: str, out: Path, gen: Path = GEN4) -> dict:
     """Generate one run of the fifth generator (``foreign4``: its own clay loam and wheel) and fit the log with
     its lab terrain file and wheel (radius, width, mass and inertia from the run's truth file, as the user who
     mounted that wheel knows them); returns a row dict as :func:`run_case`."""
-    truth = _run_generator(GEN4, _round_args(case, seed, params, fmt), name, out)
+    truth = _run_generator(gen, _round_args(case, seed, params, fmt), name, out)
     wheel = {"wheel_radius": truth["wheel_radius_m"], "wheel_width": truth["wheel_width_m"],
              "wheel_mass": truth["wheel_mass_kg"], "wheel_inertia": truth["wheel_inertia_kgm2"]}
     return fit_and_score(name, truth, out, "free", log=out / f"{name}.{fmt}",
-                         terrain=str(GEN4.parent / truth["terrain_toml"]), acceptable=truth["acceptable_verdicts"],
+                         terrain=str(gen.parent / truth["terrain_toml"]), acceptable=truth["acceptable_verdicts"],
                          wheel=wheel)
 
 
@@ -230,12 +233,13 @@ def main() -> None:
     ap.add_argument("--round2", action="store_true",
                     help="with --generator foreign2: its second round, 25 runs on fresh seeds (501-525) at sizes "
                          "chosen before any was run (every listed effect clearly above the noise); with foreign3: "
-                         "its second round, 30 runs on seeds 631-660 (foreign3/round2.json)")
+                         "its second round, 30 runs on seeds 631-660 (foreign3/round2.json); with foreign4: its second round, "
+                         "30 runs on seeds 731-760 (foreign4/round2.json)")
     ap.add_argument("--only", default="", help="comma list of case names (default: all)")
     ap.add_argument("--keep", type=Path, default=None, help="keep logs, recordings and reports here")
     args = ap.parse_args()
-    if args.stress and args.generator != "foreign2" or args.round2 and args.generator in ("foreign", "foreign4"):
-        ap.error("--stress needs --generator foreign2, --round2 foreign2 or foreign3")
+    if args.stress and args.generator != "foreign2" or args.round2 and args.generator == "foreign":
+        ap.error("--stress needs --generator foreign2, --round2 foreign2, foreign3 or foreign4")
     if args.stress and args.round2:
         ap.error("choose one of --stress and --round2")
     only = set(filter(None, args.only.split(",")))
@@ -245,10 +249,9 @@ def main() -> None:
     rows = []
     if args.generator == "foreign":
         cases = CASES
-    elif args.generator == "foreign3":
-        cases = [(r["name"], r["case"], r["seed"], r["params"], r["format"]) for r in (ROUND3B if args.round2 else ROUND3)]
-    elif args.generator == "foreign4":
-        cases = [(r["name"], r["case"], r["seed"], r["params"], r["format"]) for r in ROUND4]
+    elif args.generator in ("foreign3", "foreign4"):
+        cases = [(r["name"], r["case"], r["seed"], r["params"], r["format"])
+                 for r in round_runs(args.generator, 2 if args.round2 else 1)]
     else:
         cases = STRESS if args.stress else ROUND2 if args.round2 else CASES2
     w = max(len(c[0]) for c in cases)

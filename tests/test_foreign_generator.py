@@ -10,8 +10,8 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
-from bench_foreign import (CASES, CASES2, GEN, GEN2, GEN3, GEN4, NAMED, ROUND2, ROUND3, ROUND3B, ROUND4,  # noqa: E402
-                           STRESS, generate, run_case, run_case2)
+from bench_foreign import (CASES, CASES2, GEN, GEN2, GEN3, GEN4, NAMED, ROUND2,  # noqa: E402
+                           STRESS, generate, round_runs, run_case, run_case2)
 
 
 def _load(gen_path, name):
@@ -64,7 +64,7 @@ def test_every_run_of_the_fourth_generators_round_is_one_of_its_cases_with_its_p
     run names a case of the generator, sets only that case's parameters, in a log format the pipeline reads
     directly; no seed or name twice."""
     gen = _load(GEN3, "foreign3_gen")
-    rows = ROUND3 + ROUND3B
+    rows = round_runs("foreign3", 1) + round_runs("foreign3", 2)
     for r in rows:
         assert r["case"] in gen.CASES, r
         assert set(r["params"]) <= set(gen.CASES[r["case"]]["defaults"]), r
@@ -80,7 +80,7 @@ def test_the_fourth_generators_towed_clay_runs_fitted_from_their_logs(tmp_path, 
     the forecast-encompassing paired test: `unexplained`, no hypothesis improving Dp over its 5 folds)."""
     from bench_foreign import run_case3
 
-    r = next(x for x in ROUND3 if x["name"] == run)
+    r = next(x for x in round_runs("foreign3", 1) if x["name"] == run)
     row = run_case3(r["name"], r["case"], r["seed"], r["params"], r["format"], tmp_path)
     assert row["score"] == "right", row
     assert row["effect"] == ("none" if r["case"] == "none" else "terrain_mismatch"), row
@@ -155,17 +155,18 @@ def test_a_clean_one_value_mismatch_the_five_value_refit_outscores_is_reported_w
 
 
 def test_every_run_of_the_fifth_generators_round_is_one_of_its_cases():
-    """``bench_foreign.py --generator foreign4`` (``foreign4/round1.json``): each run names a case of the
+    """``bench_foreign.py --generator foreign4 [--round2]`` (``foreign4/round1.json``, ``round2.json``): each run names a case of the
     generator, sets only parameters that case knows (a terrain mismatch: one lab value), in a log format
     the pipeline reads directly; no seed or name twice."""
     gen = _load(GEN4, "foreign4_gen")
-    for r in ROUND4:
+    rows = round_runs("foreign4", 1) + round_runs("foreign4", 2)
+    for r in rows:
         assert r["case"] in gen.CASES, r
         known = set(gen.DEFAULTS.get(r["case"], {})) | {"terrain_mismatch": set(gen.MISMATCH_KEYS),
                                                         "terrain_drift": {"at"}}.get(r["case"], set())
         assert set(r["params"]) <= known, r
         assert r["format"] in ("asc", "blf", "log"), r
-    assert len({r["seed"] for r in ROUND4}) == len(ROUND4) == len({r["name"] for r in ROUND4})
+    assert len({r["seed"] for r in rows}) == len(rows) == len({r["name"] for r in rows})
 
 
 def test_the_fifth_generators_k_mismatch_far_from_its_stated_lab_uncertainty(tmp_path):
@@ -174,6 +175,6 @@ def test_the_fifth_generators_k_mismatch_far_from_its_stated_lab_uncertainty(tmp
     from the lab value, was refused as a prior-data conflict and left `unexplained`; it is a k_eq mismatch."""
     from bench_foreign import run_case4
 
-    r = next(x for x in ROUND4 if x["name"] == "r1_02")
+    r = next(x for x in round_runs("foreign4", 1) if x["name"] == "r1_02")
     row = run_case4(r["name"], r["case"], r["seed"], r["params"], r["format"], tmp_path)
     assert row["score"] == "right" and row["model"] == "terrain_k_eq", row
