@@ -823,6 +823,8 @@ def _handler(args) -> int:
 _EPILOG = """\
 examples:
   wheelsoil fit run1.mcap run2.mcap --terrain clay --slip-min 0.2 -o reports/clay
+  wheelsoil fit drive.asc --terrain my_soil.toml --wheel-radius 0.41 --wheel-width 0.26 \\
+      --wheel-mass 62 --wheel-inertia 6.4 -o reports/drive
   wheelsoil fit testbed.csv --terrain dry-sand --fit-terrain \\
       --wheel-radius 0.0625 --wheel-width 0.06 -o reports/testbed
   wheelsoil fit table.csv --terrain my_soil.toml --models wong,lyasko -o out/
@@ -830,7 +832,8 @@ examples:
 inputs: a table CSV with columns slip (a fraction, Eq. 6: 0.3, not 30 %), load_n [N],
 drawbar_pull_n [N] and optional torque_nm [N m], sinkage_m [m, not mm] (one row per
 steady-state test point; slip in per cent or a sinkage deeper than the wheel's diameter is an
-error naming the file), or a recording (.mcap) that is processed first. Several inputs of one
+error naming the file), or a recording (.mcap) or CAN log (candump .log, Vector .asc/.blf, PEAK
+.trc: read as `wheelsoil import` reads it) that is processed first. Several inputs of one
 terrain are fitted jointly. A table's wheel: --wheel-radius/--wheel-width, else its columns
 wheel_radius_m/wheel_width_m, else a sidecar TABLE.json next to it ({"wheel": {"radius_m": R,
 "width_m": B}}), else the vehicle's 0.47 x 0.32 m wheel with a loud note; a radius that
@@ -863,7 +866,7 @@ def register(subparsers) -> None:
         epilog=_EPILOG,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    p.add_argument("inputs", nargs="+", metavar="INPUT", help="table CSV(s) or recording(s) (.mcap)")
+    p.add_argument("inputs", nargs="+", metavar="INPUT", help="table CSV(s), recording(s) (.mcap) or CAN log(s) (.log, .asc, .blf, .trc)")
     p.add_argument("--terrain", required=True,
                    help="built-in terrain slug (see 'wheelsoil terrains') or a terrain TOML file")
     p.add_argument("-o", "--output", required=True, metavar="DIR",
