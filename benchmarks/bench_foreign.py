@@ -53,6 +53,7 @@ GEN = Path(__file__).resolve().parent / "foreign" / "gen.py"
 GEN2 = Path(__file__).resolve().parent / "foreign2" / "gen.py"
 GEN3 = Path(__file__).resolve().parent / "foreign3" / "gen.py"
 GEN4 = Path(__file__).resolve().parent / "foreign4" / "gen.py"
+GEN5 = Path(__file__).resolve().parent / "foreign5" / "gen.py"
 
 #: name, generator case, fronts, seed, latency [s], effect options
 CASES = [
@@ -124,12 +125,12 @@ ROUND2 = [
 #: ``foreign3/round2.json`` (631-660: sizes between about half and the full first round's, the terrain mismatches'
 #: other signs, drifts in c and k) and ``foreign4/round2.json`` (731-760: the in-family effects at other clear
 #: sizes, every cause on no list at two sizes) by the project after the first was scored and before any of
-#: these was run
-ROUNDS = {(gen.parent.name, k): gen.parent / f"round{k}.json" for gen in (GEN3, GEN4) for k in (1, 2)}
+#: these was run; ``foreign5/round1.json`` (801-830) by its author before any run was scored
+ROUNDS = {(gen.parent.name, k): gen.parent / f"round{k}.json" for gen in (GEN3, GEN4, GEN5) for k in (1, 2)}
 
 
 def round_runs(generator: str, k: int) -> list[dict]:
-    """Round ``k`` of ``generator`` (``foreign3``, ``foreign4``): its runs as written in the round file (dicts
+    """Round ``k`` of ``generator`` (``foreign3``, ``foreign4``, ``foreign5``): its runs as written in the round file (dicts
     with name, case, seed, params, format)."""
     return json.loads(ROUNDS[generator, k].read_text())
 NAMED = ("slip_sinkage", "terrain_mismatch", "stress_distribution", "terrain_drift")
@@ -168,10 +169,12 @@ def run_case2(name: str, case: str, seed: int, latency_s: float, params: dict, o
     return fit_and_score(name, generate2(name, case, seed, latency_s, params, out, options), out, "locked")
 
 
-def _round_args(case: str, seed: int, params: dict, fmt: str) -> list:
-    """The command line of a round file's run for the fourth and fifth generators (the same CLI)."""
+def _round_args(case: str, seed: int, params: dict, fmt: str, plain: bool = False) -> list:
+    """The command line of a round file's run for the fourth to sixth generators (the same CLI; the sixth,
+    ``plain``, reads ``--p key=value`` values as numbers or words, not JSON)."""
     return [case, "--seed", str(seed), "--format", fmt,
-            *[a for k, v in params.items() for a in ("--p", f"{k}={json.dumps(v)}")]]
+            *[a for k, v in params.items()
+              for a in ("--p", f"{k}={v if plain and isinstance(v, str) else json.dumps(v)}")]]
 
 
 def run_case3(name: str, case: str, seed: int, params: dict, fmt: str, out: Path) -> dict:
@@ -192,6 +195,20 @@ def run_case4(name: str, case: str, seed: int, params: dict, fmt: str, out: Path
              "wheel_mass": truth["wheel_mass_kg"], "wheel_inertia": truth["wheel_inertia_kgm2"]}
     return fit_and_score(name, truth, out, "free", log=out / f"{name}.{fmt}",
                          terrain=str(gen.parent / truth["terrain_toml"]), acceptable=truth["acceptable_verdicts"],
+                         wheel=wheel)
+
+
+def run_case5(name: str, case: str, seed: int, params: dict, fmt: str, out: Path) -> dict:
+    """Generate one run of the sixth generator (``foreign5``: a loose loamy sand with n > 1 and its own soil
+    file, a 0.43 m wheel, a load car towed behind, damaged logs, PEAK TRC among the formats) and fit the log
+    with its soil file and wheel (from the run's truth file); returns a row dict as :func:`run_case`."""
+    truth = _run_generator(GEN5, _round_args(case, seed, params, fmt, plain=True), name, out)
+    # its truth names the effect "slip_sinkage:vasilev", "out_of_family:stones": the scorer's keys
+    truth = {**truth, "effect": truth["effect"].split(":")[0], "model": case}
+    wheel = {"wheel_radius": truth["wheel_radius"], "wheel_width": truth["wheel_width"],
+             "wheel_mass": truth["wheel_mass"], "wheel_inertia": truth["wheel_inertia"]}
+    return fit_and_score(name, truth, out, "free", log=out / f"{name}.{fmt}",
+                         terrain=str(GEN5.parent / "lab_soil.toml"), acceptable=truth["acceptable_verdicts"],
                          wheel=wheel)
 
 
@@ -223,10 +240,11 @@ def fit_and_score(name: str, truth: dict, out: Path, fronts: str, log: Path | No
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--generator", choices=("foreign", "foreign2", "foreign3", "foreign4"), default="foreign",
+    ap.add_argument("--generator", choices=("foreign", "foreign2", "foreign3", "foreign4", "foreign5"), default="foreign",
                     help="which independent generator's cases (default: foreign, 14 cases; foreign2: 36; foreign3: "
                          "its first round, 30 runs on the paper's clay from a towed vehicle, logs in ASC, BLF and "
-                         "candump format fitted directly; foreign4: 30 runs of its own soil and wheel)")
+                         "candump format fitted directly; foreign4: 30 runs of its own soil and wheel; foreign5: 30 runs of a "
+                         "loamy sand, a load car towed behind, damaged logs)")
     ap.add_argument("--stress", action="store_true",
                     help="with --generator foreign2: 24 runs of eight of its cases as short runs (4 cycles), with 3x "
                          "the sensor noise and with 3x the soil variability, instead of its 36 cases")
@@ -238,7 +256,7 @@ def main() -> None:
     ap.add_argument("--only", default="", help="comma list of case names (default: all)")
     ap.add_argument("--keep", type=Path, default=None, help="keep logs, recordings and reports here")
     args = ap.parse_args()
-    if args.stress and args.generator != "foreign2" or args.round2 and args.generator == "foreign":
+    if args.stress and args.generator != "foreign2" or args.round2 and args.generator in ("foreign", "foreign5"):
         ap.error("--stress needs --generator foreign2, --round2 foreign2, foreign3 or foreign4")
     if args.stress and args.round2:
         ap.error("choose one of --stress and --round2")
@@ -249,7 +267,7 @@ def main() -> None:
     rows = []
     if args.generator == "foreign":
         cases = CASES
-    elif args.generator in ("foreign3", "foreign4"):
+    elif args.generator in ("foreign3", "foreign4", "foreign5"):
         cases = [(r["name"], r["case"], r["seed"], r["params"], r["format"])
                  for r in round_runs(args.generator, 2 if args.round2 else 1)]
     else:
@@ -262,6 +280,7 @@ def main() -> None:
         try:
             r = run_case(*c, base) if args.generator == "foreign" else run_case3(*c, base) if \
                 args.generator == "foreign3" else run_case4(*c, base) if args.generator == "foreign4" else \
+                run_case5(*c, base) if args.generator == "foreign5" else \
                 run_case2(*c[:5], base, *c[5:])
         except subprocess.CalledProcessError as e:  # the generator refused (e.g. a run the vehicle cannot drive)
             print(f"{c[0]:<{w}} generator failed: {e.stderr.decode(errors='replace').strip().splitlines()[-1:]}")
