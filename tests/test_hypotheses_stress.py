@@ -1,0 +1,34 @@
+"""The two Wong-Reece forms of the stress-distribution effect: Eq. (10)'s sinkage, or the sinkage at which
+the shifted stresses carry the load the paper's distribution carries (``wong_reece_load``)."""
+
+import numpy as np
+
+from wheelsoil.model import DEFAULT_WHEEL, load_terrain, wong_forces
+from wheelsoil.model.hypotheses import HYPOTHESES, Context, lab_prior
+
+SAND = load_terrain("sand")
+CTX = Context(SAND, DEFAULT_WHEEL, "eq10", lab_prior(SAND, DEFAULT_WHEEL))
+W = np.full(5, 11000.0)
+S = np.linspace(0.1, 0.9, 5)
+
+
+def test_the_load_balanced_form_carries_the_papers_load_at_a_deeper_sinkage():
+    plain = wong_forces(SAND, DEFAULT_WHEEL, W, S)
+    f = HYPOTHESES["wong_reece_load"].predict(CTX, W, S, None, {"a1": 0.3, "a2": 0.2})
+    eq10 = HYPOTHESES["wong_reece"].predict(CTX, W, S, None, {"a1": 0.3, "a2": 0.2})
+    # Eq. (7) of the shifted stresses equals the paper's Eq. (7) at Eq. (10)'s sinkage ...
+    np.testing.assert_allclose(f.load_model_n, plain.load_model_n, rtol=1e-9)
+    # ... which the Eq. (10) form's shifted stresses do not carry at that sinkage
+    assert np.all(eq10.load_model_n < 0.99 * plain.load_model_n)
+    assert np.all(f.sinkage_m > plain.sinkage_m)
+    np.testing.assert_allclose(eq10.sinkage_m, plain.sinkage_m, rtol=1e-12)
+
+
+def test_the_load_balanced_form_is_wong_at_its_null_and_not_tried_in_balance_mode():
+    f = HYPOTHESES["wong_reece_load"].predict(CTX, W, S, None, HYPOTHESES["wong_reece_load"].nulls(CTX))
+    ref = wong_forces(SAND, DEFAULT_WHEEL, W, S)
+    np.testing.assert_allclose(f.drawbar_pull_n, ref.drawbar_pull_n, rtol=1e-12)
+    np.testing.assert_allclose(f.torque_nm, ref.torque_nm, rtol=1e-12)
+    bal = Context(SAND, DEFAULT_WHEEL, "balance", lab_prior(SAND, DEFAULT_WHEEL))
+    assert HYPOTHESES["wong_reece_load"].available(bal, True)
+    assert HYPOTHESES["wong_reece_load"].effect == HYPOTHESES["wong_reece"].effect == "stress_distribution"
