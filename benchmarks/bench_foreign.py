@@ -1,7 +1,7 @@
 """The diagnosis on runs of four independent generators (``benchmarks/foreign/``, ``foreign2/``, ``foreign3/``,
 ``foreign4/``).
 
-    python benchmarks/bench_foreign.py [--generator foreign|foreign2 [--stress|--round2]|foreign3 [--round2]|foreign4]
+    python benchmarks/bench_foreign.py [--generator foreign|foreign2 [--stress|--round2]|foreign3|foreign4|foreign5 [--round2]]
                                        [--only a1,v15] [--keep DIR]
 
 Each generator was written from the hardware contract, the DBC files and the paper alone, by a
@@ -119,13 +119,14 @@ ROUND2 = [
     ("lug3", "lugs", 523, 0.140, {"h": 0.012}), ("lk3", "load_k", 524, 0.055, {"beta": 0.7}),
     ("xt3", "fx_crosstalk", 525, 0.105, {"fz_to_fx": 0.008}),
 ]
-#: the round files of the generators that write them (``--generator foreign3|foreign4 [--round2]``): name, case,
+#: the round files of the generators that write them (``--generator foreign3|foreign4|foreign5 [--round2]``): name, case,
 #: seed, params, log format.  ``foreign3/round1.json`` (seeds 601-630, the paper's clay) and
 #: ``foreign4/round1.json`` (701-730) were written by the generators' authors before any run was scored;
 #: ``foreign3/round2.json`` (631-660: sizes between about half and the full first round's, the terrain mismatches'
 #: other signs, drifts in c and k) and ``foreign4/round2.json`` (731-760: the in-family effects at other clear
 #: sizes, every cause on no list at two sizes) by the project after the first was scored and before any of
-#: these was run; ``foreign5/round1.json`` (801-830) by its author before any run was scored
+#: these was run; ``foreign5/round1.json`` (801-830) by its author before any run was scored, its
+#: ``round2.json`` (831-860) by the project after the first was scored and before any of these was run
 ROUNDS = {(gen.parent.name, k): gen.parent / f"round{k}.json" for gen in (GEN3, GEN4, GEN5) for k in (1, 2)}
 
 
@@ -252,12 +253,13 @@ def main() -> None:
                     help="with --generator foreign2: its second round, 25 runs on fresh seeds (501-525) at sizes "
                          "chosen before any was run (every listed effect clearly above the noise); with foreign3: "
                          "its second round, 30 runs on seeds 631-660 (foreign3/round2.json); with foreign4: its second round, "
-                         "30 runs on seeds 731-760 (foreign4/round2.json)")
+                         "30 runs on seeds 731-760 (foreign4/round2.json); with foreign5: 30 runs on seeds 831-860 "
+                         "(foreign5/round2.json)")
     ap.add_argument("--only", default="", help="comma list of case names (default: all)")
     ap.add_argument("--keep", type=Path, default=None, help="keep logs, recordings and reports here")
     args = ap.parse_args()
-    if args.stress and args.generator != "foreign2" or args.round2 and args.generator in ("foreign", "foreign5"):
-        ap.error("--stress needs --generator foreign2, --round2 foreign2, foreign3 or foreign4")
+    if args.stress and args.generator != "foreign2" or args.round2 and args.generator == "foreign":
+        ap.error("--stress needs --generator foreign2, --round2 one of foreign2 to foreign5")
     if args.stress and args.round2:
         ap.error("choose one of --stress and --round2")
     only = set(filter(None, args.only.split(",")))

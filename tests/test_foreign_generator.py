@@ -185,7 +185,7 @@ def test_every_run_of_the_sixth_generators_round_is_one_of_its_cases():
     generator, sets only parameters that case or its log damage knows, in a log format the pipeline reads
     directly (PEAK TRC among them); no seed or name twice."""
     gen = _load(GEN5, "foreign5_gen")
-    rows = round_runs("foreign5", 1)
+    rows = round_runs("foreign5", 1) + round_runs("foreign5", 2)
     for r in rows:
         assert r["case"] in gen.IN + gen.OUT, r
         assert set(r["params"]) <= set(gen.DEFAULTS.get(r["case"], {})) | set(gen.LOGDEF), r
