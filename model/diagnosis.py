@@ -136,7 +136,11 @@ decides with this rule (constants below; none was tuned on a benchmark):
    own effect not null (:func:`_stand_in_better`): what it adds shows in data the fits did not
    see, and the candidate is not the whole story (a soil stiffer at the wheel's loading rate
    is, over one run's speeds, mostly a constant k_eq mismatch): ``unexplained``.
-   No supported hypothesis -> ``unexplained``.
+   No supported hypothesis -> ``unexplained``.  A hypothesis of another effect whose sinkage grows
+   with slip (``Hypothesis.sinks_with_slip``: the Wong-Reece form whose sinkage carries the load) is
+   not tried when the measured sinkage grows with slip: that growth is slip sinkage's signature
+   (Eqs. 11-13), and the form would explain it alike (it named the CMU grousered wheel at a 30 deg
+   slip angle a stress distribution, and made the smooth wheel's Vasil'ev forms ambiguous).
    Whatever the above gives, Wong's sample residuals are also compared on rising against
    falling slip within each accelerate cycle (:func:`_hysteresis_test`): every hypothesis is a
    static function of slip, load and place, and the cells pool both directions, so a channel
@@ -1227,6 +1231,13 @@ def diagnose(
             notes.append("with --fit-terrain the terrain is fitted in every hypothesis, so "
                          + ", ".join(dup) + " are not separate hypotheses (terrain_mismatch not tried: there are "
                          "no lab values to mismatch).")
+    # sinkage evidence (cells): the measured sinkage growing with slip
+    sink_ev = None
+    if "sinkage_m" in data.channels:
+        zc = data.cells.channels["sinkage_m"]
+        sink_ev = _slope_test(data.cells.slip, zc, covariate=data.cells.load_n)
+        sink_ev["significant"] = bool(np.isfinite(sink_ev["p_positive"]) and sink_ev["p_positive"] < ALPHA)
+        sink_ev["z_range_m"] = [float(np.nanmin(zc)), float(np.nanmax(zc))]
     has_x = data.cells.x is not None
     steps = None  # (change point, number of candidate splits) in Wong's residuals along the run
     tried = []
@@ -1243,6 +1254,9 @@ def diagnose(
         if bar is not None:
             bar.set_postfix_str(name)
         why = h.available(ctx, has_x)
+        if not why and h.sinks_with_slip and sink_ev is not None and sink_ev["significant"]:
+            why = ("the measured sinkage grows with slip, slip sinkage's signature (Eqs. 11-13), which this form's "
+                   "sinkage, growing with slip too, would explain alike")
         if why:
             not_tried.setdefault(why, []).append(name)
             if bar is not None:
@@ -1486,13 +1500,6 @@ def diagnose(
                        p_improve=r["p_improve"], p_worse=r["p_worse"], gain_noise_var=r["gain_noise_var"],
                        compared_model=shown)
         channels[c] = row
-    # sinkage evidence (cells)
-    sink_ev = None
-    if "sinkage_m" in data.channels:
-        zc = data.cells.channels["sinkage_m"]
-        sink_ev = _slope_test(data.cells.slip, zc, covariate=data.cells.load_n)
-        sink_ev["significant"] = bool(np.isfinite(sink_ev["p_positive"]) and sink_ev["p_positive"] < ALPHA)
-        sink_ev["z_range_m"] = [float(np.nanmin(zc)), float(np.nanmax(zc))]
     # forms
     # forms of the named effect (or of slip sinkage, the candidate) that explain the data about as well: a
     # Lyasko form against Vasil'ev's, a c re-fit against a phi re-fit (on one load c and phi act alike)

@@ -32,3 +32,19 @@ def test_the_load_balanced_form_is_wong_at_its_null_and_not_tried_in_balance_mod
     bal = Context(SAND, DEFAULT_WHEEL, "balance", lab_prior(SAND, DEFAULT_WHEEL))
     assert HYPOTHESES["wong_reece_load"].available(bal, True)
     assert HYPOTHESES["wong_reece_load"].effect == HYPOTHESES["wong_reece"].effect == "stress_distribution"
+
+
+def test_the_load_balanced_form_is_not_tried_where_the_measured_sinkage_grows_with_slip():
+    """Its sinkage grows with slip as slip sinkage's does: on a table whose measured sinkage grows with slip
+    (Vasil'ev, H = 0.05 m) it is left out, with the reason in the notes; on the same table without the
+    sinkage column it is tried."""
+    from wheelsoil.model.diagnosis import diagnose
+    from wheelsoil.model.data import synthetic_data
+
+    df = synthetic_data(SAND, DEFAULT_WHEEL, "vasilev", {"H": 0.05}, kind="table", n_rows=40, noise_z_m=0.002, seed=4)
+    d = diagnose(df, SAND, DEFAULT_WHEEL)
+    assert d.sinkage_evidence["significant"]
+    assert "wong_reece_load" not in d.tried and "wong_reece" in d.tried
+    assert any("slip sinkage's signature" in n and "wong_reece_load" in n for n in d.notes), d.notes
+    d2 = diagnose(df.drop(columns="sinkage_m"), SAND, DEFAULT_WHEEL)
+    assert "wong_reece_load" in d2.tried
