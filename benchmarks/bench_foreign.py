@@ -1,5 +1,4 @@
-"""The diagnosis on runs of four independent generators (``benchmarks/foreign/``, ``foreign2/``, ``foreign3/``,
-``foreign4/``).
+"""The diagnosis on runs of five independent generators (``benchmarks/foreign/`` to ``foreign5/``).
 
     python benchmarks/bench_foreign.py [--generator foreign|foreign2 [--stress|--round2]|foreign3|foreign4|foreign5 [--round2]]
                                        [--only a1,v15] [--keep DIR]
@@ -34,7 +33,10 @@ each written down before any of its runs was run. ``foreign4`` (30 runs, ``forei
 701-730): a clay loam of the generator's own lab values (``foreign4/lab_soil.toml``), a 0.41 x 0.26 m wheel of
 62 kg and 6.4 kg m^2, launches from rest and slip staircases held against the other axle's brakes, fitted
 as a user with that wheel would (``wheelsoil fit run.asc --terrain foreign4/lab_soil.toml --wheel-radius 0.41
---wheel-width 0.26 --wheel-mass 62 --wheel-inertia 6.4``). Prints one row per case (verdict, latency found against the truth, its method and
+--wheel-width 0.26 --wheel-mass 62 --wheel-inertia 6.4``); its ``--round2``, seeds 731-760. ``foreign5`` (30 runs,
+``foreign5/round1.json``, seeds 801-830; ``--round2`` 831-860): a loose loamy sand with n > 1 of its own soil file,
+a 0.43 x 0.285 m wheel of 68 kg and 8.6 kg m^2, a load car towed behind, damaged logs (other ECUs' ids, error
+frames, duplicates, a logging stall, host clock steps), PEAK TRC among the formats. Prints one row per case (verdict, latency found against the truth, its method and
 reliability) and the totals, and the wall time.
 """
 
@@ -187,15 +189,15 @@ def run_case3(name: str, case: str, seed: int, params: dict, fmt: str, out: Path
                          acceptable=truth["acceptable_verdicts"])
 
 
-def run_case4(name: str, case: str, seed: int, params: dict, fmt: str, out: Path, gen: Path = GEN4) -> dict:
+def run_case4(name: str, case: str, seed: int, params: dict, fmt: str, out: Path) -> dict:
     """Generate one run of the fifth generator (``foreign4``: its own clay loam and wheel) and fit the log with
     its lab terrain file and wheel (radius, width, mass and inertia from the run's truth file, as the user who
     mounted that wheel knows them); returns a row dict as :func:`run_case`."""
-    truth = _run_generator(gen, _round_args(case, seed, params, fmt), name, out)
+    truth = _run_generator(GEN4, _round_args(case, seed, params, fmt), name, out)
     wheel = {"wheel_radius": truth["wheel_radius_m"], "wheel_width": truth["wheel_width_m"],
              "wheel_mass": truth["wheel_mass_kg"], "wheel_inertia": truth["wheel_inertia_kgm2"]}
     return fit_and_score(name, truth, out, "free", log=out / f"{name}.{fmt}",
-                         terrain=str(gen.parent / truth["terrain_toml"]), acceptable=truth["acceptable_verdicts"],
+                         terrain=str(GEN4.parent / truth["terrain_toml"]), acceptable=truth["acceptable_verdicts"],
                          wheel=wheel)
 
 

@@ -512,8 +512,7 @@ class WongReeceLoad(WongReece):
         plain = wong_forces(terrain, ctx.wheel, load_n, slip, sinkage=ctx.sinkage)
         if p["a1"] == 0.0 and p["a2"] == 0.0:
             return plain
-        f = wong_forces(terrain, ctx.wheel, plain.load_model_n, slip, sinkage="balance", stress=(p["a1"], p["a2"]))
-        return f
+        return wong_forces(terrain, ctx.wheel, plain.load_model_n, slip, sinkage="balance", stress=(p["a1"], p["a2"]))
 
 
 class DriftLinear(Hypothesis):
