@@ -1375,23 +1375,24 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
         # tooth); both are tried when the fronts are in the module's message, and the one whose
         # GNSS latency agrees better with the slip-traction estimate (which needs no front wheel) is kept
         shared = [wss_shift_ns] + ([0] if wss_shift_ns and any(f.message == ws_ref.message for f, _ in f_raw) else [])
-        tr0 = cands.get("traction")
-        best = None
-        for shift in shared:
+
+        def wheel_reference(shift: int):
+            """The wheel-reference latency with the fronts in the module's message moved back ``shift`` ns:
+            (estimate, or why there is none; fronts coupled to the measured wheel; fronts the reference; label)."""
             ref_t = ref_v = usable = None
-            wheel_ref_label = ""
+            label_ = ""
             f_series = [(s[0] - (shift if f.message == ws_ref.message else 0), s[1]) for f, s in f_raw]
-            coupled = False
+            coupled_ = False
             if f_series:
                 ft = f_series[0][0]
                 with _w.catch_warnings():
                     _w.simplefilter("ignore", RuntimeWarning)  # every front wheel lost at a sample: NaN
                     fv = np.nanmean(np.vstack([np.interp(ft, s[0], s[1]) for s in f_series]), axis=0) * r
-                coupled = wss_t is not None and _fronts_coupled(ft, fv, wss_t, got[1] * r)
-            front_ref = bool(f_series) and not coupled
-            if front_ref:
+                coupled_ = wss_t is not None and _fronts_coupled(ft, fv, wss_t, got[1] * r)
+            front = bool(f_series) and not coupled_
+            if front:
                 ref_t, ref_v = rel_s(ft), fv
-                wheel_ref_label = "front wheels r*omega (" + ", ".join(f.signal for f, _ in f_raw) + ")"
+                label_ = "front wheels r*omega (" + ", ".join(f.signal for f, _ in f_raw) + ")"
             elif wss_t is not None and np.isfinite(torque).any():
                 # no front wheel rolls freely (none logged, or the 4x4 drives them): the measured wheel
                 # where it transmits no torque does (coasting, another axle braking); its transducer
@@ -1399,23 +1400,29 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
                 ref_t, ref_v = wss_rel, got[1] * r
                 tq = np.interp(ref_t, t_grid, np.nan_to_num(torque, nan=1e9))
                 usable = _sustained(np.abs(tq) < FREE_ROLLING_TORQUE_NM, ref_t, FREE_ROLLING_HOLD_S)
-                wheel_ref_label = f"measured wheel r*omega where |T| < {FREE_ROLLING_TORQUE_NM:g} N m"
-            est: LatencyEstimate | str = "no free-rolling wheel speed to compare with"
+                label_ = f"measured wheel r*omega where |T| < {FREE_ROLLING_TORQUE_NM:g} N m"
+            est_: LatencyEstimate | str = "no free-rolling wheel speed to compare with"
             if ref_t is not None:
                 _, ref_period = _time_gaps("ref", (ref_t * 1e9).astype(np.int64))
                 ref_f = filter_to_grid(ref_t, ref_v, ref_period, ref_t, LATENCY_REF_CUTOFF_HZ)
-                if front_ref:  # a braked front wheel may skid
+                if front:  # a braked front wheel may skid
                     usable = np.gradient(np.nan_to_num(ref_f), ref_t) > -LATENCY_MAX_DECEL_MPS2
                 try:
-                    est = estimate_latency(g_rel, g_v, ref_t, ref_f, usable_ref=usable,
-                                           max_latency_s=LATENCY_MAX_S, min_latency_s=LATENCY_MIN_S)
+                    est_ = estimate_latency(g_rel, g_v, ref_t, ref_f, usable_ref=usable,
+                                            max_latency_s=LATENCY_MAX_S, min_latency_s=LATENCY_MIN_S)
                 except ValueError as exc:
-                    est = str(exc)
-            off = (abs(est.latency_s - tr0.latency_s) if isinstance(est, LatencyEstimate) and tr0 is not None
-                   and not tr0.note else math.inf)
-            if best is None or off < best[0]:
-                best = (off, shift, est, coupled, front_ref, wheel_ref_label)
-        _, shift, est, coupled, front_ref, wheel_ref_label = best
+                    est_ = str(exc)
+            return est_, coupled_, front, label_
+
+        tr0 = cands.get("traction")
+
+        def off_traction(est_) -> float:  # how far from the slip-traction estimate (inf: not comparable)
+            ok = isinstance(est_, LatencyEstimate) and tr0 is not None and not tr0.note
+            return abs(est_.latency_s - tr0.latency_s) if ok else math.inf
+
+        # the shift whose estimate agrees best (on a tie the first: the module's lag)
+        shift, est, coupled, front_ref, wheel_ref_label = min(
+            ((sh, *wheel_reference(sh)) for sh in shared), key=lambda t: off_traction(t[1]))
         if len(shared) > 1:
             quality["wheel_speed_lag"]["fronts_shifted"] = bool(shift)
             if not shift:
