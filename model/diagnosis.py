@@ -16,8 +16,9 @@ decides with this rule (constants below; none was tuned on a benchmark):
    series the accelerate cycle is the independent unit for whatever is
    constant within it: the mean error is tested over the cycle means, the
    shape against slip and load within the cycles, the dependence on distance
-   over the cycles (:func:`_structure_cells`).  Bonferroni over all tests at
-   family level ``ALPHA``; a structure must also be *relevant*: its
+   over the cycles (:func:`_structure_cells`).  Holm's step-down over all tests
+   at family level ``ALPHA`` (:func:`_holm`; a channel far off lets the next
+   compete among fewer tests); a structure must also be *relevant*: its
    RMS at least ``MIN_EFFECT`` cell-noise sigma (smaller than the scatter of
    one independent unit, nobody predicting a new cycle could tell it from
    unit-to-unit variation) and ``MIN_REL`` of the channel's magnitude.
@@ -213,7 +214,7 @@ from .wong import sinkage_eq10
 __all__ = ["Diagnosis", "diagnose", "LabTerrainBuriesWheel", "structure_test", "binned_residuals",
            "SLIP_SINKAGE_MODELS", "TITLES", "CHANNEL_TITLES", "THRESHOLDS"]
 
-ALPHA = 0.01  #: family-wise significance level (structure tests, Bonferroni; "improves" per channel)
+ALPHA = 0.01  #: family-wise significance level (structure tests, Holm; "improves" per channel)
 WORSEN_ALPHA = 0.10  #: one-sided level at which a worse held-out error counts as "worsens" (lenient on purpose)
 MIN_EFFECT = 1.0  #: relevant structure: RMS of the systematic part >= this many cell-noise sigmas
 MIN_REL = 0.03  #: ... and >= this fraction of the RMS magnitude of the channel's cell means
@@ -689,6 +690,7 @@ def _structure_cells(data: FitData, pred: dict) -> dict:
             t["sigma_rel"] = cells.sigma[c] / size if size > 0 else float("inf")
             t["channel"] = c
             out[k] = t
+    _holm(out)
     return out
 
 
@@ -771,14 +773,32 @@ def _relevant(t: dict) -> bool:
     return t["effect"] >= MIN_EFFECT and t.get("effect_rel", float("inf")) >= MIN_REL
 
 
-def _significant_tests(tests: dict, n_tests: int) -> list:
-    lvl = ALPHA / max(n_tests, 1)
-    return [k for k, t in tests.items() if np.isfinite(t["p"]) and t["p"] < lvl and _relevant(t)]
+def _holm(tests: dict) -> None:
+    """Holm's step-down adjusted p-values of one model's structure tests, in place (``p_holm``).
+
+    The tests are sorted by ``p``; the i-th smallest (0-based) of m gets ``(m - i) p``, made
+    non-decreasing along the order and capped at 1; a test is significant when ``p_holm < ALPHA``.
+    This controls the family-wise error at ``ALPHA`` under any dependence between the tests, as
+    Bonferroni (``m p``) does, and rejects everything Bonferroni rejects and more: once one test
+    is rejected, the rest compete among fewer (Holm 1979, Scand. J. Statist. 6:65).  A test
+    without a p-value counts in m and is never significant."""
+    m = len(tests)
+    order = sorted(tests, key=lambda k: tests[k]["p"] if np.isfinite(tests[k]["p"]) else np.inf)
+    run = 0.0
+    for i, k in enumerate(order):
+        p = tests[k]["p"]
+        run = max(run, min(1.0, (m - i) * p)) if np.isfinite(p) else float("nan")
+        tests[k]["p_holm"] = run
 
 
-def _detectable_only(tests: dict, n_tests: int) -> list:
-    lvl = ALPHA / max(n_tests, 1)
-    return [k for k, t in tests.items() if np.isfinite(t["p"]) and t["p"] < lvl and not _relevant(t)]
+def _significant_tests(tests: dict) -> list:
+    """Tests significant at family level ``ALPHA`` (Holm, :func:`_holm`) and relevant."""
+    return [k for k, t in tests.items() if t.get("p_holm", np.nan) < ALPHA and _relevant(t)]
+
+
+def _detectable_only(tests: dict) -> list:
+    """Tests significant at family level ``ALPHA`` (Holm) but below the relevance floors."""
+    return [k for k, t in tests.items() if t.get("p_holm", np.nan) < ALPHA and not _relevant(t)]
 
 
 class LabTerrainBuriesWheel(ValueError):
@@ -1320,8 +1340,7 @@ def diagnose(
     probs = {k: math.exp(v - mx) / z for k, v in lp.items()}
     # structure of Wong's residuals
     tests_w = _structure_cells(data, wong.cell_pred)
-    n_tests = len(tests_w)
-    sig_w = _significant_tests(tests_w, n_tests)
+    sig_w = _significant_tests(tests_w)
     structured = bool(sig_w)
     structure = {"wong": tests_w}
     relevant = list(dict.fromkeys(tests_w[k]["channel"] for k in sig_w))  # Wong errs relevantly there
@@ -1389,11 +1408,11 @@ def diagnose(
         # that the candidate does not hold against out of sample explains the data as well where it
         # matters, whatever the in-sample evidence says
         tests_b = _structure_cells(data, fits[best].cell_pred)
-        remain = _significant_tests(tests_b, len(tests_b))
+        remain = _significant_tests(tests_b)
 
         def leaves(k):  # the rival's own residuals keep relevant structure (asked only when needed)
             t = _structure_cells(data, fits[k].cell_pred)
-            return bool(_significant_tests(t, len(t)))
+            return bool(_significant_tests(t))
 
         holds = {k: _holds_against(data, fits[best], fits[k], target, relevant,
                                    None if remain else lambda k=k: leaves(k))
@@ -1920,11 +1939,11 @@ def _summary(d: Diagnosis) -> str:
     if d.effect == "none":
         loose = _loose(tw)
         parts.append(f"Wong's residuals show no significant systematic structure of relevant size ({ptxt}; threshold "
-                     f"{ALPHA:g} Bonferroni-corrected, size >= {MIN_EFFECT:g} cell-noise sigma and >= {MIN_REL:.0%} "
+                     f"{ALPHA:g} on Holm-adjusted p, size >= {MIN_EFFECT:g} cell-noise sigma and >= {MIN_REL:.0%} "
                      "of the channel's magnitude): the data show no effect Wong's model misses, "
                      + (f"but they cannot exclude one either ({_loose_text(loose)}): Wong's model is kept for want of "
                         "evidence, not because the data confirm it." if loose else "so Wong's model is kept."))
-        small = _detectable_only(tw, len(tw))
+        small = _detectable_only(tw)
         if small:
             parts.append("A small systematic error is statistically detectable in " + ", ".join(small)
                          + " but is below the relevance threshold; it is not attributed to a cause.")

@@ -579,15 +579,17 @@ def report_dict(diag, *, terrain, wheel, inputs, time_sync: dict | None = None,
 # ============================================================================ findings (text from the numbers)
 
 
-def _n_tests(rep) -> int:
-    """Number of structure tests the Bonferroni correction divides by: every test of Wong's residuals
-    (keys ``<channel>``, ``<channel>@load``, ``<channel>@x``); before those keys existed the load test
-    was separate (``load_test``)."""
+def _test_level(rep, t: dict) -> tuple[float | None, float | None]:
+    """``(p, level)`` a structure test is judged by: Holm's adjusted p against the family level
+    (``p_holm``, module :mod:`wheelsoil.model.diagnosis`); a report written before it existed used
+    Bonferroni: the raw p against alpha over the number of tests (the load test was once separate)."""
     d = rep["diagnosis"]
+    alpha = (d.get("thresholds") or {}).get("alpha")
+    if "p_holm" in t:
+        return t["p_holm"], alpha
     tests = (d.get("structure_tests") or {}).get("wong") or {}
-    if any("@" in k for k in tests):
-        return max(1, len(tests))
-    return max(1, len(tests) + (1 if d.get("load_test") else 0))
+    n = len(tests) if any("@" in k for k in tests) else len(tests) + (1 if d.get("load_test") else 0)
+    return t.get("p"), (alpha / max(1, n) if alpha is not None else None)
 
 
 _AGAINST = {"": "against slip", "load": "against load", "x": "against distance/time"}
@@ -611,10 +613,10 @@ def structure_statements(rep) -> list:
     out = []
     if alpha is None or not tests:
         return out
-    lvl = alpha / _n_tests(rep)
     for key, t in tests.items():
         c = t.get("channel") or key.partition("@")[0]
-        p, es, er, ea = t.get("p"), t.get("effect_sigma"), t.get("effect_rel"), t.get("effect_abs")
+        (p, lvl), es, er, ea = _test_level(rep, t), t.get("effect_sigma"), t.get("effect_rel"), t.get("effect_abs")
+        adj = "Holm-adjusted p" if "p_holm" in t else "p"
         ch = _test_label(key)
         if p is None:
             out.append({"test": key, "channel": c, "kind": "untested", "text": f"{ch}: too few independent units to test."})
@@ -629,14 +631,14 @@ def structure_statements(rep) -> list:
                 fails.append(f"{num(100 * er, 2) if er is not None else 'n/a'} % < {num(100 * min_r, 2)} %")
             if fails:
                 out.append({"test": key, "channel": c, "kind": "small", "text":
-                            f"{ch}: statistically significant (p = {num(p, 2)} < {num(lvl, 2)}) but too small to "
+                            f"{ch}: statistically significant ({adj} = {num(p, 2)} < {num(lvl, 2)}) but too small to "
                             f"attribute to a cause ({size}; size rule failed: {'; '.join(fails)})."})
             else:
                 out.append({"test": key, "channel": c, "kind": "systematic", "text":
-                            f"{ch}: systematic (p = {num(p, 2)} < {num(lvl, 2)}) and large enough ({size})."})
+                            f"{ch}: systematic ({adj} = {num(p, 2)} < {num(lvl, 2)}) and large enough ({size})."})
         else:
             out.append({"test": key, "channel": c, "kind": "not_significant", "text":
-                        f"{ch}: not significant (p = {num(p, 2)} >= {num(lvl, 2)}; {size})."})
+                        f"{ch}: not significant ({adj} = {num(p, 2)} >= {num(lvl, 2)}; {size})."})
     return out
 
 

@@ -59,7 +59,7 @@ from .slip import PHASES, accel_cycles, classify_phases, slip_ratio
 from .timebase import (MAX_GRID_ROWS, cycle_loss, find_clock_steps, find_time_outliers, robust_period,
                        split_joined_parts)
 from .timesync import LatencyEstimate, estimate_latency, estimate_latency_traction, fit_gps_time_mapping
-from .wft import assemble_wft_samples, rotate_to_hub, rotation_ripple
+from .wft import angle_steps, assemble_wft_samples, rotate_to_hub, rotation_ripple
 
 __all__ = ["ProcessResult", "process_recording", "COLUMNS", "MAX_FILL_SAMPLES"]
 
@@ -1208,6 +1208,15 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
                                      "samples are treated as lost, like an overload")
             t_w = rel_s(ws.timestamp_ns)
             if all(k in cols for k in ("wft_fx_w", "wft_fz_w", "wft_angle")):
+                cols["wft_angle"], jumps = angle_steps(cols["wft_angle"])
+                if jumps:
+                    quality["wft_angle_jumps"] = [{"t_s": float(t_w[r]), "jump_deg": math.degrees(j)}
+                                                  for r, j in jumps]
+                    warns.append(f"WFT: the wheel angle jumps {len(jumps)} time(s) within one sample ("
+                                 + ", ".join(f"{math.degrees(j):+.2f} deg at t = {t_w[r]:.2f} s" for r, j in jumps[:5])
+                                 + (", ..." if len(jumps) > 5 else "") + "), more than the wheel can turn: the "
+                                 "encoder lost or gained counts. Each jump is taken out of the later angles, so the "
+                                 "forces are rotated to the hub with the wheel's angle; check the encoder")
                 fx, fz = rotate_to_hub(cols["wft_fx_w"], cols["wft_fz_w"], cols["wft_angle"])
                 fx[bad] = np.nan
                 fz[bad] = np.nan

@@ -127,7 +127,7 @@ def write_recording(path, truth: Truth, *, latency_s: float = 0.1, seed: int = 0
                     wheel_mass_kg: float = WHEEL_MASS_KG, wheel_inertia_kgm2: float = WHEEL_INERTIA_KGM2,
                     config=None, ts_edit=None, drop_wft_runs=(), drop_frames: dict | None = None,
                     burst_s: float = 0.0, fronts_coupled: bool = False, at_max: dict | None = None,
-                    fx_w_gain: float = 1.0, fx_w_offset_n: float = 0.0,
+                    fx_w_gain: float = 1.0, fx_w_offset_n: float = 0.0, angle_jumps=(),
                     wheel_speed_lag_s: float = 0.0, rl_lag_s: float = 0.0) -> dict:
     """Encode ``truth`` as frames and write an MCAP recording.
 
@@ -152,7 +152,9 @@ def write_recording(path, truth: Truth, *, latency_s: float = 0.1, seed: int = 0
     differentials) instead of rolling freely; ``at_max`` ``{signal name: (t0_s, t1_s)}``:
     ``Fx_w`` or ``WheelSpeed_RL`` reads its DBC maximum in that window (a clipped sensor, or
     the all-ones "not available" code); ``fx_w_gain``, ``fx_w_offset_n``: the rotating Fx_w
-    bridge reads with that gain and offset (a calibration fault); ``wheel_speed_lag_s``: every
+    bridge reads with that gain and offset (a calibration fault); ``angle_jumps`` ``[(t_s, deg), ...]``:
+    the reported WheelAngle jumps by that much at t_s and keeps it (an encoder losing or gaining
+    counts; the forces stay in the true rotating frame); ``wheel_speed_lag_s``: every
     wheel speed is the speed that long before its frame (a module that reads late); ``rl_lag_s``:
     the measured (left-rear) wheel's channel alone lags that much more (a filter in its sensor).
 
@@ -177,6 +179,9 @@ def write_recording(path, truth: Truth, *, latency_s: float = 0.1, seed: int = 0
     my_hub = truth.torque_nm + wheel_inertia_kgm2 * np.gradient(truth.omega_radps, t)
     fx_w = fx_hub * ca - truth.load_n * sa + rng.normal(0, FORCE_NOISE_N, n)
     fx_w = fx_w * fx_w_gain + fx_w_offset_n
+    angle_rep = angle.copy()
+    for t0, deg in angle_jumps:
+        angle_rep[t >= t0] += np.radians(deg)
     at_max = at_max or {}
     if "Fx_w" in at_max:
         fx_w[(t >= at_max["Fx_w"][0]) & (t < at_max["Fx_w"][1])] = \
@@ -200,7 +205,7 @@ def write_recording(path, truth: Truth, *, latency_s: float = 0.1, seed: int = 0
                                                     "Status": 0}, strict=False)))
         can0.append((t[i] + 2.3e-4, m_m, m_m.encode({"Mx_w": 0.0, "My": my[i], "Mz_w": 0.0, "Counter": c,
                                                      "Status": 0}, strict=False)))
-        can0.append((t[i] + 3.6e-4, m_a, m_a.encode({"WheelAngle": np.degrees(angle[i]) % 360.0, "Counter": c,
+        can0.append((t[i] + 3.6e-4, m_a, m_a.encode({"WheelAngle": np.degrees(angle_rep[i]) % 360.0, "Counter": c,
                                                      "Status": 0}, strict=False)))
     m_d = wft.get_message_by_name("WFT_RL_Diag")  # multiplexed diagnostics, 1 Hz per mux value
     for sec in np.arange(0.0, t[-1], 1.0):
