@@ -1934,12 +1934,13 @@ def _summary(d: Diagnosis) -> str:
                      + f" (slope {zr['slope'] * 1e3:.1f} +/- {zr['stderr'] * 1e3:.1f} mm per unit slip); Wong's static "
                      f"sinkage is {np.nanmean(zw) * 1e3:.1f} mm.")
     tw = d.structure["wong"]
-    ptxt = ", ".join(f"{k.replace('drawbar_pull_n', 'Dp').replace('torque_nm', 'T').replace('sinkage_m', 'z')} "
-                     f"p = {t['p']:.2g}" for k, t in tw.items() if np.isfinite(t["p"]))
+    ptxt = "Holm-adjusted " + ", ".join(
+        f"{k.replace('drawbar_pull_n', 'Dp').replace('torque_nm', 'T').replace('sinkage_m', 'z')} p = {t['p_holm']:.2g}"
+        for k, t in tw.items() if np.isfinite(t.get("p_holm", np.nan)))
     if d.effect == "none":
         loose = _loose(tw)
         parts.append(f"Wong's residuals show no significant systematic structure of relevant size ({ptxt}; threshold "
-                     f"{ALPHA:g} on Holm-adjusted p, size >= {MIN_EFFECT:g} cell-noise sigma and >= {MIN_REL:.0%} "
+                     f"{ALPHA:g}, size >= {MIN_EFFECT:g} cell-noise sigma and >= {MIN_REL:.0%} "
                      "of the channel's magnitude): the data show no effect Wong's model misses, "
                      + (f"but they cannot exclude one either ({_loose_text(loose)}): Wong's model is kept for want of "
                         "evidence, not because the data confirm it." if loose else "so Wong's model is kept."))
