@@ -59,7 +59,7 @@ from .slip import PHASES, accel_cycles, classify_phases, slip_ratio
 from .timebase import (MAX_GRID_ROWS, cycle_loss, find_clock_steps, find_time_outliers, robust_period,
                        split_joined_parts)
 from .timesync import LatencyEstimate, estimate_latency, estimate_latency_traction, fit_gps_time_mapping
-from .wft import angle_steps, assemble_wft_samples, rotate_to_hub, rotation_ripple
+from .wft import angle_jumps, assemble_wft_samples, rotate_to_hub, rotation_ripple
 
 __all__ = ["ProcessResult", "process_recording", "COLUMNS", "MAX_FILL_SAMPLES"]
 
@@ -1208,7 +1208,7 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
                                      "samples are treated as lost, like an overload")
             t_w = rel_s(ws.timestamp_ns)
             if all(k in cols for k in ("wft_fx_w", "wft_fz_w", "wft_angle")):
-                cols["wft_angle"], jumps = angle_steps(cols["wft_angle"])
+                cols["wft_angle"], jumps = angle_jumps(cols["wft_angle"])
                 if jumps:
                     quality["wft_angle_jumps"] = [{"t_s": float(t_w[r]), "jump_deg": math.degrees(j)}
                                                   for r, j in jumps]

@@ -22,14 +22,14 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["unwrap_counter", "rotate_to_hub", "angle_steps", "WftSamples", "assemble_wft_samples", "GapReport"]
+__all__ = ["unwrap_counter", "rotate_to_hub", "angle_jumps", "WftSamples", "assemble_wft_samples", "GapReport"]
 
 #: A wheel-angle jump within one sample at least this large [rad] cannot be the wheel's motion (see
-#: :func:`angle_steps`): 0.5 deg more or less than the neighbouring samples' turn in 2 ms is an
+#: :func:`angle_jumps`): 0.5 deg more or less than the neighbouring samples' turn in 2 ms is an
 #: angular acceleration of about 2000 rad/s^2, some 25 kN m on an 11.5 kg m^2 wheel.
-ANGLE_STEP_MIN_RAD = float(np.radians(0.5))
+ANGLE_JUMP_MIN_RAD = float(np.radians(0.5))
 #: ... and at least this many robust standard deviations of the per-sample turn's scatter.
-ANGLE_STEP_SIGMA = 10.0
+ANGLE_JUMP_SIGMA = 10.0
 
 
 def unwrap_counter(timestamp_ns: np.ndarray, counter: np.ndarray, *, modulo: int = 256,
@@ -132,15 +132,15 @@ def rotate_to_hub(fx_w: np.ndarray, fz_w: np.ndarray, angle_rad: np.ndarray) -> 
     return fx_w * ca + fz_w * sa, -fx_w * sa + fz_w * ca
 
 
-def angle_steps(angle_rad: np.ndarray, *, half_window: int = 10, max_gap: int = 5
+def angle_jumps(angle_rad: np.ndarray, *, half_window: int = 10, max_gap: int = 5
                 ) -> tuple[np.ndarray, list[tuple[int, float]]]:
     """Find and undo jumps of the transducer's wheel angle: an encoder that loses or gains counts.
 
     The wheel turns smoothly: from one 2 ms sample to the next its turn changes by far less than a
-    degree (:data:`ANGLE_STEP_MIN_RAD`).  Each turn between valid samples up to ``max_gap`` samples
+    degree (:data:`ANGLE_JUMP_MIN_RAD`).  Each turn between valid samples up to ``max_gap`` samples
     apart is compared with the local turn per sample (the median over ``half_window`` turns on
-    either side) times the gap; a departure of at least :data:`ANGLE_STEP_MIN_RAD` and
-    :data:`ANGLE_STEP_SIGMA` robust standard deviations (1.4826 x the median absolute departure) is a
+    either side) times the gap; a departure of at least :data:`ANGLE_JUMP_MIN_RAD` and
+    :data:`ANGLE_JUMP_SIGMA` robust standard deviations (1.4826 x the median absolute departure) is a
     jump of the reading, not of the wheel.  Every later angle then carries it, and the hub forces
     rotated with it (hardware.md, "Frames and signs") are off by ``W sin(jump)`` in Fx: hundreds of
     newtons for a degree or two.  The jumps are subtracted from every later sample (an encoder that
@@ -168,7 +168,7 @@ def angle_steps(angle_rad: np.ndarray, *, half_window: int = 10, max_gap: int = 
     if ok.sum() < w:
         return a, []
     sigma = 1.4826 * float(np.median(np.abs(dev[ok])))
-    hit = np.flatnonzero(ok & (np.abs(np.nan_to_num(dev)) >= max(ANGLE_STEP_MIN_RAD, ANGLE_STEP_SIGMA * sigma)))
+    hit = np.flatnonzero(ok & (np.abs(np.nan_to_num(dev)) >= max(ANGLE_JUMP_MIN_RAD, ANGLE_JUMP_SIGMA * sigma)))
     if hit.size == 0:
         return a, []
     jumps = [(int(rows[i + 1]), float(dev[i])) for i in hit]
