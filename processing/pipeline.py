@@ -90,6 +90,12 @@ FREE_ROLLING_HOLD_S = 0.5
 #: this fraction of the mean load is reported as a calibration fault: a 2x ripple of 3 % is a 6 %
 #: gain mismatch of the rotating bridges; a tyre's radial force variation is usually under 1.5 %.
 WFT_RIPPLE_REL = 0.03
+#: A GNSS velocity frame whose receiver accuracy figure (the message's ``Accuracy_*`` signal, in the
+#: receiver's own unit) is at least this many times its median over the run is a degraded solution
+#: (too few satellites, RTK lost, the INS coasting on its own integration): its velocity is four
+#: times less certain than the run's typical one, and an INS integrating through a GNSS outage
+#: drifts while its Validity flag still says 1.  Such frames are left out as lost, said in a warning.
+GNSS_ACCURACY_DEGRADED = 4.0
 #: GNSS latency search range [s] (hardware.md: typically 20-200 ms); an estimate within 4 ms of
 #: either end is an edge hit (unreliable).
 LATENCY_MAX_S = 0.5
@@ -283,6 +289,14 @@ def _validity_signal(names: list, signal: str) -> str | None:
     ``INS_Vel_Forwards_2D``); None when the message has none."""
     hits = [n for n in names if n.startswith("Validity_") and signal.startswith(n[len("Validity_"):])]
     return max(hits, key=len) if hits else None
+
+
+def _accuracy_signal(names: list) -> str | None:
+    """The receiver's accuracy figure among a message's signal ``names``: its one ``Accuracy_*`` signal (the
+    RT-Range/SpeedBox DBC convention: ``Accuracy_INS_Vel_Body`` for the body-axis velocities); None when the
+    message has none or several."""
+    hits = [n for n in names if n.startswith("Accuracy_")]
+    return hits[0] if len(hits) == 1 else None
 
 
 def _at_range_limit(cfg, ref, v: np.ndarray) -> np.ndarray:
@@ -998,12 +1012,14 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
         if "Status" in [s.name for s in msg.signals]:
             select[sig[key].message].add("Status")
     validity = {}  # GNSS velocity key -> the receiver's validity flag of it in the same message, if the DBC has one
+    accuracy = {}  # ... and its accuracy figure
     for key in ("gnss_forward_velocity", "gnss_speed"):
         msg = cfg.database(sig[key].bus).get_message_by_name(sig[key].message)
-        flag = _validity_signal([s.name for s in msg.signals], sig[key].signal)
-        if flag:
-            validity[key] = flag
-            select[sig[key].message].add(flag)
+        names = [s.name for s in msg.signals]
+        for found, flag in ((validity, _validity_signal(names, sig[key].signal)), (accuracy, _accuracy_signal(names))):
+            if flag:
+                found[key] = flag
+                select[sig[key].message].add(flag)
     decoder = Decoder({bus: [cfg.database(bus)] for bus in cfg.buses}, select=select)
     screen = _FrameScreen({bus: [m for m in cfg.database(bus).messages if m.name in select] for bus in cfg.buses})
 
@@ -1356,6 +1372,20 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
         g_v = np.where(bad, np.nan, g_v)
         warns.append(f"GNSS: {int(bad.sum())} of {bad.size} {label(g_key)} frames flagged invalid by the receiver "
                      f"({validity[g_key]} = 0, e.g. no fix): left out as lost, so speed and slip are NaN there")
+    acc = dec[g_msg].signals.get(accuracy[g_key]) if g_t is not None and g_key in accuracy else None
+    if acc is not None and np.isfinite(g_v).any():
+        typical = float(np.nanmedian(np.where(np.isfinite(g_v), acc, np.nan)))
+        bad = np.isfinite(g_v) & (acc >= GNSS_ACCURACY_DEGRADED * typical) if typical > 0 else np.zeros(acc.shape, bool)
+        if bad.any():
+            g_v = np.where(bad, np.nan, g_v)
+            spans = [(float(rel_s(g_t[a:a + 1])[0]), float(rel_s(g_t[b - 1:b])[0])) for a, b in segments(bad)]
+            quality["gnss_degraded_spans_s"] = spans
+            warns.append(f"GNSS: {int(bad.sum())} of {bad.size} {label(g_key)} frames with the receiver's accuracy "
+                         f"figure ({accuracy[g_key]}) {GNSS_ACCURACY_DEGRADED:g} or more times its median over the run "
+                         f"({typical:g}), in {len(spans)} span(s) ("
+                         + ", ".join(f"{a:.1f}-{b:.1f} s" for a, b in spans[:5]) + (", ..." if len(spans) > 5 else "")
+                         + "): a degraded solution (few satellites, the INS coasting; its velocity drifts while "
+                         "flagged valid), left out as lost, so speed and slip are NaN there")
     if g_t is not None:
         g_bus = dec[g_msg].bus
         rep, g_period = _time_gaps(g_msg, g_t, *cfg.cycle_time_s(g_bus, g_msg), parts=tb_parts.get(g_msg))

@@ -128,7 +128,7 @@ def write_recording(path, truth: Truth, *, latency_s: float = 0.1, seed: int = 0
                     config=None, ts_edit=None, drop_wft_runs=(), drop_frames: dict | None = None,
                     burst_s: float = 0.0, fronts_coupled: bool = False, at_max: dict | None = None,
                     fx_w_gain: float = 1.0, fx_w_offset_n: float = 0.0, angle_jumps=(),
-                    wheel_speed_lag_s: float = 0.0, rl_lag_s: float = 0.0) -> dict:
+                    gnss_outages=(), wheel_speed_lag_s: float = 0.0, rl_lag_s: float = 0.0) -> dict:
     """Encode ``truth`` as frames and write an MCAP recording.
 
     ``drop_wft_bursts``: that many runs of 1..12 lost WFT samples;
@@ -154,7 +154,9 @@ def write_recording(path, truth: Truth, *, latency_s: float = 0.1, seed: int = 0
     the all-ones "not available" code); ``fx_w_gain``, ``fx_w_offset_n``: the rotating Fx_w
     bridge reads with that gain and offset (a calibration fault); ``angle_jumps`` ``[(t_s, deg), ...]``:
     the reported WheelAngle jumps by that much at t_s and keeps it (an encoder losing or gaining
-    counts; the forces stay in the true rotating frame); ``wheel_speed_lag_s``: every
+    counts; the forces stay in the true rotating frame); ``gnss_outages`` ``[(t0_s, t1_s, drift_mps2), ...]``:
+    the INS coasts through a GNSS outage, its velocity drifting by ``drift_mps2 (t - t0)``, still flagged
+    valid, the accuracy figures 40 instead of 10; ``wheel_speed_lag_s``: every
     wheel speed is the speed that long before its frame (a module that reads late); ``rl_lag_s``:
     the measured (left-rear) wheel's channel alone lags that much more (a filter in its sensor).
 
@@ -248,11 +250,15 @@ def write_recording(path, truth: Truth, *, latency_s: float = 0.1, seed: int = 0
             v = float(np.interp(tf, t, truth.speed_mps))
             rx = tf + latency_s + abs(rng.normal(0, 5e-4))
             vel = v + rng.normal(0, 0.01)
+            acc = 10
+            for t0, t1, drift in gnss_outages:
+                if t0 <= tf < t1:
+                    vel, acc = vel + drift * (tf - t0), 40
             can1.append((rx, m_s, m_s.encode({"GPS_Speed_2D": abs(vel), "GPS_Speed_3D": abs(vel),
-                                               "Accuracy_GPS_Speed": 10, "Validity_GPS_Speed_2D": 1,
+                                               "Accuracy_GPS_Speed": acc, "Validity_GPS_Speed_2D": 1,
                                                "Validity_GPS_Speed_3D": 1})))
             can1.append((rx + 2e-4, m_v, m_v.encode({"INS_Vel_Forwards_2D": vel, "INS_Vel_Sideways_2D": 0.0,
-                                                      "Accuracy_INS_Vel_Body": 10, "Validity_INS_Vel_Forwards": 1,
+                                                      "Accuracy_INS_Vel_Body": acc, "Validity_INS_Vel_Forwards": 1,
                                                       "Validity_INS_Vel_Sideways": 1})))
             week = np.floor(gfix / 604800)
             can1.append((rx + 4e-4, m_t, m_t.encode({"GPS_Week": week, "GPS_Time": round(gfix - week * 604800, 3),

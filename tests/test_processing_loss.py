@@ -190,3 +190,22 @@ def test_an_encoder_that_loses_counts_is_found_and_its_jumps_taken_out(truth, tm
     d = np.abs(bad.signals["drawbar_pull_n"].to_numpy() - clean.signals["drawbar_pull_n"].to_numpy())
     w = float(np.nanmean(clean.signals["load_n"].to_numpy()))
     assert np.nanmax(d) < 0.002 * w  # uncorrected: W sin(2.5 deg) = 4.4 % of W after t = 6 s
+
+
+def test_gnss_frames_the_receiver_rates_degraded_are_left_out_not_used(truth, tmp_path):
+    """An INS coasting through a GNSS outage drifts while its Validity flag still says 1; the receiver's
+    accuracy figure says it (an independent generator's outages: 0.16 m/s of drift in slip, unseen).
+    Frames whose figure is 4x the run's median or more are lost samples, their span said; the rest
+    of the run's speed is untouched."""
+    clean = process_recording(write_recording(tmp_path / "clean.mcap", truth)["path"])
+    out = process_recording(write_recording(tmp_path / "out.mcap", truth, gnss_outages=[(8.0, 12.0, 0.05)])["path"])
+    assert "gnss_degraded_spans_s" not in clean.quality
+    spans = out.quality["gnss_degraded_spans_s"]
+    assert len(spans) == 1 and abs(spans[0][0] - 8.1) < 0.2 and abs(spans[0][1] - 12.1) < 0.2, spans
+    assert any("accuracy figure" in w and "left out as lost" in w for w in out.warnings)
+    t = out.signals["t_s"].to_numpy()
+    v, v0 = out.signals["speed_mps"].to_numpy(), clean.signals["speed_mps"].to_numpy()
+    inside = (t > 8.5) & (t < 11.5)
+    assert np.isnan(v[inside]).all()  # uncorrected: up to 0.2 m/s off
+    away = (t < 7.0) | (t > 13.0)
+    assert np.nanmax(np.abs(v[away] - v0[away])) < 0.01
