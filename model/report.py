@@ -579,17 +579,17 @@ def report_dict(diag, *, terrain, wheel, inputs, time_sync: dict | None = None,
 # ============================================================================ findings (text from the numbers)
 
 
-def _test_level(rep, t: dict) -> tuple[float | None, float | None]:
-    """``(p, level)`` a structure test is judged by: Holm's adjusted p against the family level
+def _test_level(rep, t: dict) -> tuple[float | None, float | None, str]:
+    """``(p, level, name of p)`` a structure test is judged by: Holm's adjusted p against the family level
     (``p_holm``, module :mod:`wheelsoil.model.diagnosis`); a report written before it existed used
     Bonferroni: the raw p against alpha over the number of tests (the load test was once separate)."""
     d = rep["diagnosis"]
     alpha = (d.get("thresholds") or {}).get("alpha")
     if "p_holm" in t:
-        return t["p_holm"], alpha
+        return t["p_holm"], alpha, "Holm-adjusted p"
     tests = (d.get("structure_tests") or {}).get("wong") or {}
     n = len(tests) if any("@" in k for k in tests) else len(tests) + (1 if d.get("load_test") else 0)
-    return t.get("p"), (alpha / max(1, n) if alpha is not None else None)
+    return t.get("p"), (alpha / max(1, n) if alpha is not None else None), "p"
 
 
 _AGAINST = {"": "against slip", "load": "against load", "x": "against distance/time"}
@@ -615,8 +615,8 @@ def structure_statements(rep) -> list:
         return out
     for key, t in tests.items():
         c = t.get("channel") or key.partition("@")[0]
-        (p, lvl), es, er, ea = _test_level(rep, t), t.get("effect_sigma"), t.get("effect_rel"), t.get("effect_abs")
-        adj = "Holm-adjusted p" if "p_holm" in t else "p"
+        p, lvl, adj = _test_level(rep, t)
+        es, er, ea = t.get("effect_sigma"), t.get("effect_rel"), t.get("effect_abs")
         ch = _test_label(key)
         if p is None:
             out.append({"test": key, "channel": c, "kind": "untested", "text": f"{ch}: too few independent units to test."})

@@ -1374,11 +1374,12 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
                      f"({validity[g_key]} = 0, e.g. no fix): left out as lost, so speed and slip are NaN there")
     acc = dec[g_msg].signals.get(accuracy[g_key]) if g_t is not None and g_key in accuracy else None
     if acc is not None and np.isfinite(g_v).any():
-        typical = float(np.nanmedian(np.where(np.isfinite(g_v), acc, np.nan)))
-        bad = np.isfinite(g_v) & (acc >= GNSS_ACCURACY_DEGRADED * typical) if typical > 0 else np.zeros(acc.shape, bool)
-        if bad.any():
+        typical = float(np.nanmedian(acc[np.isfinite(g_v)]))
+        bad = np.isfinite(g_v) & (acc >= GNSS_ACCURACY_DEGRADED * typical)
+        if typical > 0 and bad.any():  # a figure of 0 says nothing
             g_v = np.where(bad, np.nan, g_v)
-            spans = [(float(rel_s(g_t[a:a + 1])[0]), float(rel_s(g_t[b - 1:b])[0])) for a, b in segments(bad)]
+            t_rel = rel_s(g_t)
+            spans = [(float(t_rel[a]), float(t_rel[b - 1])) for a, b in segments(bad)]
             quality["gnss_degraded_spans_s"] = spans
             warns.append(f"GNSS: {int(bad.sum())} of {bad.size} {label(g_key)} frames with the receiver's accuracy "
                          f"figure ({accuracy[g_key]}) {GNSS_ACCURACY_DEGRADED:g} or more times its median over the run "
