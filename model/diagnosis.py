@@ -78,7 +78,10 @@ decides with this rule (constants below; none was tuned on a benchmark):
    off).  The step drift's evidence pays for the choice of its change point
    among the possible splits (a uniform prior over them).
 5. **Verdict.**  The supported hypothesis with the highest posterior is the
-   candidate.  Its effect is named only if the effect's posterior probability
+   candidate; when that is a catch-all (below) and a narrower form of its
+   effect (one lab value, one lab test's values) has evidence within
+   ``BF_ALTERNATIVE`` of it while the catch-all predicts no measured channel
+   better out of sample, the narrower form is (:func:`_narrower`).  Its effect is named only if the effect's posterior probability
    is at least ``P_NAME`` and it holds, out of sample (paired test of step
    2), against every supported hypothesis of another effect, a listed cause
    or a generic alternative for causes on no list: it
@@ -120,7 +123,9 @@ decides with this rule (constants below; none was tuned on a benchmark):
    them is the candidate, Wong with the lab's terrain is shown to err, not
    that a soil value is what is wrong: ``unexplained``, with it as the
    candidate.  A terrain mismatch or drift is named by the re-fit of a
-   single lab value (a lab error the data point at), and only when that
+   single lab value or of the values one lab test gives together (the plate
+   test's k_eq and n, the shear test's c, phi and K: a lab error the data
+   point at), and only when that
    claim holds on new data: its whole (``Hypothesis.whole``, the same re-fit
    or drift of all five values) must not predict any measured channel better
    out of sample (step 2's paired test, worsening none, at the level at which
@@ -207,7 +212,7 @@ from scipy import stats
 
 from .crossval import FIT_MAX_ITER, MAX_FOLDS, HypFit, cross_validate, fit_hypothesis, inv_psd, sample_predictions
 from .data import CHANNELS, FitData, prepare_data
-from .hypotheses import EFFECTS, HYPOTHESES, Context, DriftStep, get_hypothesis, lab_prior
+from .hypotheses import EFFECTS, HYPOTHESES, Context, DriftStep, TerrainTest, get_hypothesis, lab_prior
 from .hypotheses import LIBRARY_PRIOR_WIDEN, speed_reference
 from .wong import sinkage_eq10
 
@@ -994,6 +999,23 @@ def _catch_all(f: HypFit) -> bool:
     return f.effect in ("terrain_mismatch", "terrain_drift") and f.hypothesis.terrain_block
 
 
+def _narrower(data, fits, best: str, supported, probs) -> str:
+    """The candidate in place of the catch-all ``best`` (:func:`_catch_all`): the most probable
+    supported hypothesis of the same effect that is not a catch-all (a re-fit or drift of one lab
+    value or one lab test's values), when its evidence is within ``BF_ALTERNATIVE`` of the catch-all's
+    (the data do not prefer the catch-all strongly: Kass & Raftery 1995) and the catch-all predicts
+    no measured channel better out of sample (:func:`_better_than`, as a named model's whole must
+    not); else ``best``.  The catch-all's edge is then not shown on new data, and the narrower claim
+    goes on to every test a candidate meets (step 5)."""
+    pb = probs.get(best, 0.0)
+    narrow = [k for k in supported if fits[k].effect == fits[best].effect and not _catch_all(fits[k])
+              and probs.get(k, 0.0) * BF_ALTERNATIVE >= pb]
+    if not narrow:
+        return best
+    one = max(narrow, key=lambda k: probs.get(k, 0.0))
+    return best if _better_than(data, fits[one], fits[best]) else one
+
+
 def _effective_terrain(f: HypFit) -> bool:
     """True when the terrain part of ``f`` moved from the lab values (Wald, as :func:`_effective`)."""
     if not f.prior:
@@ -1151,8 +1173,9 @@ _LOOK_ALIKES = {
     "terrain_mismatch": ("a firm layer under the soil, a soil rebounding behind the wheel, lugs or a tread that "
                          "shear the soil at a larger radius, a slip angle, a deflecting tyre, a tyre-soil interface "
                          "weaker than the soil (it acts as a lower friction angle), a loose top layer (as a "
-                         "different cohesion), a soil stiffer at the wheel's loading rate than under the lab's "
-                         "plate (a viscous or wet soil: as a larger k_eq), a modulus that follows the load (a plate "
+                         "different cohesion), a cohesive surface crust (as a larger cohesion), a soil stiffer at the "
+                         "wheel's loading rate than under the lab's plate (a viscous or wet soil: as a larger k_eq) or "
+                         "stronger at its shear rate than in the shear box (as a larger c and phi), a modulus that follows the load (a plate "
                          "smaller than the contact patch: as another k_eq over a run whose load varies little): each "
                          "can change the drawbar pull and torque as a soil of other values would (measured on the "
                          "benchmark's held-out batches and an independent generator's runs)",
@@ -1397,6 +1420,8 @@ def diagnose(
                            f"{target_txt} only")
     else:
         best = max(supported, key=lambda k: probs.get(k, 0.0))
+        if _catch_all(fits[best]):
+            best = _narrower(data, fits, best, supported, probs)
         model = best
         pb = probs.get(best, 0.0)
         alternatives = [k for k in supported if k != best and probs.get(k, 0.0) * BF_ALTERNATIVE >= pb]
@@ -1454,19 +1479,20 @@ def diagnose(
                            + _LOOK_ALIKES[fits[best].effect][0] + ")")
         elif _catch_all(fits[best]):
             effect = "unexplained"
-            # a one-value re-fit (or drift) that is supported but less probable: say what it found
+            # a one-value or one-test re-fit (or drift) that is supported but less probable: say what it found
             one = max((k for k in supported if fits[k].effect == fits[best].effect and not _catch_all(fits[k])),
                       key=lambda k: probs.get(k, 0.0), default=None)
             if one is not None:
                 o = fits[one]
                 bf = lp[best] - lp[one]  # ln Bayes factor of the catch-all over it
-                lead = (f"{TITLES[best]} explains the data best; the best re-fit of a single lab value, "
+                lead = (f"{TITLES[best]} explains the data best; the best re-fit of "
+                        + ("one lab test's values" if isinstance(o.hypothesis, TerrainTest) else "a single lab value") + ", "
                         f"{TITLES[o.name]} (" + ", ".join(_param_text(q, v, o.stderr.get(q)) for q, v in o.params.items())
                         + f"), also lowers the {target_txt} error out of sample, but with "
                         + (f"{math.exp(bf):.2g}" if bf < 700 else f"e^{bf:.0f}")
                         + " times less evidence")
             else:
-                lead = f"only {TITLES[best]} explains the data, no re-fit of a single lab value does"
+                lead = f"only {TITLES[best]} explains the data, no re-fit of a single lab value (or of one lab test's values) does"
             if fits[best].name == "terrain":  # what it found, against the lab's values
                 lead += "; its values: " + ", ".join(_lab_text(fits[best], q) for q in fits[best].prior)
             reasons.append(lead + ": Wong with the lab's terrain errs, but the data do not show which value is "

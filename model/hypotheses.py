@@ -130,6 +130,8 @@ __all__ = [
     "DriftOne",
     "DriftStep",
     "TerrainOne",
+    "TerrainTest",
+    "LAB_TESTS",
 ]
 
 #: The verdicts ``diagnosis.effect`` can take (contract D).
@@ -434,6 +436,37 @@ def _terrain_one(name: str) -> TerrainOne:
         "title": f"terrain mismatch in {name} alone",
         "source": "Wong (2008) ch. 2; one lab value as a Gaussian prior (penalised least squares)"})
     return cls()
+
+
+class TerrainTest(TerrainOne):
+    """A terrain mismatch in the values of one lab test: ``params`` re-fitted against their lab
+    priors, the others at the lab values.  The plate-sinkage (bevameter) test gives k_eq and n
+    together from one pressure-sinkage curve, the shear test c, phi and K together from one set of
+    shear curves (Wong 2008 ch. 2; Bekker 1969): a faulty test (a plate too small for the soil's
+    layering, a shear ring's grousers slipping, a sample disturbed in transport) puts its error
+    in all its values at once, not in one of them.  It contains the one-value re-fits of its
+    values (``nested``) and must beat each of them out of sample to be supported; like them it is
+    named only when the re-fit of all five values does not predict a channel better (``whole``)
+    and, re-fitting several values, only when the fitted values do not conflict with the lab's."""
+
+    params: ClassVar[tuple[str, ...]] = ()
+
+    def own_params(self, ctx):
+        return tuple(q for q in terrain_params(ctx) if q.name in self.params)
+
+
+def _terrain_test(test: str, names: tuple[str, ...]) -> TerrainTest:
+    """The terrain mismatch in the values ``names`` of the lab's ``test`` (``plate`` or ``shear``)."""
+    cls = type(f"Terrain_{test}", (TerrainTest,), {
+        "params": names, "name": f"terrain_{test}", "nested": tuple(f"terrain_{n}" for n in names),
+        "title": f"terrain mismatch in the {test} test's values ({', '.join(names)})",
+        "source": f"Wong (2008) ch. 2: the {test} test gives {', '.join(names)} together; their lab values as "
+                  "Gaussian priors (penalised least squares)"})
+    return cls()
+
+
+#: The lab's two tests and the values each gives (:class:`TerrainTest`).
+LAB_TESTS = {"plate": ("k_eq", "n"), "shear": ("c", "phi", "K")}
 
 
 class VasilevTerrain(Vasilev):
@@ -1245,6 +1278,7 @@ class SmallAngleSinkage(Hypothesis):
 HYPOTHESES: dict[str, Hypothesis] = {
     h.name: h
     for h in (Wong(), Vasilev(), Lyasko(), Ding(), TerrainMismatch(), *(_terrain_one(n) for n in TERRAIN_NAMES),
+              *(_terrain_test(t, v) for t, v in LAB_TESTS.items()),
               VasilevTerrain(), DingTerrain(),
               WongReece(), WongReeceLoad(), DriftLinear(), DriftStep(), *(_drift_one(n) for n in TERRAIN_NAMES),
               *(_drift_one(n, step=True) for n in TERRAIN_NAMES), DrawbarResistance(), DrawbarDrift(), ZeroDrift(),

@@ -192,6 +192,25 @@ def test_one_value_terrain_mismatch_moves_only_its_value(param):
     assert h.available(dataclasses.replace(CTX, fit_terrain=True), True)
 
 
+@pytest.mark.parametrize("test, names", [("plate", ("k_eq", "n")), ("shear", ("c", "phi", "K"))])
+def test_a_lab_tests_mismatch_moves_that_tests_values_and_contains_their_one_value_refits(test, names):
+    """terrain_plate (k_eq, n) and terrain_shear (c, phi, K): Wong's model with that lab test's
+    values replaced together, the others as in the lab; each contains the one-value re-fits of its
+    values (it must beat them out of sample) and is named only against the five-value re-fit."""
+    h = HYPOTHESES[f"terrain_{test}"]
+    assert h.effect == "terrain_mismatch" and tuple(q.name for q in h.parameters(CTX)) == names
+    assert h.nested == tuple(f"terrain_{p}" for p in names) and h.whole == "terrain"
+    value = {q.name: (q.default + np.radians(3.0) if q.name == "phi" else q.default * 1.3) for q in h.parameters(CTX)}
+    base = {"k_eq": SAND.k_eq(DEFAULT_WHEEL.width), "n": SAND.n, "c": SAND.c, "phi": SAND.phi, "K": SAND.K, **value}
+    ref = wong_forces(SAND.replace(kc=0.0, kphi=base["k_eq"], n=base["n"], c=base["c"], phi=base["phi"], K=base["K"]),
+                      DEFAULT_WHEEL, W, S)
+    f = h.predict(CTX, W, S, None, value)
+    np.testing.assert_allclose(f.drawbar_pull_n, ref.drawbar_pull_n, rtol=1e-9)
+    np.testing.assert_allclose(f.torque_nm, ref.torque_nm, rtol=1e-9)
+    wong = HYPOTHESES["wong"].predict(CTX, W, S, None, {})
+    np.testing.assert_allclose(h.predict(CTX, W, S, None, _defaults(h)).drawbar_pull_n, wong.drawbar_pull_n, rtol=1e-9)
+
+
 def test_a_transducer_gain_scales_the_reading_with_the_wheels_inertia():
     """A gain error scales what the transducer reads, Fx = Dp - m_w dV/dt and My = T + I_w domega/dt
     (hardware.md); after processing adds the inertia back, Dp_c = (1 + g) Dp + g (Fx - Dp).  Only
