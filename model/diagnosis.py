@@ -70,7 +70,8 @@ decides with this rule (constants below; none was tuned on a benchmark):
    c_hat from the best fit, and the cells' design effect: cells of one
    accelerate cycle are correlated, so the data weigh as the effective number
    of independent cells, :func:`_design_effect`; :mod:`wheelsoil.model.crossval`) times equal
-   prior mass per effect, split among its forms.  An effect's probability
+   prior mass per effect, split among its forms (the re-fits of two or three lab values, of one lab
+   test or one value of each, share the mass of one form: :func:`_prior_mass`).  An effect's probability
    sums its hypotheses; a hypothesis whose effect parameters are null counts
    for the smaller model it then is (slip sinkage + terrain with a null slip
    sinkage is a terrain re-fit), and so does one that does not beat, out of
@@ -79,7 +80,7 @@ decides with this rule (constants below; none was tuned on a benchmark):
    among the possible splits (a uniform prior over them).
 5. **Verdict.**  The supported hypothesis with the highest posterior is the
    candidate; when that is a catch-all (below) and a narrower form of its
-   effect (one lab value, one lab test's values) has evidence within
+   effect (one lab value, one lab test's values, one value of each) has evidence within
    ``BF_ALTERNATIVE`` of it while the catch-all predicts no measured channel
    better out of sample, the narrower form is (:func:`_narrower`).  Its effect is named only if the effect's posterior probability
    is at least ``P_NAME`` and it holds, out of sample (paired test of step
@@ -123,9 +124,9 @@ decides with this rule (constants below; none was tuned on a benchmark):
    them is the candidate, Wong with the lab's terrain is shown to err, not
    that a soil value is what is wrong: ``unexplained``, with it as the
    candidate.  A terrain mismatch or drift is named by the re-fit of a
-   single lab value or of the values one lab test gives together (the plate
-   test's k_eq and n, the shear test's c, phi and K: a lab error the data
-   point at), and only when that
+   single lab value, of the values one lab test gives together (the plate
+   test's k_eq and n, the shear test's c, phi and K) or of one value of each
+   test (a lab error the data point at), and only when that
    claim holds on new data: its whole (``Hypothesis.whole``, the same re-fit
    or drift of all five values) must not predict any measured channel better
    out of sample (step 2's paired test, worsening none, at the level at which
@@ -999,6 +1000,17 @@ def _catch_all(f: HypFit) -> bool:
     return f.effect in ("terrain_mismatch", "terrain_drift") and f.hypothesis.terrain_block
 
 
+def _prior_mass(k: str, fits: dict, tried) -> float:
+    """The prior mass of hypothesis ``k`` among the hypotheses ``tried``: each effect 1, split
+    equally among its forms, a group of forms (``Hypothesis.prior_group``: the re-fits of two or three
+    lab values) counting as one form whose mass its members share (module doc, step 4)."""
+    eff = fits[k].effect
+    group = fits[k].hypothesis.prior_group
+    units = {fits[j].hypothesis.prior_group or j for j in tried if fits[j].effect == eff}
+    size = sum(1 for j in tried if fits[j].effect == eff and group and fits[j].hypothesis.prior_group == group)
+    return 1.0 / len(units) / max(size, 1)
+
+
 def _narrower(data, fits, best: str, supported, probs) -> str:
     """The candidate in place of the catch-all ``best`` (:func:`_catch_all`): the most probable
     supported hypothesis of the same effect that is not a catch-all (a re-fit or drift of one lab
@@ -1354,10 +1366,7 @@ def diagnose(
         for k in logev:
             if isinstance(fits[k].hypothesis, DriftStep):
                 logev[k] -= math.log(steps[1])
-    eff_count = {}
-    for k in logev:
-        eff_count[fits[k].effect] = eff_count.get(fits[k].effect, 0) + 1
-    lp = {k: v + math.log(1.0 / eff_count[fits[k].effect]) for k, v in logev.items() if np.isfinite(v)}
+    lp = {k: v + math.log(_prior_mass(k, fits, logev)) for k, v in logev.items() if np.isfinite(v)}
     mx = max(lp.values())
     z = sum(math.exp(v - mx) for v in lp.values())
     probs = {k: math.exp(v - mx) / z for k, v in lp.items()}
@@ -1486,13 +1495,13 @@ def diagnose(
                 o = fits[one]
                 bf = lp[best] - lp[one]  # ln Bayes factor of the catch-all over it
                 lead = (f"{TITLES[best]} explains the data best; the best re-fit of "
-                        + ("one lab test's values" if isinstance(o.hypothesis, TerrainTest) else "a single lab value") + ", "
+                        + ("fewer lab values" if isinstance(o.hypothesis, TerrainTest) else "a single lab value") + ", "
                         f"{TITLES[o.name]} (" + ", ".join(_param_text(q, v, o.stderr.get(q)) for q, v in o.params.items())
                         + f"), also lowers the {target_txt} error out of sample, but with "
                         + (f"{math.exp(bf):.2g}" if bf < 700 else f"e^{bf:.0f}")
                         + " times less evidence")
             else:
-                lead = f"only {TITLES[best]} explains the data, no re-fit of a single lab value (or of one lab test's values) does"
+                lead = f"only {TITLES[best]} explains the data, no re-fit of a single lab value (or of one or two lab tests' values) does"
             if fits[best].name == "terrain":  # what it found, against the lab's values
                 lead += "; its values: " + ", ".join(_lab_text(fits[best], q) for q in fits[best].prior)
             reasons.append(lead + ": Wong with the lab's terrain errs, but the data do not show which value is "

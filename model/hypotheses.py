@@ -132,6 +132,7 @@ __all__ = [
     "TerrainOne",
     "TerrainTest",
     "LAB_TESTS",
+    "TEST_PAIRS",
 ]
 
 #: The verdicts ``diagnosis.effect`` can take (contract D).
@@ -283,6 +284,9 @@ class Hypothesis:
     sample (the claim "only this value" must hold on new data).  "" for all others.
     ``sinks_with_slip``: a hypothesis of another effect than slip sinkage whose sinkage grows with slip;
     the diagnosis does not try it when the measured sinkage grows with slip.
+    ``prior_group``: hypotheses of one effect with the same non-empty group share the prior mass of one
+    form of that effect (the re-fits of two or three lab values: the lab tests' and the pairs'), so
+    that adding forms to a group takes no more prior mass from the effect's other forms.
     """
 
     name: ClassVar[str] = ""
@@ -295,6 +299,7 @@ class Hypothesis:
     nested: ClassVar[tuple[str, ...]] = ()
     whole: ClassVar[str] = ""
     sinks_with_slip: ClassVar[bool] = False
+    prior_group: ClassVar[str] = ""
 
     def own_params(self, ctx: Context) -> tuple[HParam, ...]:
         """The hypothesis' own parameters (besides the terrain block)."""
@@ -444,29 +449,43 @@ class TerrainTest(TerrainOne):
     together from one pressure-sinkage curve, the shear test c, phi and K together from one set of
     shear curves (Wong 2008 ch. 2; Bekker 1969): a faulty test (a plate too small for the soil's
     layering, a shear ring's grousers slipping, a sample disturbed in transport) puts its error
-    in all its values at once, not in one of them.  It contains the one-value re-fits of its
-    values (``nested``) and must beat each of them out of sample to be supported; like them it is
-    named only when the re-fit of all five values does not predict a channel better (``whole``)
-    and, re-fitting several values, only when the fitted values do not conflict with the lab's."""
+    in all its values at once, not in one of them.  Also one value of each test together
+    (:data:`TEST_PAIRS`): a field soil wetter or denser than the sample tested differs in its
+    pressure-sinkage and its shear values at once (Wong 2008 ch. 2), and a pair is the sparsest
+    such change; three or more values are the five-value re-fit, which names no cause.  It contains
+    the one-value re-fits of its values (``nested``) and must beat each of them out of sample to be
+    supported; like them it is named only when the re-fit of all five values does not predict a
+    channel better (``whole``) and, re-fitting several values, only when the fitted values do not
+    conflict with the lab's."""
 
     params: ClassVar[tuple[str, ...]] = ()
+    prior_group = "two or three values"
 
     def own_params(self, ctx):
         return tuple(q for q in terrain_params(ctx) if q.name in self.params)
 
 
-def _terrain_test(test: str, names: tuple[str, ...]) -> TerrainTest:
-    """The terrain mismatch in the values ``names`` of the lab's ``test`` (``plate`` or ``shear``)."""
-    cls = type(f"Terrain_{test}", (TerrainTest,), {
-        "params": names, "name": f"terrain_{test}", "nested": tuple(f"terrain_{n}" for n in names),
-        "title": f"terrain mismatch in the {test} test's values ({', '.join(names)})",
-        "source": f"Wong (2008) ch. 2: the {test} test gives {', '.join(names)} together; their lab values as "
-                  "Gaussian priors (penalised least squares)"})
+def _terrain_test(test: str | None, names: tuple[str, ...]) -> TerrainTest:
+    """The terrain mismatch in the values ``names`` of the lab's ``test`` (``plate`` or ``shear``), or
+    (``test`` None) in one value of each test, ``terrain_<a>_<b>``."""
+    if test is None:
+        name, title = f"terrain_{'_'.join(names)}", f"terrain mismatch in {' and '.join(names)} (one value of each lab test)"
+        source = ("Wong (2008) ch. 2: a field soil other than the sample tested differs in its pressure-sinkage and "
+                  "shear values at once; their lab values as Gaussian priors (penalised least squares)")
+    else:
+        name, title = f"terrain_{test}", f"terrain mismatch in the {test} test's values ({', '.join(names)})"
+        source = (f"Wong (2008) ch. 2: the {test} test gives {', '.join(names)} together; their lab values as "
+                  "Gaussian priors (penalised least squares)")
+    cls = type(f"Terrain_{name[8:]}", (TerrainTest,), {
+        "params": names, "name": name, "nested": tuple(f"terrain_{n}" for n in names), "title": title,
+        "source": source})
     return cls()
 
 
 #: The lab's two tests and the values each gives (:class:`TerrainTest`).
 LAB_TESTS = {"plate": ("k_eq", "n"), "shear": ("c", "phi", "K")}
+#: One value of each test (:class:`TerrainTest`): ``terrain_k_eq_c``, ..., ``terrain_n_K``.
+TEST_PAIRS = tuple((a, b) for a in LAB_TESTS["plate"] for b in LAB_TESTS["shear"])
 
 
 class VasilevTerrain(Vasilev):
@@ -1278,7 +1297,7 @@ class SmallAngleSinkage(Hypothesis):
 HYPOTHESES: dict[str, Hypothesis] = {
     h.name: h
     for h in (Wong(), Vasilev(), Lyasko(), Ding(), TerrainMismatch(), *(_terrain_one(n) for n in TERRAIN_NAMES),
-              *(_terrain_test(t, v) for t, v in LAB_TESTS.items()),
+              *(_terrain_test(t, v) for t, v in LAB_TESTS.items()), *(_terrain_test(None, v) for v in TEST_PAIRS),
               VasilevTerrain(), DingTerrain(),
               WongReece(), WongReeceLoad(), DriftLinear(), DriftStep(), *(_drift_one(n) for n in TERRAIN_NAMES),
               *(_drift_one(n, step=True) for n in TERRAIN_NAMES), DrawbarResistance(), DrawbarDrift(), ZeroDrift(),

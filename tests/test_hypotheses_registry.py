@@ -192,11 +192,13 @@ def test_one_value_terrain_mismatch_moves_only_its_value(param):
     assert h.available(dataclasses.replace(CTX, fit_terrain=True), True)
 
 
-@pytest.mark.parametrize("test, names", [("plate", ("k_eq", "n")), ("shear", ("c", "phi", "K"))])
+@pytest.mark.parametrize("test, names", [("plate", ("k_eq", "n")), ("shear", ("c", "phi", "K")),
+                                         ("k_eq_c", ("k_eq", "c")), ("n_K", ("n", "K"))])
 def test_a_lab_tests_mismatch_moves_that_tests_values_and_contains_their_one_value_refits(test, names):
-    """terrain_plate (k_eq, n) and terrain_shear (c, phi, K): Wong's model with that lab test's
-    values replaced together, the others as in the lab; each contains the one-value re-fits of its
-    values (it must beat them out of sample) and is named only against the five-value re-fit."""
+    """terrain_plate (k_eq, n), terrain_shear (c, phi, K) and one value of each test (terrain_k_eq_c, ...):
+    Wong's model with those values replaced together, the others as in the lab; each contains the
+    one-value re-fits of its values (it must beat them out of sample) and is named only against the
+    five-value re-fit."""
     h = HYPOTHESES[f"terrain_{test}"]
     assert h.effect == "terrain_mismatch" and tuple(q.name for q in h.parameters(CTX)) == names
     assert h.nested == tuple(f"terrain_{p}" for p in names) and h.whole == "terrain"
