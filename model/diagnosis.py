@@ -1014,7 +1014,7 @@ def _prior_mass(k: str, fits: dict, tried) -> float:
 def _narrower(data, fits, best: str, supported, probs) -> str:
     """The candidate in place of the catch-all ``best`` (:func:`_catch_all`): the most probable
     supported hypothesis of the same effect that is not a catch-all (a re-fit or drift of one lab
-    value or one lab test's values), when its evidence is within ``BF_ALTERNATIVE`` of the catch-all's
+    value, a re-fit of one lab test's values or of one value of each), when its evidence is within ``BF_ALTERNATIVE`` of the catch-all's
     (the data do not prefer the catch-all strongly: Kass & Raftery 1995) and the catch-all predicts
     no measured channel better out of sample (:func:`_better_than`, as a named model's whole must
     not); else ``best``.  The catch-all's edge is then not shown on new data, and the narrower claim
@@ -1488,7 +1488,7 @@ def diagnose(
                            + _LOOK_ALIKES[fits[best].effect][0] + ")")
         elif _catch_all(fits[best]):
             effect = "unexplained"
-            # a one-value or one-test re-fit (or drift) that is supported but less probable: say what it found
+            # a re-fit (or drift) of fewer values that is supported but less probable: say what it found
             one = max((k for k in supported if fits[k].effect == fits[best].effect and not _catch_all(fits[k])),
                       key=lambda k: probs.get(k, 0.0), default=None)
             if one is not None:

@@ -452,7 +452,7 @@ class TerrainTest(TerrainOne):
     in all its values at once, not in one of them.  Also one value of each test together
     (:data:`TEST_PAIRS`): a field soil wetter or denser than the sample tested differs in its
     pressure-sinkage and its shear values at once (Wong 2008 ch. 2), and a pair is the sparsest
-    such change; three or more values are the five-value re-fit, which names no cause.  It contains
+    such change; any other set of values is left to the five-value re-fit, which names no cause.  It contains
     the one-value re-fits of its values (``nested``) and must beat each of them out of sample to be
     supported; like them it is named only when the re-fit of all five values does not predict a
     channel better (``whole``) and, re-fitting several values, only when the fitted values do not
