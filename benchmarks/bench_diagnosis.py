@@ -226,6 +226,8 @@ def run_seed(seed: int, duration_s: float, front_wheels: str, keep_dir: str | No
     row["target"] = dg.get("target_channels")  # the channels a cause had to improve (Wong errs relevantly there)
     row["holds_against"] = {k: [route, dg["models"][k]["effect"]]
                             for k, route in (dg.get("holds_against") or {}).items()}
+    row["why"] = dg.get("why")  # for an unexplained verdict: the step of the rule that stopped the naming
+    row["alternatives"] = list(dg.get("alternatives") or [])
     return row
 
 
@@ -290,12 +292,28 @@ def report(rows: list[dict], wall_s: float, args) -> str:
                      f"{_pct(sum(r['right'] for r in fin), len(fin))} | {_pct(sum(r['right'] for r in fout), len(fout))} |")
     fin = [r for r in rows if r.get("family") == "in"]
     fout = [r for r in rows if r.get("family") == "out"]
+    floor = thresholds()["MIN_REL"]
+    lines += ["", "In-family runs not named right, by why (report.json diagnosis.why: the rule's first test that "
+              "stopped the naming; `none`: step 1 found no relevant systematic error)", "",
+              f"| why | seeds | of them >= {100 * floor:g} % floor | seeds (model; alternatives) |", "|---|---|---|---|"]
+    missed = {}
+    for r in fin:
+        if not r["right"]:
+            key = ("wrong cause" if r["wrong_cause"] else "none" if r["verdict"] == "none"
+                   else r.get("why") or r["verdict"])
+            missed.setdefault(key, []).append(r)
+    for key, rs in sorted(missed.items(), key=lambda kv: -len(kv[1])):
+        above = sum(bool(r.get("imprint")) and max(r["imprint"].values()) >= floor for r in rs)
+        lines.append(f"| {key} | {len(rs)} | {above} | " + ", ".join(
+            f"{r['seed']} ({r.get('model')}" + ("; " + ", ".join(r.get("alternatives") or []) if r.get("alternatives")
+                                                else "") + ")" for r in rs) + " |")
+    if not missed:
+        lines.append("| - | 0 | 0 | - |")
     high = [r for r in rows if r.get("confidence") == "high"]
     wrong_high = [r for r in high if not r["right"]]
     lines += ["", "Summary (issue 11 acceptance: in-family right >= 95 %; out-of-family wrong named cause "
               "<= 5 % and never at 'high'; 'high' right >= 95 %)", ""]
     lines.append(f"- in-family verdicts right: {_pct(sum(r['right'] for r in fin), len(fin))}")
-    floor = thresholds()["MIN_REL"]
     big = [r for r in fin if r["effect"] != "none" and r.get("imprint")
            and max(r["imprint"].values()) >= floor]
     small = [r for r in fin if r["effect"] != "none" and r.get("imprint") and r not in big]
@@ -335,13 +353,13 @@ def report(rows: list[dict], wall_s: float, args) -> str:
                  f"{sim:.0f} s + fit {fit:.0f} s = {sim + fit:.0f} s on one core ({args.duration:.0f} s runs; "
                  f"per seed {(sim + fit) / max(len(rows), 1):.1f} s)")
     lines += ["", "Seeds (re-run one with --seed N)", "",
-              "| seed | effect | family | terrain | wheel | size | verdict | model | confidence | right | "
-              "latency err ms | notes |", "|---|---|---|---|---|---|---|---|---|---|---|---|"]
+              "| seed | effect | family | terrain | wheel | size | verdict | model | confidence | why | right | "
+              "latency err ms | notes |", "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in sorted(rows, key=lambda r: r["seed"]):
         le = r.get("latency_error_s")
         lines.append(f"| {r['seed']} | {r['effect']} | {r.get('family')} | {r['terrain']} | "
                      f"{r['wheel'][0]}x{r['wheel'][1]} | {r['size']:.2f} | {r['verdict']} | {r.get('model')} | "
-                     f"{r.get('confidence')} | {'yes' if r['right'] else ('WRONG CAUSE' if r['wrong_cause'] else 'no')} | "
+                     f"{r.get('confidence')} | {r.get('why') or ''} | {'yes' if r['right'] else ('WRONG CAUSE' if r['wrong_cause'] else 'no')} | "
                      f"{'' if le is None else f'{le * 1e3:.0f}'} | {'; '.join(r['notes'])[:160]} |")
     return "\n".join(lines)
 

@@ -262,6 +262,22 @@ EFFECT_TITLES = {
     "unexplained": "unexplained",
 }
 #: The legacy default candidate list of the command line (pipeline); it means "all hypotheses".
+#: Why a verdict is ``unexplained`` (``Diagnosis.why``, report.json ``diagnosis.why``): the first test of the rule
+#: (module doc, step 5) that stopped the naming of the candidate, in the order the rule asks them.
+WHY_UNEXPLAINED = {
+    "not_supported": "no hypothesis lowers the target channels' error out of sample without worsening another",
+    "equally_well": "causes of different effects explain the data about equally well",
+    "rival_more_evidence": "an unsupported hypothesis of another effect has more evidence than the candidate",
+    "low_probability": f"the candidate's effect has a posterior probability under P_NAME = {P_NAME:g}",
+    "not_listed": "the best explanation is a stand-in for causes on no list",
+    "leaves_structure": "the candidate leaves significant structure of relevant size",
+    "whole_better": "the re-fit (or drift) of all five lab values predicts a channel better out of sample",
+    "stand_in_better": "a stand-in for causes on no list that contains the candidate predicts better out of sample",
+    "catch_all": "only the re-fit (or drift) of all five lab values explains the data",
+    "hysteresis": "Wong's residuals differ on rising and on falling slip (a lag, an inertia, a rate effect)",
+    "wheel_buried": "Wong's model on the lab terrain buries the wheel at the measured loads (nothing fitted)",
+}
+
 _LEGACY_DEFAULT = {"vasilev", "lyasko", "ding", "terrain_mismatch"}
 
 
@@ -286,7 +302,9 @@ class Diagnosis:
     thresholds; notes; failures; gain; fit_terrain; identifiability; tried;
     c_hat (common overdispersion); deff (the cells' design effect in the evidence);
     paired (name -> channel -> paired test); supported (the hypotheses a verdict may name, rule
-    step 3); why_not (name -> why it is not supported, ``models.<name>.not_supported_because``).
+    step 3); why_not (name -> why it is not supported, ``models.<name>.not_supported_because``);
+    why (for an ``unexplained`` verdict, the step that stopped the naming: a key of
+    :data:`WHY_UNEXPLAINED`; else None).
     """
 
     effect: str
@@ -326,6 +344,7 @@ class Diagnosis:
     why_not: dict = field(default_factory=dict)
     target_channels: list = field(default_factory=list)
     hysteresis_test: dict = field(default_factory=dict)
+    why: str | None = None
 
     def to_dict(self) -> dict:
         """The ``diagnosis`` object of report.json (contract D), JSON-ready (SI units)."""
@@ -369,6 +388,7 @@ class Diagnosis:
             "models": models,
             "tried": self.tried,
             "confidence_reasons": list(self.confidence_reasons),
+            "why": self.why,
             "thresholds": self.thresholds,
             "c_hat": self.c_hat,
             "design_effect": self.deff,
@@ -1019,13 +1039,17 @@ def _narrower(data, fits, best: str, supported, probs) -> str:
     no measured channel better out of sample (:func:`_better_than`, as a named model's whole must
     not); else ``best``.  The catch-all's edge is then not shown on new data, and the narrower claim
     goes on to every test a candidate meets (step 5)."""
-    pb = probs.get(best, 0.0)
-    narrow = [k for k in supported if fits[k].effect == fits[best].effect and not _catch_all(fits[k])
-              and probs.get(k, 0.0) * BF_ALTERNATIVE >= pb]
-    if not narrow:
+    one = _most_probable_narrower(fits, best, supported, probs)
+    if one is None or probs.get(one, 0.0) * BF_ALTERNATIVE < probs.get(best, 0.0):
         return best
-    one = max(narrow, key=lambda k: probs.get(k, 0.0))
     return best if _better_than(data, fits[one], fits[best]) else one
+
+
+def _most_probable_narrower(fits, best: str, supported, probs) -> str | None:
+    """The most probable supported hypothesis of the catch-all ``best``'s effect that is not a
+    catch-all (:func:`_catch_all`), or None."""
+    return max((k for k in supported if fits[k].effect == fits[best].effect and not _catch_all(fits[k])),
+               key=lambda k: probs.get(k, 0.0), default=None)
 
 
 def _effective_terrain(f: HypFit) -> bool:
@@ -1414,6 +1438,7 @@ def diagnose(
             supported.append(k)
     reasons: list[str] = []
     effect, model, best = "none", None, None
+    why = None  # a code of :data:`WHY_UNEXPLAINED` when the verdict is unexplained
     alternatives: list = []
     holds: dict = {}
     sep = None
@@ -1421,7 +1446,7 @@ def diagnose(
     if not structured:
         effect, model = "none", "wong"
     elif not supported:
-        effect = "unexplained"
+        effect, why = "unexplained", "not_supported"
         reasons.append(f"none of the {len(fits) - 1} hypotheses tried is shown to lower the {target_txt} error out of sample "
                        "without worsening another channel")
         if "drawbar_pull_n" not in target:
@@ -1456,41 +1481,40 @@ def diagnose(
         pe = eprobs.get(fits[best].effect, 0.0)
         structure[best] = tests_b
         if other_eff:
-            effect = "unexplained"
+            effect, why = "unexplained", "equally_well"
             reasons.append("causes of different effects explain the data about equally well ("
                            + ", ".join(TITLES[k] for k in [best, *alternatives]) + "); no single cause is named")
         elif rivals:
-            effect = "unexplained"
+            effect, why = "unexplained", "rival_more_evidence"
             reasons.append(f"{TITLES[rivals[0]]} has more evidence than {TITLES[best]} but "
                            f"{why_not.get(rivals[0], 'is not supported out of sample')}; the causes cannot be told apart")
         elif pe < P_NAME:
-            effect = "unexplained"
+            effect, why = "unexplained", "low_probability"
             reasons.append(f"the probability of {EFFECT_TITLES[fits[best].effect]} is only {pe:.2f} (< {P_NAME:g})")
         elif fits[best].effect == "unexplained":
-            effect = "unexplained"
+            effect, why = "unexplained", "not_listed"
             reasons.append(f"the best explanation is {TITLES[best]}, which is not a listed cause")
         elif remain:
-            effect = "unexplained"
+            effect, why = "unexplained", "leaves_structure"
             reasons.append(f"{TITLES[best]} lowers the drawbar pull error but leaves significant structure ("
                            + ", ".join(remain) + ")")
         elif better := _whole_better(data, fits, fits[best]):
-            effect = "unexplained"
+            effect, why = "unexplained", "whole_better"
             w = fits[best].hypothesis.whole
             reasons.append(f"{TITLES[w]} predicts the " + " and ".join(CHANNEL_TITLES[c] for c in better)
                            + f" better out of sample than {TITLES[best]}: the soil differs from the lab (or changes "
                            "along the run) in more than one value or in a way no single value describes, so the data "
                            "do not show which value is wrong (" + _LOOK_ALIKES[fits[best].effect][0] + ")")
         elif ext := _stand_in_better(data, fits, fits[best]):
-            effect = "unexplained"
+            effect, why = "unexplained", "stand_in_better"
             reasons.append(f"{TITLES[ext[0]]} predicts the " + " and ".join(CHANNEL_TITLES[c] for c in ext[1])
                            + f" better out of sample than {TITLES[best]}, which it contains: what it adds shows in "
                            "data the fits did not see, so the named cause is not the whole story ("
                            + _LOOK_ALIKES[fits[best].effect][0] + ")")
         elif _catch_all(fits[best]):
-            effect = "unexplained"
+            effect, why = "unexplained", "catch_all"
             # a re-fit (or drift) of fewer values that is supported but less probable: say what it found
-            one = max((k for k in supported if fits[k].effect == fits[best].effect and not _catch_all(fits[k])),
-                      key=lambda k: probs.get(k, 0.0), default=None)
+            one = _most_probable_narrower(fits, best, supported, probs)
             if one is not None:
                 o = fits[one]
                 bf = lp[best] - lp[one]  # ln Bayes factor of the catch-all over it
@@ -1501,7 +1525,7 @@ def diagnose(
                         + (f"{math.exp(bf):.2g}" if bf < 700 else f"e^{bf:.0f}")
                         + " times less evidence")
             else:
-                lead = f"only {TITLES[best]} explains the data, no re-fit of a single lab value (or of one or two lab tests' values) does"
+                lead = f"only {TITLES[best]} explains the data, no re-fit (or drift) of fewer lab values does"
             if fits[best].name == "terrain":  # what it found, against the lab's values
                 lead += "; its values: " + ", ".join(_lab_text(fits[best], q) for q in fits[best].prior)
             reasons.append(lead + ": Wong with the lab's terrain errs, but the data do not show which value is "
@@ -1514,7 +1538,7 @@ def diagnose(
     if any(t["significant"] for t in hyst.values()):
         if effect == "none":
             model = None
-        effect = "unexplained"
+        effect, why = "unexplained", why or "hysteresis"
         reasons.append(_hysteresis_text(hyst))
         sep = "; ".join(x for x in (sep, "the transducer channels' relative delay (a tap or step test) and the same "
                                    "sweep at another slip ramp rate: a lag's loop grows with the ramp rate, a wrong "
@@ -1587,7 +1611,7 @@ def diagnose(
         effect_probabilities=eprobs, alternatives=alternatives, holds_against=holds, separating_measurement=sep,
         not_excluded=not_excl,
         consistency=consistency, flags=flags, tried=tried, c_hat=c_hat, deff=deff, paired=paired, supported=supported,
-        why_not=why_not, target_channels=target, hysteresis_test=hyst,
+        why_not=why_not, target_channels=target, hysteresis_test=hyst, why=why,
     )
     diag._remain = remain  # noqa: SLF001
     diag._sig_w = sig_w  # noqa: SLF001

@@ -419,11 +419,11 @@ class TerrainOne(Wong):
     Not tried with ``ctx.fit_terrain`` (the whole terrain is then fitted in every hypothesis)."""
 
     effect = "terrain_mismatch"
-    param: ClassVar[str] = ""
+    params: ClassVar[tuple[str, ...]] = ()  #: the lab values re-fitted (one here; :class:`TerrainTest`: two or three)
     whole = "terrain"
 
     def own_params(self, ctx):
-        return tuple(q for q in terrain_params(ctx) if q.name == self.param)
+        return tuple(q for q in terrain_params(ctx) if q.name in self.params)
 
     def available(self, ctx, has_x):
         if ctx.fit_terrain:
@@ -437,7 +437,7 @@ class TerrainOne(Wong):
 def _terrain_one(name: str) -> TerrainOne:
     """The one-value terrain mismatch of terrain value ``name``."""
     cls = type(f"Terrain_{name}", (TerrainOne,), {
-        "param": name, "name": f"terrain_{name}",
+        "params": (name,), "name": f"terrain_{name}",
         "title": f"terrain mismatch in {name} alone",
         "source": "Wong (2008) ch. 2; one lab value as a Gaussian prior (penalised least squares)"})
     return cls()
@@ -458,11 +458,7 @@ class TerrainTest(TerrainOne):
     channel better (``whole``) and, re-fitting several values, only when the fitted values do not
     conflict with the lab's."""
 
-    params: ClassVar[tuple[str, ...]] = ()
     prior_group = "two or three values"
-
-    def own_params(self, ctx):
-        return tuple(q for q in terrain_params(ctx) if q.name in self.params)
 
 
 def _terrain_test(test: str | None, names: tuple[str, ...]) -> TerrainTest:

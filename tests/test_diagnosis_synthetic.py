@@ -7,14 +7,14 @@ import numpy as np
 import pytest
 
 from wheelsoil.model import DEFAULT_WHEEL, load_terrain, wong_forces
-from wheelsoil.model.diagnosis import EFFECTS, MIN_REL, TITLES, _fmt, diagnose, structure_test
+from wheelsoil.model.diagnosis import EFFECTS, MIN_REL, TITLES, WHY_UNEXPLAINED, _fmt, diagnose, structure_test
 from wheelsoil.model.fit import synthetic_data
 
 SAND = load_terrain("sand")
 CLAY = load_terrain("clay")
 W = DEFAULT_WHEEL
 CONTRACT_KEYS = {"effect", "model", "confidence", "summary", "channels", "probabilities", "alternatives",
-                 "separating_measurement", "not_excluded", "consistency", "flags", "models"}
+                 "separating_measurement", "not_excluded", "consistency", "flags", "models", "why"}
 
 
 def _table(model="wong", params=None, *, terrain=SAND, truth=None, seed=0, n=120, **kw):
@@ -58,6 +58,8 @@ def _invariants(d):
                 assert all(pr[c]["gain_noise_var"] > 0 for c in d.target_channels), k  # it does lower the error
             if why and why.startswith("does not lower"):
                 assert any(pr[c]["gain_noise_var"] <= 0 for c in d.target_channels), k
+    # an unexplained verdict says, as a code, which test of the rule stopped the naming
+    assert (out["why"] in WHY_UNEXPLAINED) if d.effect == "unexplained" else out["why"] is None, out["why"]
     if d.effect == "unexplained":
         assert d.confidence != "high"
         top = max(d.probabilities, key=d.probabilities.get)
@@ -427,7 +429,7 @@ def test_only_the_five_value_terrain_refit_explains_it_then_no_cause_is_named():
     truth = SAND.replace(K=SAND.K * 0.5, kc=SAND.kc * 1.3, kphi=SAND.kphi * 1.3, phi=SAND.phi + math.radians(3))
     d = diagnose(_table(truth=truth, seed=1, n=150), SAND, W)
     _invariants(d)
-    assert d.model == "terrain" and d.effect == "unexplained", d.summary
+    assert d.model == "terrain" and d.effect == "unexplained" and d.why == "catch_all", d.summary
     assert "the data do not show which value is wrong" in d.summary and d.not_excluded is None
     assert d.to_dict()["channels"]["drawbar_pull_n"]["effect"] == "unexplained"
 

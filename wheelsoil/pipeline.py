@@ -574,6 +574,7 @@ def _failure_report(out_dir: Path, inputs, terrain, wheel, slip_min, error: str,
                        "metrics": {"M0_pct": None, "R0_n": None, "R2": None}, "cv_R0_n": None, "bic": None}
                    for m in ALL_MODELS},
         "diagnosis": {"effect": effect, "model": None, "confidence": "medium" if effect else None,
+                      "why": "wheel_buried" if effect == "unexplained" else None,
                       "summary": (f"Wong's model errs on these data, and the cause is {effect}: {error}." if effect
                                   else f"Nothing could be fitted: {error}")},
         "gain": {"R0_n_before": None, "R0_n_after": None, "cv_R0_n_before": None, "cv_R0_n_after": None},
