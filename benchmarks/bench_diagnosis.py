@@ -263,7 +263,9 @@ def _pct(a, b):
     return "n/a" if b == 0 else f"{100.0 * a / b:.1f} % ({a}/{b})"
 
 
-def report(rows: list[dict], wall_s: float, args) -> str:
+def report(rows: list[dict], wall_s: float, args, runs: str | None = None) -> str:
+    """The benchmark's tables (confusion, calibration, in-family misses by why, summary, seeds) as
+    Markdown text; ``runs`` names what a seed is when not a simulated run of ``args.duration``."""
     from wheelsoil.simulate import ALL_HELD_OUT, IN_FAMILY, OUT_OF_FAMILY, VERDICTS
 
     lines = []
@@ -350,7 +352,7 @@ def report(rows: list[dict], wall_s: float, args) -> str:
     sim = sum(r.get("sim_cpu_s", 0) for r in rows)
     fit = sum(r.get("fit_cpu_s", 0) for r in rows)
     lines.append(f"- wall time {wall_s:.0f} s for {len(rows)} seeds with {args.jobs} process(es); CPU: simulate "
-                 f"{sim:.0f} s + fit {fit:.0f} s = {sim + fit:.0f} s on one core ({args.duration:.0f} s runs; "
+                 f"{sim:.0f} s + fit {fit:.0f} s = {sim + fit:.0f} s on one core ({runs or f'{args.duration:.0f} s runs'}; "
                  f"per seed {(sim + fit) / max(len(rows), 1):.1f} s)")
     lines += ["", "Seeds (re-run one with --seed N)", "",
               "| seed | effect | family | terrain | wheel | size | verdict | model | confidence | why | right | "

@@ -1,0 +1,47 @@
+"""The testbed benchmark (``benchmarks/bench_testbed.py``): single-wheel tables from the independent
+simulator, fitted through ``run_fit``'s table path as a user's testbed data would be."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
+import bench_testbed  # noqa: E402
+
+from wheelsoil.simulate import EFFECTS  # noqa: E402
+
+
+def _seed_of(effect: str, start: int = 0) -> int:
+    return next(s for s in range(start, start + 10 * len(EFFECTS)) if EFFECTS[s % len(EFFECTS)] == effect)
+
+
+def test_a_testbed_table_has_every_test_point_and_the_true_sinkage_growing_with_slip():
+    seed = _seed_of("vasilev")
+    df, info, row = bench_testbed.testbed_table(seed)
+    n = len(bench_testbed.SLIPS) * len(bench_testbed.LOAD_FACTORS) * bench_testbed.REPEATS
+    assert len(df) == n and info["effect"] == "vasilev" and info["acceptable"] == ["slip_sinkage"]
+    assert {"slip", "load_n", "drawbar_pull_n", "torque_nm", "sinkage_m", "wheel_radius_m"} <= set(df.columns)
+    assert np.all(np.isfinite(df[["drawbar_pull_n", "torque_nm", "sinkage_m"]].to_numpy()))
+    # Vasil'ev's z = z0 + H s: at each load the sinkage grows with slip by about H over the slips' range
+    level = np.argsort(np.argsort(df["load_n"].to_numpy())) * len(bench_testbed.LOAD_FACTORS) // n  # the 3 loads
+    for w, g in df.groupby(level):
+        slope = np.polyfit(g["slip"], g["sinkage_m"], 1)[0]
+        assert abs(slope - info["params"]["H"]) < 0.3 * info["params"]["H"] + 0.005, (w, slope, info["params"])
+    assert max(row["imprint"].values()) > 0
+
+
+def test_effects_a_table_cannot_carry_are_skipped_with_the_reason():
+    for effect, why in (("terrain_drift", "along the run"), ("zero_drift", "sensor effect")):
+        df, info, row = bench_testbed.testbed_table(_seed_of(effect))
+        assert df is None and info is None and any(why in n for n in row["notes"]), row
+
+
+def test_a_hidden_slip_sinkage_is_named_from_a_testbed_table(tmp_path):
+    """The table goes through ``run_fit`` (read, cells, every hypothesis, the rule) and is judged as
+    the benchmark judges it: the slip sinkage the measured sinkage shows is named."""
+    row = bench_testbed.run_seed(_seed_of("lyasko"), keep_dir=str(tmp_path))
+    assert row["verdict"] == "slip_sinkage" and row["right"] and not row["wrong_cause"], row
+    assert (tmp_path / f"testbed{row['seed']}.csv").exists()
