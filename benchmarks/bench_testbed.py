@@ -16,8 +16,9 @@ point (``--noise`` scales it): drawbar pull and torque 2 % of the table's RMS, l
 the static load, sinkage 1 mm.  Effects that change along the run have no meaning in a
 table without an order (a soil bin is prepared before each test), and sensor effects other
 than a gain of the force, torque or load channel need the vehicle's signals: those seeds are
-skipped, with the reason.  A case the testbed cannot run (the wheel buries itself) is re-drawn
-at half the size, at most 3 times.  Scored by ``judge`` against the truth's acceptable verdicts;
+skipped, with the reason.  A soil that cannot carry the wheel at the testbed's loads moves the
+case to the next plausible run (as ``bench_diagnosis.py`` does); an effect that buries the wheel
+is re-drawn at half the size, at most 3 times, then moves it.  Scored by ``judge`` against the truth's acceptable verdicts;
 the diagnosis' thresholds are whatever the code holds (printed, never changed here).
 
     python benchmarks/bench_testbed.py                      # seeds 0..67, 2 processes
@@ -73,32 +74,45 @@ def testbed_table(seed: int, terrains=None, effects: str = "listed", noise: floa
         row["notes"].append("skipped: a sensor effect of the vehicle's signals")
         return None, None, row
     rng = np.random.default_rng([seed, 20261126])
-    _, soil = _terrain_values(case["terrain"])
-    r, b = case["wheel"]
-    static = STATIC_LOAD_N + case["added_load_n"]
-    load = np.repeat(np.outer(LOAD_FACTORS, np.ones(SLIPS.size)).ravel() * static, REPEATS)
-    slip = np.repeat(np.tile(SLIPS, len(LOAD_FACTORS)), REPEATS)
-    order = rng.permutation(load.size)
-    load, slip = load[order], slip[order]
-    speed = np.full(load.size, rng.uniform(0.1, 1.0))
-    lab = TruthModel(soil, r, b, "none", {}, static)
-    size = case["size"]
-    for _ in range(3):
-        params = draw_effect(e, np.random.default_rng(seed), size=size)
-        tm = TruthModel(soil, r, b, e if e not in SENSOR_EFFECTS else "none", params, static)
+    order = rng.permutation(len(SLIPS) * len(LOAD_FACTORS) * REPEATS)
+    speed = np.full(order.size, rng.uniform(0.1, 1.0))
+    slip = np.repeat(np.tile(SLIPS, len(LOAD_FACTORS)), REPEATS)[order]
+    found = None
+    # a soil that cannot carry the wheel at the testbed's loads: the next plausible run (as bench_diagnosis.py),
+    # an effect that buries it: half the size (3 tries), then the next run at the full size
+    for k, (terrain, wheel, added) in enumerate(bench_diagnosis._runs_to_try(case["terrain"], case, terrains)):
+        if k:
+            row["notes"].append(f"moved to {terrain} {wheel[0]}x{wheel[1]} +{added:.0f} N")
+        _, soil = _terrain_values(terrain)
+        r, b = wheel
+        static = STATIC_LOAD_N + added
+        load = np.repeat(np.outer(LOAD_FACTORS, np.ones(SLIPS.size)).ravel() * static, REPEATS)[order]
+        lab = TruthModel(soil, r, b, "none", {}, static)
         try:
-            true = tm.drive_forces(load, slip, frac=0.5, speed_mps=speed)
-            if not np.allclose(tm.drive_forces(load, slip, frac=0.1, speed_mps=speed)["drawbar_pull_n"],
-                               tm.drive_forces(load, slip, frac=0.9, speed_mps=speed)["drawbar_pull_n"]):
-                row["notes"].append("skipped: the effect changes along the run (a table has no order)")
-                return None, None, row
             wong = lab.drive_forces(load, slip, frac=0.5, speed_mps=speed)
-            break
         except ValueError as exc:
-            row["notes"].append(f"refused at size {size:.3f}: {str(exc)[:60]}")
-            size *= 0.5
-    else:
+            row["notes"].append(f"the lab soil buries the wheel: {str(exc)[:50]}")
+            continue
+        size = case["size"]
+        for _ in range(3):
+            params = draw_effect(e, np.random.default_rng(seed), size=size)
+            tm = TruthModel(soil, r, b, e if e not in SENSOR_EFFECTS else "none", params, static)
+            try:
+                true = tm.drive_forces(load, slip, frac=0.5, speed_mps=speed)
+                if not np.allclose(tm.drive_forces(load, slip, frac=0.1, speed_mps=speed)["drawbar_pull_n"],
+                                   tm.drive_forces(load, slip, frac=0.9, speed_mps=speed)["drawbar_pull_n"]):
+                    row["notes"].append("skipped: the effect changes along the run (a table has no order)")
+                    return None, None, row
+                found = (terrain, wheel, added)
+                break
+            except ValueError as exc:
+                row["notes"].append(f"refused at size {size:.3f}: {str(exc)[:60]}")
+                size *= 0.5
+        if found:
+            break
+    if not found:
         return None, None, row
+    row.update(terrain=found[0], wheel=list(found[1]), added_load_n=found[2])
     row["size"] = size
     meas = {c: np.asarray(true[c], float).copy() for c in ("drawbar_pull_n", "torque_nm", "sinkage_m")}
     meas["load_n"] = load.copy()

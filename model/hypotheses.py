@@ -172,7 +172,8 @@ class Context:
     hypothesis, as a nuisance), ``w_ref`` a reference load of the data [N],
     ``x_step`` the change point along the normalised drift coordinate that the
     diagnosis found in Wong's residuals (None: none found), ``w_static`` the run's
-    static wheel load [N] (None: unknown, e.g. a table) and ``v_ref`` the data's median forward
+    static wheel load [N] (for a table run at several loads their median, :func:`load_reference`;
+    None: unknown, e.g. a table at one load) and ``v_ref`` the data's median forward
     speed [m/s] (None: no speed recorded, or one that hardly varies; :func:`speed_reference`)."""
 
     terrain: object
@@ -1017,8 +1018,9 @@ class LoadStiffness(_KeqPowerLaw):
     quadratically in ln W between the kernel's forces at the smallest, middle and largest
     load of the call (the moduli there differ by (W_max / W_min)^beta; interpolation error
     of order (beta ln(W_max / W_min))^3 of the force's change).  Effect ``unexplained``.
-    Not tried without a static load (tables).  With ``ctx.fit_terrain`` the terrain block
-    holds k_eq and beta is the only own parameter.
+    Not tried without a reference load (:func:`load_reference`: a table whose loads vary by less than
+    ``SPEED_SPREAD_MIN``).  With ``ctx.fit_terrain`` the terrain block holds k_eq and beta is the only
+    own parameter.
     """
 
     name, effect, title = "load_k", "unexplained", "a pressure-sinkage modulus that depends on the load (no listed cause)"
@@ -1027,7 +1029,8 @@ class LoadStiffness(_KeqPowerLaw):
 
     def available(self, ctx, has_x):
         if ctx.w_static is None or not ctx.w_static > 0:
-            return "needs the run's static wheel load (a time series over whole accelerate-brake cycles)"
+            return (f"needs the run's static wheel load (a time series over whole accelerate-brake cycles) or a "
+                    f"table whose loads vary by a factor {SPEED_SPREAD_MIN:g} or more")
         return super().available(ctx, has_x)
 
     def forces(self, ctx, terrain, load_n, slip, x, p):
@@ -1042,6 +1045,23 @@ SPEED_FLOOR_MPS = 0.05
 #: :func:`speed_reference`: the forward speed must vary by at least this factor between the 10th and 90th
 #: percentiles of the cells for a dependence on it to be told from a constant.
 SPEED_SPREAD_MIN = 1.25
+
+
+def load_reference(load_static_n: float | None, load_n) -> float | None:
+    """The reference load [N] of :class:`LoadStiffness`: the run's static wheel load ``load_static_n``
+    (a time series), else, for a table (no static load), the median of ``load_n`` ((N,) [N]) when the
+    loads vary by ``SPEED_SPREAD_MIN`` or more between their 10th and 90th percentiles (a testbed
+    run at several dead-weight loads: the modulus there is re-fitted, so the reference only says where
+    the lab's value is the prior); None when neither (a dependence on the load cannot be told from a
+    constant)."""
+    if load_static_n is not None and load_static_n > 0:
+        return float(load_static_n)
+    w = np.asarray(load_n, float)
+    w = w[np.isfinite(w) & (w > 0)]
+    if w.size < 3:
+        return None
+    lo, mid, hi = np.percentile(w, [10, 50, 90])
+    return float(mid) if hi >= SPEED_SPREAD_MIN * lo else None
 
 
 def speed_reference(speed_mps) -> float | None:

@@ -209,6 +209,46 @@ def test_measured_sinkage_growth_is_found_in_the_sinkage_channel():
     assert "direct evidence" in " ".join(d.confidence_reasons)
 
 
+def test_slip_sinkage_is_not_named_when_the_measured_sinkage_does_not_grow_with_slip():
+    """The forces of a Vasil'ev slip sinkage (H = 5 cm) with a measured sinkage that stays at its static
+    value at every slip (the table above, the growth H s taken out): whatever explains the forces, it is
+    not a sinkage growing with slip, and the measurement says so (``_sinkage_contradicts``)."""
+    df = _table("vasilev", {"H": 0.05}, seed=9, n=40, noise_z_m=0.004)
+    df["sinkage_m"] -= 0.05 * df["slip"]
+    d = diagnose(df, SAND, W)
+    _invariants(d)
+    assert not d.sinkage_evidence["significant"]
+    assert d.effect != "slip_sinkage", d.summary
+    if d.model in d.fits and d.fits[d.model].effect == "slip_sinkage":
+        assert d.why == "sinkage_contradicts" and "does not grow with slip as" in d.summary, d.summary
+
+
+def test_a_slip_sinkage_fit_whose_sinkage_growth_the_measurement_contradicts_is_flagged():
+    """``_sinkage_contradicts`` on its own: a measured sinkage flat in slip (1 mm noise, three loads)
+    against a slip-sinkage fit whose cell sinkage grows 8 mm per unit slip is contradicted; a fit
+    growing as little as the measurement is not, nor is a fit of another effect."""
+    from types import SimpleNamespace
+
+    from wheelsoil.model.diagnosis import _sinkage_contradicts, _slope_test
+
+    rng = np.random.default_rng(3)
+    slip = np.tile(np.linspace(0.12, 0.88, 9), 6)
+    load = np.repeat([9000.0, 12000.0, 15000.0], 18)
+    z0 = 0.04 * (load / 12000.0) ** 0.8
+    data = SimpleNamespace(cells=SimpleNamespace(slip=slip, load_n=load))
+    z = z0 + 0.001 * rng.standard_normal(slip.size)
+    ev = _slope_test(slip, z, covariate=load)
+
+    def fit(effect, growth):
+        return SimpleNamespace(effect=effect, cell_pred={"sinkage_m": z0 + growth * slip})
+
+    hit = _sinkage_contradicts(data, fit("slip_sinkage", 0.008), ev)
+    assert hit is not None and hit[3] < 0.01 and abs(hit[2] - 0.008) < 1e-3 and abs(hit[0]) < 3 * hit[1]
+    assert _sinkage_contradicts(data, fit("slip_sinkage", ev["slope"]), ev) is None
+    assert _sinkage_contradicts(data, fit("stress_distribution", 0.008), ev) is None
+    assert _sinkage_contradicts(data, fit("slip_sinkage", 0.008), None) is None
+
+
 def test_consistency_is_reported_for_every_model():
     d = diagnose(_table("lyasko", {"m1": 0.6, "m2": 0.03}, seed=10), SAND, W, models=("lyasko", "vasilev"))
     for k, c in d.consistency.items():

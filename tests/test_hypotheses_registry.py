@@ -346,3 +346,15 @@ def test_the_speed_driven_sinkage_follows_the_treads_speed_not_the_slip():
     np.testing.assert_allclose(h.predict(ctx, w, s, None, {"H_v": 0.0}, speed_mps=v).drawbar_pull_n, ref.drawbar_pull_n,
                                rtol=1e-12)
     assert h.available(CTX, True)  # no recorded speed: not tried
+
+
+def test_the_load_dependent_modulus_takes_a_multi_load_tables_median_as_its_reference():
+    """``load_k`` needs a reference load: the run's static load, or for a table run at several loads
+    (a testbed's dead weights, 0.75 to 1.25 of one) their median; a table at one load has none."""
+    from wheelsoil.model.hypotheses import load_reference
+
+    loads = np.repeat([9000.0, 12000.0, 15000.0], 10)
+    assert load_reference(11000.0, loads) == 11000.0
+    assert load_reference(None, loads) == 12000.0
+    assert load_reference(None, 12000.0 * (1 + 0.02 * np.sin(np.arange(30)))) is None
+    assert load_reference(None, [12000.0]) is None
