@@ -1326,7 +1326,7 @@ def diagnose(
     names = list(dict.fromkeys(names))
     prior = lab_prior(terrain, wheel, widen=LIBRARY_PRIOR_WIDEN if fit_terrain else 1.0)
     ctx = Context(terrain, wheel, sinkage, prior, fit_terrain, float(np.median(data.load_n)),
-                  w_static=load_reference(data.load_static_n, data.load_n), v_ref=speed_reference(data.cells.speed_mps))
+                  w_static=load_reference(data.load_static_n, data.load_n if data.kind == "table" else ()), v_ref=speed_reference(data.cells.speed_mps))
     if fit_terrain:
         dup = [n for n in names if HYPOTHESES[n].terrain_block and not n.startswith("drift_")]
         if dup:

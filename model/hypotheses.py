@@ -1049,7 +1049,8 @@ SPEED_SPREAD_MIN = 1.25
 
 def load_reference(load_static_n: float | None, load_n) -> float | None:
     """The reference load [N] of :class:`LoadStiffness`: the run's static wheel load ``load_static_n``
-    (a time series), else, for a table (no static load), the median of ``load_n`` ((N,) [N]) when the
+    (a time series), else, for a table (no static load; the caller passes a time series' loads as
+    ``()``), the median of ``load_n`` ((N,) [N]) when the
     loads vary by ``SPEED_SPREAD_MIN`` or more between their 10th and 90th percentiles (a testbed
     run at several dead-weight loads: the modulus there is re-fitted, so the reference only says where
     the lab's value is the prior); None when neither (a dependence on the load cannot be told from a
