@@ -1236,7 +1236,9 @@ _LOOK_ALIKES = {
                          "different cohesion), a cohesive surface crust (as a larger cohesion), a soil stiffer at the "
                          "wheel's loading rate than under the lab's plate (a viscous or wet soil: as a larger k_eq) or "
                          "stronger at its shear rate than in the shear box (as a larger c and phi), a modulus that follows the load (a plate "
-                         "smaller than the contact patch: as another k_eq over a run whose load varies little): each "
+                         "smaller than the contact patch: as another k_eq over a run whose load varies little), a rut "
+                         "a wheel ahead left (a soil compacted before the wheel meets it: as other plate and shear "
+                         "values), a shear deformation modulus that grows with slip (as another K and c): each "
                          "can change the drawbar pull and torque as a soil of other values would (measured on the "
                          "benchmark's held-out batches and an independent generator's runs)",
                          "plate-sinkage and shear tests of this soil in the field, at the surface and at the rut's "
