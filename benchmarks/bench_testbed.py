@@ -56,7 +56,7 @@ NOISE_REL, NOISE_LOAD_REL, NOISE_SINKAGE_M = 0.02, 0.005, 1e-3
 TABLE_SENSOR_GAINS = {"fx_gain": "drawbar_pull_n", "my_gain": "torque_nm", "load_gain": "load_n"}
 
 
-def testbed_table(seed: int, terrains=None, effects: str = "listed", noise: float = 1.0):
+def testbed_table(seed: int, terrains=None, effects: str = "listed", noise: float = 1.0, speeds: int = 1):
     """The testbed table of seed ``seed``: ``(df, info, row)``; ``df`` None when the seed is skipped or
     the testbed cannot run it (``row["notes"]`` says why).  ``df`` columns: slip, load_n,
     drawbar_pull_n [N], torque_nm [N m], sinkage_m [m], wheel_radius_m, wheel_width_m (one row per test
@@ -75,7 +75,12 @@ def testbed_table(seed: int, terrains=None, effects: str = "listed", noise: floa
         return None, None, row
     rng = np.random.default_rng([seed, 20261126])
     order = rng.permutation(len(SLIPS) * len(LOAD_FACTORS) * REPEATS)
-    speed = np.full(order.size, rng.uniform(0.1, 1.0))
+    v1 = rng.uniform(0.1, 1.0)
+    if speeds == 2:  # each point's repeat at a second carriage speed, 3x the first (the first in 0.1 .. 0.33 m/s)
+        v1 = 0.1 + (v1 - 0.1) * 0.23 / 0.9
+        speed = np.tile([v1, 3.0 * v1], len(SLIPS) * len(LOAD_FACTORS))[order]
+    else:
+        speed = np.full(order.size, v1)
     slip = np.repeat(np.tile(SLIPS, len(LOAD_FACTORS)), REPEATS)[order]
     found = None
     # a soil that cannot carry the wheel at the testbed's loads: the next plausible run (as bench_diagnosis.py),
@@ -126,19 +131,21 @@ def testbed_table(seed: int, terrains=None, effects: str = "listed", noise: floa
 
     df = pd.DataFrame({"slip": slip, **{c: meas[c] + noise * sd[c] * rng.standard_normal(load.size) for c in sd},
                        "wheel_radius_m": r, "wheel_width_m": b})
+    if speeds == 2:
+        df["speed_mps"] = speed
     info = {"effect": e, "family": family_of(e), "acceptable": list(ACCEPTABLE[e]), "params": params}
     row["params"] = params
     return df, info, row
 
 
 def run_seed(seed: int, terrains=None, effects: str = "listed", noise: float = 1.0, keep_dir: str | None = None,
-             no_torque: bool = False, no_sinkage: bool = False) -> dict:
+             no_torque: bool = False, no_sinkage: bool = False, speeds: int = 1) -> dict:
     """Make seed ``seed``'s table, fit it as a user would (``run_fit([table], terrain)``), score it."""
     from wheelsoil.pipeline import run_fit
     from wheelsoil.simulate import judge
 
     c0 = time.process_time()
-    df, info, row = testbed_table(seed, terrains, effects, noise)
+    df, info, row = testbed_table(seed, terrains, effects, noise, speeds)
     row["sim_cpu_s"] = time.process_time() - c0
     if df is None:
         row.update(verdict="(skipped)", right=False, wrong_cause=False, confidence=None, model=None, family=None)
@@ -188,6 +195,10 @@ def main(argv=None) -> int:
                     "the load 0.5 %% of the static load, sinkage 1 mm)")
     ap.add_argument("--no-torque", action="store_true", help="tables without torque (as the CMU data set's)")
     ap.add_argument("--no-sinkage", action="store_true", help="tables without measured sinkage")
+    ap.add_argument("--speeds", type=int, choices=(1, 2), default=1,
+                    help="carriage speeds: 1 (default, one speed drawn in 0.1 .. 1 m/s) or 2 (each point's repeat "
+                    "at 3x the first speed, drawn in 0.1 .. 0.33 m/s; the table gets a speed_mps column): the "
+                    "measurement that separates rate and speed effects from slip and soil values")
     ap.add_argument("--json", default=None, metavar="FILE", help="also write the rows as JSON")
     ap.add_argument("--keep", default=None, metavar="DIR", help="keep tables, truths and reports here")
     args = ap.parse_args(argv)
@@ -201,12 +212,13 @@ def main(argv=None) -> int:
           f"noise x{args.noise:g}, {args.jobs} process(es)"
           + ("" if terrains is None else f", terrains {', '.join(terrains)}")
           + ("" if args.effects == "listed" else f", effects {args.effects}")
-          + (", no torque" if args.no_torque else "") + (", no sinkage" if args.no_sinkage else ""))
+          + (", no torque" if args.no_torque else "") + (", no sinkage" if args.no_sinkage else "")
+          + (", two carriage speeds" if args.speeds == 2 else ""))
     print("diagnosis thresholds as the code holds them (wheelsoil.model.diagnosis):",
           json.dumps(bench_diagnosis.thresholds(), sort_keys=True))
     sys.stdout.flush()
     t0 = time.perf_counter()
-    task = (terrains, args.effects, args.noise, args.keep, args.no_torque, args.no_sinkage)
+    task = (terrains, args.effects, args.noise, args.keep, args.no_torque, args.no_sinkage, args.speeds)
     rows = []
     with ProcessPoolExecutor(max_workers=args.jobs) as pool:
         futs = {s: pool.submit(run_seed, s, *task) for s in seeds}
