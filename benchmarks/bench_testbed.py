@@ -60,8 +60,9 @@ def testbed_table(seed: int, terrains=None, effects: str = "listed", noise: floa
     """The testbed table of seed ``seed``: ``(df, info, row)``; ``df`` None when the seed is skipped or
     the testbed cannot run it (``row["notes"]`` says why).  ``df`` columns: slip, load_n,
     drawbar_pull_n [N], torque_nm [N m], sinkage_m [m], wheel_radius_m, wheel_width_m (one row per test
-    point, 54 rows); ``info``: the truth (``effect``, ``family``, ``acceptable``, ``params``).
-    Never raises."""
+    point, 54 rows), and speed_mps [m/s] with ``speeds=2`` (module doc); ``info``: the truth (``effect``,
+    ``family``, ``acceptable``, ``params``).  Source of the forces: ``TruthModel.drive_forces`` (paper
+    Eqs. 1-10 by adaptive quadrature, the effect applied).  Never raises."""
     from wheelsoil.sim.effects import ACCEPTABLE, SENSOR_EFFECTS, TruthModel, draw_effect, family_of
     from wheelsoil.simulate import EFFECTS, HELD_OUT_BATCHES, STATIC_LOAD_N, _terrain_values, draw_case
 
@@ -123,6 +124,11 @@ def testbed_table(seed: int, terrains=None, effects: str = "listed", noise: floa
     meas["load_n"] = load.copy()
     if e in TABLE_SENSOR_GAINS:
         meas[TABLE_SENSOR_GAINS[e]] *= params["gain"]
+        if e == "load_gain":  # what the fit sees: the forces against Wong at the load the channel reports
+            try:
+                wong = lab.drive_forces(meas["load_n"], slip, frac=0.5, speed_mps=speed)
+            except ValueError:
+                pass
     row["imprint"] = {c: float(np.sqrt(np.mean((meas[c] - wong[c]) ** 2)) / max(np.sqrt(np.mean(wong[c] ** 2)), 1e-9))
                       for c in ("drawbar_pull_n", "torque_nm")}
     sd = {c: NOISE_REL * float(np.sqrt(np.mean(meas[c] ** 2))) for c in ("drawbar_pull_n", "torque_nm")}

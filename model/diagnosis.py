@@ -264,7 +264,6 @@ EFFECT_TITLES = {
     "stress_distribution": "a different normal-stress distribution", "terrain_drift": "terrain drifting along the run",
     "unexplained": "unexplained",
 }
-#: The legacy default candidate list of the command line (pipeline); it means "all hypotheses".
 #: Why a verdict is ``unexplained`` (``Diagnosis.why``, report.json ``diagnosis.why``): the first test of the rule
 #: (module doc, step 5) that stopped the naming of the candidate, in the order the rule asks them.
 WHY_UNEXPLAINED = {
@@ -282,6 +281,7 @@ WHY_UNEXPLAINED = {
     "wheel_buried": "Wong's model on the lab terrain buries the wheel at the measured loads (nothing fitted)",
 }
 
+#: The legacy default candidate list of the command line (pipeline); it means "all hypotheses".
 _LEGACY_DEFAULT = {"vasilev", "lyasko", "ding", "terrain_mismatch"}
 
 
@@ -1328,7 +1328,8 @@ def diagnose(
     names = list(dict.fromkeys(names))
     prior = lab_prior(terrain, wheel, widen=LIBRARY_PRIOR_WIDEN if fit_terrain else 1.0)
     ctx = Context(terrain, wheel, sinkage, prior, fit_terrain, float(np.median(data.load_n)),
-                  w_static=load_reference(data.load_static_n, data.load_n if data.kind == "table" else ()), v_ref=speed_reference(data.cells.speed_mps))
+                  w_static=load_reference(data.load_static_n, data.load_n if data.kind == "table" else ()),
+                  v_ref=speed_reference(data.cells.speed_mps))
     if fit_terrain:
         dup = [n for n in names if HYPOTHESES[n].terrain_block and not n.startswith("drift_")]
         if dup:
