@@ -246,6 +246,18 @@ def terrain_list(text: str | None) -> list[str] | None:
     return terrains
 
 
+def parse_args(ap: argparse.ArgumentParser, argv=None) -> tuple:
+    """``(args, terrains)`` of a benchmark's parser with ``--jobs`` and ``--terrains`` (this one's and
+    ``bench_testbed.py``'s): jobs clamped to 1..2, the terrains as :func:`terrain_list` gives them (an
+    unknown slug is the parser's error, exit 2)."""
+    args = ap.parse_args(argv)
+    args.jobs = max(1, min(args.jobs, 2))
+    try:
+        return args, terrain_list(args.terrains)
+    except ValueError as exc:
+        ap.error(str(exc))
+
+
 def thresholds() -> dict:
     """The diagnosis' numeric module constants as the code holds them (for the record)."""
     import wheelsoil.model.diagnosis as d
@@ -434,12 +446,7 @@ def main(argv=None) -> int:
                     "velocity smoothed by the receiver)")
     ap.add_argument("--json", default=None, metavar="FILE", help="also write the rows as JSON")
     ap.add_argument("--keep", default=None, metavar="DIR", help="keep recordings, truths and reports here")
-    args = ap.parse_args(argv)
-    args.jobs = max(1, min(args.jobs, 2))
-    try:
-        terrains = terrain_list(args.terrains)
-    except ValueError as exc:
-        ap.error(str(exc))
+    args, terrains = parse_args(ap, argv)
     sim_options = {k: v for k, v in (("soil_variability", args.soil_variability), ("slip_max", args.slip_max),
                                      ("procedure", args.procedure), ("wft_noise", args.wft_noise),
                                      ("wft_noise_hz", args.wft_noise_hz)) if v is not None}

@@ -207,12 +207,7 @@ def main(argv=None) -> int:
                     "measurement that separates rate and speed effects from slip and soil values")
     ap.add_argument("--json", default=None, metavar="FILE", help="also write the rows as JSON")
     ap.add_argument("--keep", default=None, metavar="DIR", help="keep tables, truths and reports here")
-    args = ap.parse_args(argv)
-    args.jobs = max(1, min(args.jobs, 2))
-    try:
-        terrains = bench_diagnosis.terrain_list(args.terrains)
-    except ValueError as exc:
-        ap.error(str(exc))
+    args, terrains = bench_diagnosis.parse_args(ap, argv)
     seeds = args.seed if args.seed else list(range(args.first, args.first + args.seeds))
     print(f"bench_testbed: {len(seeds)} seeds, {len(SLIPS) * len(LOAD_FACTORS) * REPEATS} test points each, "
           f"noise x{args.noise:g}, {args.jobs} process(es)"

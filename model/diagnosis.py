@@ -71,7 +71,7 @@ decides with this rule (constants below; none was tuned on a benchmark):
    accelerate cycle are correlated, so the data weigh as the effective number
    of independent cells, :func:`_design_effect`; :mod:`wheelsoil.model.crossval`) times equal
    prior mass per effect, split among its forms (the re-fits of two or three lab values, of one lab
-   test or one value of each, share the mass of one form: :func:`_prior_mass`).  An effect's probability
+   test or one value of each, share the mass of one form: :func:`_prior_masses`).  An effect's probability
    sums its hypotheses; a hypothesis whose effect parameters are null counts
    for the smaller model it then is (slip sinkage + terrain with a null slip
    sinkage is a terrain re-fit), and so does one that does not beat, out of
@@ -1024,15 +1024,19 @@ def _catch_all(f: HypFit) -> bool:
     return f.effect in ("terrain_mismatch", "terrain_drift") and f.hypothesis.terrain_block
 
 
-def _prior_mass(k: str, fits: dict, tried) -> float:
-    """The prior mass of hypothesis ``k`` among the hypotheses ``tried``: each effect 1, split
-    equally among its forms, a group of forms (``Hypothesis.prior_group``: the re-fits of two or three
-    lab values) counting as one form whose mass its members share (module doc, step 4)."""
-    eff = fits[k].effect
-    group = fits[k].hypothesis.prior_group
-    units = {fits[j].hypothesis.prior_group or j for j in tried if fits[j].effect == eff}
-    size = sum(1 for j in tried if fits[j].effect == eff and group and fits[j].hypothesis.prior_group == group)
-    return 1.0 / len(units) / max(size, 1)
+def _prior_masses(fits: dict, tried) -> dict:
+    """Hypothesis -> prior mass, for the hypotheses ``tried``: each effect 1, split equally among its
+    forms, a group of forms (``Hypothesis.prior_group``: the re-fits of two or three lab values) counting
+    as one form whose mass its members share (module doc, step 4)."""
+    units: dict = {}  # effect -> its forms (a group is one)
+    members: dict = {}  # (effect, group) -> how many forms the group holds
+    for j in tried:
+        eff, group = fits[j].effect, fits[j].hypothesis.prior_group
+        units.setdefault(eff, set()).add(group or j)
+        if group:
+            members[eff, group] = members.get((eff, group), 0) + 1
+    return {j: 1.0 / len(units[fits[j].effect]) / members.get((fits[j].effect, fits[j].hypothesis.prior_group), 1)
+            for j in tried}
 
 
 def _narrower(data, fits, best: str, supported, probs) -> str:
@@ -1417,7 +1421,8 @@ def diagnose(
         for k in logev:
             if isinstance(fits[k].hypothesis, DriftStep):
                 logev[k] -= math.log(steps[1])
-    lp = {k: v + math.log(_prior_mass(k, fits, logev)) for k, v in logev.items() if np.isfinite(v)}
+    mass = _prior_masses(fits, logev)
+    lp = {k: v + math.log(mass[k]) for k, v in logev.items() if np.isfinite(v)}
     mx = max(lp.values())
     z = sum(math.exp(v - mx) for v in lp.values())
     probs = {k: math.exp(v - mx) / z for k, v in lp.items()}

@@ -1058,10 +1058,17 @@ def load_reference(load_static_n: float | None, load_n) -> float | None:
     if load_static_n is not None and load_static_n > 0:
         return float(load_static_n)
     w = np.asarray(load_n, float)
-    w = w[np.isfinite(w) & (w > 0)]
-    if w.size < 3:
+    return _median_if_varying(w[w > 0])
+
+
+def _median_if_varying(v: np.ndarray) -> float | None:
+    """The median of the finite values of ``v`` when their 90th percentile is at least ``SPEED_SPREAD_MIN``
+    times their 10th (three values or more), else None: the reference of a power law in them
+    (:func:`load_reference`, :func:`speed_reference`)."""
+    v = v[np.isfinite(v)]
+    if v.size < 3:
         return None
-    lo, mid, hi = np.percentile(w, [10, 50, 90])
+    lo, mid, hi = np.percentile(v, [10, 50, 90])
     return float(mid) if hi >= SPEED_SPREAD_MIN * lo else None
 
 
@@ -1072,12 +1079,7 @@ def speed_reference(speed_mps) -> float | None:
     told from a constant)."""
     if speed_mps is None:
         return None
-    v = np.maximum(np.abs(np.asarray(speed_mps, float)), SPEED_FLOOR_MPS)
-    v = v[np.isfinite(v)]
-    if v.size < 3:
-        return None
-    lo, mid, hi = np.percentile(v, [10, 50, 90])
-    return float(mid) if hi >= SPEED_SPREAD_MIN * lo else None
+    return _median_if_varying(np.maximum(np.abs(np.asarray(speed_mps, float)), SPEED_FLOOR_MPS))
 
 
 class _NeedsSpeed(Hypothesis):

@@ -577,12 +577,12 @@ def test_the_refits_of_two_or_three_lab_values_share_the_prior_mass_of_one_form(
     effect's mass equally)."""
     from types import SimpleNamespace
 
-    from wheelsoil.model.diagnosis import _prior_mass
+    from wheelsoil.model.diagnosis import _prior_masses
     from wheelsoil.model.hypotheses import HYPOTHESES
 
     names = [k for k, h in HYPOTHESES.items() if h.effect in ("terrain_mismatch", "none")] + ["dp_resistance"]
     fits = {k: SimpleNamespace(effect=HYPOTHESES[k].effect, hypothesis=HYPOTHESES[k]) for k in names}
-    mass = {k: _prior_mass(k, fits, names) for k in names}
+    mass = _prior_masses(fits, names)
     several = [k for k in names if HYPOTHESES[k].prior_group]
     assert sorted(several) == sorted(["terrain_plate", "terrain_shear", "terrain_k_eq_c", "terrain_k_eq_phi",
                                       "terrain_k_eq_K", "terrain_n_c", "terrain_n_phi", "terrain_n_K"])
