@@ -146,7 +146,10 @@ def testbed_table(seed: int, terrains=None, effects: str = "listed", noise: floa
 
 def run_seed(seed: int, terrains=None, effects: str = "listed", noise: float = 1.0, keep_dir: str | None = None,
              no_torque: bool = False, no_sinkage: bool = False, speeds: int = 1) -> dict:
-    """Make seed ``seed``'s table, fit it as a user would (``run_fit([table], terrain)``), score it."""
+    """Make seed ``seed``'s table (:func:`testbed_table`), fit it as a user would (``run_fit([table],
+    terrain)``) and score it with ``judge``: returns the benchmark row (dict: ``verdict``, ``model``,
+    ``confidence``, ``right``, ``wrong_cause``, ``why``, ``imprint`` (channel -> relative RMS), CPU
+    seconds, notes).  Never raises: a pipeline exception is a row with verdict ``(error)``."""
     from wheelsoil.pipeline import run_fit
     from wheelsoil.simulate import judge
 

@@ -1054,7 +1054,8 @@ def load_reference(load_static_n: float | None, load_n) -> float | None:
     loads vary by ``SPEED_SPREAD_MIN`` or more between their 10th and 90th percentiles (a testbed
     run at several dead-weight loads: the modulus there is re-fitted, so the reference only says where
     the lab's value is the prior); None when neither (a dependence on the load cannot be told from a
-    constant)."""
+    constant).  Source: Wong 2008 ch. 2 (plate size and load).  Never raises; non-positive and NaN
+    loads are left out."""
     if load_static_n is not None and load_static_n > 0:
         return float(load_static_n)
     w = np.asarray(load_n, float)
