@@ -39,6 +39,16 @@ def test_effects_a_table_cannot_carry_are_skipped_with_the_reason():
         assert df is None and info is None and any(why in n for n in row["notes"]), row
 
 
+def test_an_effect_along_the_run_on_the_torque_alone_is_skipped():
+    """A tyre warming up changes the torque, not the drawbar pull, along the run: a table (no order) cannot
+    carry it, so it is skipped rather than scored at its mid-run state."""
+    from wheelsoil.simulate import HELD_OUT_BATCHES
+
+    seed = next(s for s in range(20000, 20100) if HELD_OUT_BATCHES["held-out-14"][s % 3] == "tyre_warmup")
+    df, info, row = bench_testbed.testbed_table(seed, effects="held-out-14")
+    assert row["effect"] == "tyre_warmup" and df is None and any("along the run" in n for n in row["notes"]), row
+
+
 def test_a_hidden_slip_sinkage_is_named_from_a_testbed_table(tmp_path):
     """The table goes through ``run_fit`` (read, cells, every hypothesis, the rule) and is judged as
     the benchmark judges it: the slip sinkage the measured sinkage shows is named."""
