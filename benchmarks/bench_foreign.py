@@ -56,6 +56,7 @@ GEN2 = Path(__file__).resolve().parent / "foreign2" / "gen.py"
 GEN3 = Path(__file__).resolve().parent / "foreign3" / "gen.py"
 GEN4 = Path(__file__).resolve().parent / "foreign4" / "gen.py"
 GEN5 = Path(__file__).resolve().parent / "foreign5" / "gen.py"
+GEN6 = Path(__file__).resolve().parent / "foreign6" / "gen.py"
 
 #: name, generator case, fronts, seed, latency [s], effect options
 CASES = [
@@ -129,7 +130,7 @@ ROUND2 = [
 #: sizes, every cause on no list at two sizes) by the project after the first was scored and before any of
 #: these was run; ``foreign5/round1.json`` (801-830) by its author before any run was scored, its
 #: ``round2.json`` (831-860) by the project after the first was scored and before any of these was run
-ROUNDS = {(gen.parent.name, k): gen.parent / f"round{k}.json" for gen in (GEN3, GEN4, GEN5) for k in (1, 2)}
+ROUNDS = {(gen.parent.name, k): gen.parent / f"round{k}.json" for gen in (GEN3, GEN4, GEN5, GEN6) for k in (1, 2)}
 
 
 def round_runs(generator: str, k: int) -> list[dict]:
@@ -215,6 +216,35 @@ def run_case5(name: str, case: str, seed: int, params: dict, fmt: str, out: Path
                          wheel=wheel)
 
 
+def run_case6(name: str, case: str, seed: int, params: dict, out: Path) -> dict:
+    """Generate one table of the seventh generator (``foreign6``: single-wheel soil-bin testbed tables of its
+    own soil, wheel and protocol) and fit it as a user would, with the command line its truth file gives
+    (``wheelsoil fit NAME.csv --terrain foreign6/...toml``; the wheel from the table's sidecar JSON); returns a
+    row dict as :func:`run_case` (no GNSS latency: a table has none)."""
+    from wheelsoil.cli import main as wheelsoil_main
+
+    truth = _run_generator(GEN6, [case, "--seed", str(seed), *[a for k, v in params.items() for a in ("--p", f"{k}={v}")]],
+                           name, out)
+    root = Path(__file__).resolve().parents[1]
+    fit_args = [str(out / f"{name}.csv") if a.endswith(f"{name}.csv") else
+                str(root / a) if a.endswith(".toml") and not Path(a).is_absolute() else a for a in truth["fit_args"]]
+    report_dir = out / f"rep_{name}"
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        rc = wheelsoil_main(["fit", *fit_args, "-o", str(report_dir)])
+    if rc:
+        raise RuntimeError(f"wheelsoil fit {' '.join(fit_args)} exited {rc}")
+    d = json.loads((report_dir / "report.json").read_text())["diagnosis"]
+    acceptable = truth["acceptable_verdicts"]
+    score = "right" if d["effect"] in acceptable else ("WRONG" if d["effect"] in NAMED else "miss")
+    form = truth.get("form")
+    return {"name": name, "fronts": "table", "truth": f"{case} {truth['params'] or ''}".strip(),
+            "listed": truth["family"] == "in", "effect": d["effect"], "model": d.get("model"),
+            "confidence": d.get("confidence"), "score": score,
+            "form": d.get("model") == form if score == "right" and form else None,
+            "latency_true_s": None, "latency_s": None, "latency_method": None, "latency_reliable": None}
+
+
 def fit_and_score(name: str, truth: dict, out: Path, fronts: str, log: Path | None = None,
                   terrain: str = "sand", acceptable: list | None = None, wheel: dict | None = None) -> dict:
     """Fit ``log`` (default: ``out/NAME.log`` imported to MCAP first) on ``terrain`` and score the verdict
@@ -243,11 +273,11 @@ def fit_and_score(name: str, truth: dict, out: Path, fronts: str, log: Path | No
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--generator", choices=("foreign", "foreign2", "foreign3", "foreign4", "foreign5"), default="foreign",
+    ap.add_argument("--generator", choices=("foreign", "foreign2", "foreign3", "foreign4", "foreign5", "foreign6"), default="foreign",
                     help="which independent generator's cases (default: foreign, 14 cases; foreign2: 36; foreign3: "
                          "its first round, 30 runs on the paper's clay from a towed vehicle, logs in ASC, BLF and "
                          "candump format fitted directly; foreign4: 30 runs of its own soil and wheel; foreign5: 30 runs of a "
-                         "loamy sand, a load car towed behind, damaged logs)")
+                         "loamy sand, a load car towed behind, damaged logs; foreign6: 30 single-wheel testbed tables)")
     ap.add_argument("--stress", action="store_true",
                     help="with --generator foreign2: 24 runs of eight of its cases as short runs (4 cycles), with 3x "
                          "the sensor noise and with 3x the soil variability, instead of its 36 cases")
@@ -256,7 +286,7 @@ def main() -> None:
                          "chosen before any was run (every listed effect clearly above the noise); with foreign3: "
                          "its second round, 30 runs on seeds 631-660 (foreign3/round2.json); with foreign4: its second round, "
                          "30 runs on seeds 731-760 (foreign4/round2.json); with foreign5: 30 runs on seeds 831-860 "
-                         "(foreign5/round2.json)")
+                         "(foreign5/round2.json); with foreign6: 30 tables on seeds 931-960 (foreign6/round2.json)")
     ap.add_argument("--only", default="", help="comma list of case names (default: all)")
     ap.add_argument("--keep", type=Path, default=None, help="keep logs, recordings and reports here")
     args = ap.parse_args()
@@ -274,6 +304,8 @@ def main() -> None:
     elif args.generator in ("foreign3", "foreign4", "foreign5"):
         cases = [(r["name"], r["case"], r["seed"], r["params"], r["format"])
                  for r in round_runs(args.generator, 2 if args.round2 else 1)]
+    elif args.generator == "foreign6":
+        cases = [(r["name"], r["case"], r["seed"], r["params"]) for r in round_runs(args.generator, 2 if args.round2 else 1)]
     else:
         cases = STRESS if args.stress else ROUND2 if args.round2 else CASES2
     w = max(len(c[0]) for c in cases)
@@ -285,16 +317,18 @@ def main() -> None:
             r = run_case(*c, base) if args.generator == "foreign" else run_case3(*c, base) if \
                 args.generator == "foreign3" else run_case4(*c, base) if args.generator == "foreign4" else \
                 run_case5(*c, base) if args.generator == "foreign5" else \
+                run_case6(*c, base) if args.generator == "foreign6" else \
                 run_case2(*c[:5], base, *c[5:])
         except subprocess.CalledProcessError as e:  # the generator refused (e.g. a run the vehicle cannot drive)
             print(f"{c[0]:<{w}} generator failed: {e.stderr.decode(errors='replace').strip().splitlines()[-1:]}")
             continue
         rows.append(r)
         lat = "n/a" if r["latency_s"] is None else f"{1e3 * r['latency_s']:.0f}"
+        lat_true = "n/a" if r["latency_true_s"] is None else f"{1e3 * r['latency_true_s']:.0f}"
         form = "" if r["form"] is None else (" form right" if r["form"] else " form wrong")
         print(f"{r['name']:<{w}} {r['fronts']:<6} {r['truth'][:34]:<34} "
               f"{r['effect'] + ' (' + str(r['model']) + ', ' + str(r['confidence']) + ')':<44} {r['score'] + form:<6} "
-              f"{lat} ({1e3 * r['latency_true_s']:.0f}): {r['latency_method']}, {r['latency_reliable']}", flush=True)
+              f"{lat} ({lat_true}): {r['latency_method']}, {r['latency_reliable']}", flush=True)
     fam = [r for r in rows if r["listed"]]
     print(f"\nin family right {sum(r['score'] == 'right' for r in fam)}/{len(fam)}; wrong named causes "
           f"{sum(r['score'] == 'WRONG' for r in rows)}/{len(rows)}; latency within 20 ms "
