@@ -43,6 +43,7 @@ reliability) and the totals, and the wall time.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import subprocess
 import sys
@@ -173,10 +174,11 @@ def run_case2(name: str, case: str, seed: int, latency_s: float, params: dict, o
     return fit_and_score(name, generate2(name, case, seed, latency_s, params, out, options), out, "locked")
 
 
-def _round_args(case: str, seed: int, params: dict, fmt: str, plain: bool = False) -> list:
-    """The command line of a round file's run for the fourth to sixth generators (the same CLI; the sixth,
-    ``plain``, reads ``--p key=value`` values as numbers or words, not JSON)."""
-    return [case, "--seed", str(seed), "--format", fmt,
+def _round_args(case: str, seed: int, params: dict, fmt: str | None, plain: bool = False) -> list:
+    """The command line of a round file's run for the fourth to seventh generators (the same CLI; the sixth and
+    seventh, ``plain``, read a ``--p key=value`` word as it is, anything else as JSON; the seventh writes tables,
+    ``fmt`` None: no log format)."""
+    return [case, "--seed", str(seed), *(("--format", fmt) if fmt else ()),
             *[a for k, v in params.items()
               for a in ("--p", f"{k}={v if plain and isinstance(v, str) else json.dumps(v)}")]]
 
@@ -223,13 +225,13 @@ def run_case6(name: str, case: str, seed: int, params: dict, out: Path) -> dict:
     row dict as :func:`run_case` (no GNSS latency: a table has none)."""
     from wheelsoil.cli import main as wheelsoil_main
 
-    truth = _run_generator(GEN6, [case, "--seed", str(seed), *[a for k, v in params.items() for a in ("--p", f"{k}={v}")]],
-                           name, out)
+    truth = _run_generator(GEN6, _round_args(case, seed, params, None, plain=True), name, out)
     root = Path(__file__).resolve().parents[1]
     fit_args = [str(out / f"{name}.csv") if a.endswith(f"{name}.csv") else
                 str(root / a) if a.endswith(".toml") and not Path(a).is_absolute() else a for a in truth["fit_args"]]
     report_dir = out / f"rep_{name}"
-    with warnings.catch_warnings():
+    with warnings.catch_warnings(), open(out / f"{name}.fit.txt", "w") as log, \
+            contextlib.redirect_stdout(log), contextlib.redirect_stderr(log):  # the CLI's own output, kept
         warnings.simplefilter("ignore")
         rc = wheelsoil_main(["fit", *fit_args, "-o", str(report_dir)])
     if rc:

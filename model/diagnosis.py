@@ -123,13 +123,19 @@ decides with this rule (constants below; none was tuned on a benchmark):
    batches, a rebounding soil, a firm layer, lugs, a slip angle or a
    deflecting tyre alike; so do its drifting forms (``drift_linear``,
    ``drift_step``: all five values changing along the run) with anything
-   that changes along the run (mud building up on the tyre).  When one of
+   that changes along the run (mud building up on the tyre); and so does the
+   re-fit of the shear test's three values (``terrain_shear``: c, phi and K
+   free follow any change of the shear stress with the normal stress and
+   the slip; on the testbed tables of the held-out batches, three loads and
+   measured sinkage, it named a shear strength growing with the shear rate,
+   a tyre-soil interface weaker than the soil, a crust and a K growing with
+   slip: 24 of 44 tables).  When one of
    them is the candidate, Wong with the lab's terrain is shown to err, not
    that a soil value is what is wrong: ``unexplained``, with it as the
    candidate.  A terrain mismatch or drift is named by the re-fit of a
-   single lab value, of the values one lab test gives together (the plate
-   test's k_eq and n, the shear test's c, phi and K) or of one value of each
-   test (a lab error the data point at), and only when that
+   single lab value, of the plate test's two values together (k_eq and n),
+   of the shear test's K with c or with phi, or of one value of each test
+   (a lab error the data point at), and only when that
    claim holds on new data: its whole (``Hypothesis.whole``, the same re-fit
    or drift of all five values) must not predict any measured channel better
    out of sample (step 2's paired test, worsening none, at the level at which
@@ -196,7 +202,7 @@ Per channel (``channels``): ``none`` when Wong shows no relevant structure
 in that channel, else the effect of the most probable hypothesis that
 improves that channel out of sample (``unexplained`` when none does, when
 hypotheses of different effects improve it about equally, or when it is one
-of step 5's catch-alls, the five-value terrain re-fit or its drifts).
+of step 5's catch-alls, the five-value terrain re-fit or its drifts, the shear test's re-fit).
 
 Flags: parameters on a bound, |correlation| > ``CORR_FLAG``, condition number
 of the column-normalised Jacobian above ``COND_FLAG`` (Belsley, Kuh & Welsch
@@ -275,7 +281,7 @@ WHY_UNEXPLAINED = {
     "leaves_structure": "the candidate leaves significant structure of relevant size",
     "whole_better": "the re-fit (or drift) of all five lab values predicts a channel better out of sample",
     "stand_in_better": "a stand-in for causes on no list that contains the candidate predicts better out of sample",
-    "catch_all": "only the re-fit (or drift) of all five lab values explains the data",
+    "catch_all": "only a catch-all re-fit explains the data (all five lab values, their drift, or the shear test's three)",
     "sinkage_contradicts": "the measured sinkage does not grow with slip as the named slip sinkage says it does",
     "hysteresis": "Wong's residuals differ on rising and on falling slip (a lag, an inertia, a rate effect)",
     "wheel_buried": "Wong's model on the lab terrain buries the wheel at the measured loads (nothing fitted)",
@@ -1018,10 +1024,10 @@ def _effect_of(f: HypFit, fits: dict, not_beaten: list = ()) -> str:
 
 
 def _catch_all(f: HypFit) -> bool:
-    """True for the re-fit of all five lab soil values (``terrain``) and its drifting forms
-    (``drift_linear``, ``drift_step``): the hypothesis space's catch-alls, which name no cause on
-    their own (module doc, step 5)."""
-    return f.effect in ("terrain_mismatch", "terrain_drift") and f.hypothesis.terrain_block
+    """True for the hypothesis space's catch-alls, which name no cause on their own (module doc, step 5;
+    ``Hypothesis.catch_all``): the re-fit of all five lab soil values (``terrain``), its drifting forms
+    (``drift_linear``, ``drift_step``) and the re-fit of the shear test's three values (``terrain_shear``)."""
+    return f.hypothesis.catch_all
 
 
 def _prior_masses(fits: dict, tried) -> dict:
@@ -1564,7 +1570,7 @@ def diagnose(
                         + " times less evidence")
             else:
                 lead = f"only {TITLES[best]} explains the data, no re-fit (or drift) of fewer lab values does"
-            if fits[best].name == "terrain":  # what it found, against the lab's values
+            if fits[best].effect == "terrain_mismatch":  # what it found, against the lab's values
                 lead += "; its values: " + ", ".join(_lab_text(fits[best], q) for q in fits[best].prior)
             reasons.append(lead + ": Wong with the lab's terrain errs, but the data do not show which value is "
                            "wrong, nor that a soil value is what is wrong (" + _LOOK_ALIKES[fits[best].effect][0] + ")")

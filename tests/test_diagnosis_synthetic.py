@@ -474,14 +474,15 @@ def test_only_the_five_value_terrain_refit_explains_it_then_no_cause_is_named():
     assert d.to_dict()["channels"]["drawbar_pull_n"]["effect"] == "unexplained"
 
 
-def test_the_catch_alls_are_the_five_value_refit_and_its_drifts():
+def test_the_catch_alls_are_the_five_value_refit_its_drifts_and_the_shear_tests_refit():
     from types import SimpleNamespace
 
     from wheelsoil.model.diagnosis import _catch_all
     from wheelsoil.model.hypotheses import HYPOTHESES
 
     caught = {k for k, h in HYPOTHESES.items() if _catch_all(SimpleNamespace(effect=h.effect, hypothesis=h))}
-    assert caught == {"terrain", "drift_linear", "drift_step"}  # slip sinkage + terrain names its slip part
+    # slip sinkage + terrain names its slip part; the plate test's re-fit and the pairs name a lab error
+    assert caught == {"terrain", "drift_linear", "drift_step", "terrain_shear"}
 
 
 def test_a_none_that_cannot_exclude_a_relevant_error_says_so():
@@ -556,7 +557,8 @@ def test_a_one_value_refit_falls_short_when_its_whole_predicts_a_channel_better(
     one = fit("terrain_phi", {"drawbar_pull_n": 0.3, "torque_nm": 1.0})
     wholes = {k: h.whole for k, h in HYPOTHESES.items() if h.whole}
     assert wholes == {**{f"terrain_{p}": "terrain" for p in ("k_eq", "n", "c", "phi", "K", "plate", "shear", "k_eq_c",
-                                                             "k_eq_phi", "k_eq_K", "n_c", "n_phi", "n_K")},
+                                                             "k_eq_phi", "k_eq_K", "n_c", "n_phi", "n_K", "c_K",
+                                                             "phi_K")},
                       **{f"drift_{p}": "drift_linear" for p in ("k_eq", "n", "c", "phi", "K")},
                       **{f"drift_step_{p}": "drift_step" for p in ("k_eq", "n", "c", "phi", "K")}}
     better = fit("terrain", {"drawbar_pull_n": 0.3, "torque_nm": 0.2})
@@ -570,7 +572,7 @@ def test_a_one_value_refit_falls_short_when_its_whole_predicts_a_channel_better(
 
 
 def test_the_refits_of_two_or_three_lab_values_share_the_prior_mass_of_one_form():
-    """Each effect has prior mass 1, split equally among its forms; the eight re-fits of two or three
+    """Each effect has prior mass 1, split equally among its forms; the ten re-fits of two or three
     lab values (the lab tests' and the pairs') count as one form, so that adding them takes from the
     one-value re-fits only the share of one more form (a one-value k_eq mismatch of the third
     generator, tk2, tied with a stand-in within a Bayes factor of 10 once eight forms shared the
@@ -585,9 +587,10 @@ def test_the_refits_of_two_or_three_lab_values_share_the_prior_mass_of_one_form(
     mass = _prior_masses(fits, names)
     several = [k for k in names if HYPOTHESES[k].prior_group]
     assert sorted(several) == sorted(["terrain_plate", "terrain_shear", "terrain_k_eq_c", "terrain_k_eq_phi",
-                                      "terrain_k_eq_K", "terrain_n_c", "terrain_n_phi", "terrain_n_K"])
+                                      "terrain_k_eq_K", "terrain_n_c", "terrain_n_phi", "terrain_n_K",
+                                      "terrain_c_K", "terrain_phi_K"])
     assert mass["terrain_k_eq"] == pytest.approx(1 / 7) and mass["terrain"] == pytest.approx(1 / 7)
-    assert mass["terrain_shear"] == pytest.approx(1 / 7 / 8)
+    assert mass["terrain_shear"] == pytest.approx(1 / 7 / 10)
     assert sum(m for k, m in mass.items() if fits[k].effect == "terrain_mismatch") == pytest.approx(1.0)
     assert mass["wong"] == 1.0 and mass["dp_resistance"] == 1.0
 
