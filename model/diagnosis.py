@@ -198,11 +198,17 @@ decides with this rule (constants below; none was tuned on a benchmark):
    for, within the cycles or in slip and distance together, passes for noise:
    a gain drifting over the run, a lagging load channel; held-out batches 5, 6).
 
+Static sinkage (``sinkage="auto"``, the pipeline's default): on data with a measured sinkage channel every
+hypothesis is fitted under Eq. (10) and under the vertical balance Eq. (7) = W, and the law the data prefer
+by a Bayes factor over ``BF_ALTERNATIVE`` is used, else Eq. (10); the law may name a cause, not turn Wong's
+error into ``none`` (:func:`_diagnose_auto`).
+
 Per channel (``channels``): ``none`` when Wong shows no relevant structure
 in that channel, else the effect of the most probable hypothesis that
 improves that channel out of sample (``unexplained`` when none does, when
 hypotheses of different effects improve it about equally, or when it is one
-of step 5's catch-alls, the five-value terrain re-fit or its drifts, the shear test's re-fit).
+of step 5's catch-alls, the five-value terrain re-fit or its drifts, the shear test's re-fit, unless
+the narrower form step 5 named in its place improves that channel too: then that form's effect).
 
 Flags: parameters on a bound, |correlation| > ``CORR_FLAG``, condition number
 of the column-normalised Jacobian above ``COND_FLAG`` (Belsley, Kuh & Welsch
@@ -314,7 +320,8 @@ class Diagnosis:
     paired (name -> channel -> paired test); supported (the hypotheses a verdict may name, rule
     step 3); why_not (name -> why it is not supported, ``models.<name>.not_supported_because``);
     why (for an ``unexplained`` verdict, the step that stopped the naming: a key of
-    :data:`WHY_UNEXPLAINED`; else None).
+    :data:`WHY_UNEXPLAINED`; else None); sinkage_law (the static-sinkage law of the fits, ``law``
+    ``eq10`` | ``balance``, and with ``sinkage="auto"`` how the data chose it: :func:`_diagnose_auto`).
     """
 
     effect: str
@@ -355,6 +362,7 @@ class Diagnosis:
     target_channels: list = field(default_factory=list)
     hysteresis_test: dict = field(default_factory=dict)
     why: str | None = None
+    sinkage_law: dict = field(default_factory=dict)
 
     def to_dict(self) -> dict:
         """The ``diagnosis`` object of report.json (contract D), JSON-ready (SI units)."""
@@ -403,6 +411,7 @@ class Diagnosis:
             "c_hat": self.c_hat,
             "design_effect": self.deff,
             "hysteresis_test": self.hysteresis_test,
+            "sinkage_law": self.sinkage_law,
             "noise": {"sigma_cell": self.data.cells.sigma, "sigma_within_cycle": self.data.cells.sigma_within,
                       "method": self.data.cells.noise_method, "cells": self.data.cells.n},
         })
@@ -1310,7 +1319,9 @@ def diagnose(
     fit_terrain : the terrain is a library entry, not a lab measurement: every
         hypothesis re-fits it against priors widened ``LIBRARY_PRIOR_WIDEN`` x;
         ``terrain`` and the ``+terrain`` combinations are then not separate hypotheses.
-    sinkage : ``eq10`` | ``balance`` (model core).
+    sinkage : ``eq10`` | ``balance`` (model core: the static sinkage from Eq. 10 or from the vertical
+        balance Eq. 7 = W) | ``auto``: on data with measured sinkage, the law the data choose
+        (:func:`_diagnose_auto`), else ``eq10``.
     progress : tqdm progress bar.
     max_iter : Gauss-Newton iteration limit per fit (default ``FIT_MAX_ITER``; a fit that does not converge is
         reported in ``failures`` and left out of the verdict).
@@ -1325,6 +1336,11 @@ def diagnose(
         from .data import dataclasses_replace, make_cells
 
         data = dataclasses_replace(data, cells=make_cells(data))
+    if sinkage == "auto":
+        return _diagnose_auto(data, terrain, wheel, models=models, fit_terrain=fit_terrain, progress=progress,
+                              max_iter=max_iter)
+    if sinkage not in ("eq10", "balance"):
+        raise ValueError(f"unknown static-sinkage law {sinkage!r}; choose eq10, balance or auto")
     notes = list(data.notes)
     failures: list[str] = []
     if models is None or set(models) == _LEGACY_DEFAULT:
@@ -1370,7 +1386,7 @@ def diagnose(
         if bar is not None:
             bar.set_postfix_str(name)
         why = h.available(ctx, has_x)
-        if not why and h.sinks_with_slip and sink_ev is not None and sink_ev["significant"]:
+        if not why and h.sinks_with_slip_in(ctx) and sink_ev is not None and sink_ev["significant"]:
             why = ("the measured sinkage grows with slip, slip sinkage's signature (Eqs. 11-13), which this form's "
                    "sinkage, growing with slip too, would explain alike")
         if why:
@@ -1610,6 +1626,8 @@ def diagnose(
             row["effect"] = "unexplained"
         else:
             bc = max(imp, key=lambda k: probs.get(k, 0.0))
+            if _catch_all(fits[bc]) and model in imp and fits[model].effect == fits[bc].effect:
+                bc = model  # the narrower form step 5 put in the catch-all's place (:func:`_narrower`)
             near = [k for k in imp if fits[k].effect != fits[bc].effect and probs.get(k, 0) * BF_ALTERNATIVE >= probs.get(bc, 0)]
             row["effect"] = "unexplained" if near or _catch_all(fits[bc]) else fits[bc].effect
             row["model"] = bc
@@ -1655,12 +1673,98 @@ def diagnose(
         effect_probabilities=eprobs, alternatives=alternatives, holds_against=holds, separating_measurement=sep,
         not_excluded=not_excl,
         consistency=consistency, flags=flags, tried=tried, c_hat=c_hat, deff=deff, paired=paired, supported=supported,
-        why_not=why_not, target_channels=target, hysteresis_test=hyst, why=why,
+        why_not=why_not, target_channels=target, hysteresis_test=hyst, why=why, sinkage_law={"law": sinkage},
     )
     diag._remain = remain  # noqa: SLF001
     diag._sig_w = sig_w  # noqa: SLF001
     diag.summary = _summary(diag)
     return diag
+
+
+#: The static-sinkage law models of each other's law (:class:`~wheelsoil.model.hypotheses.VerticalBalance`,
+#: :class:`~wheelsoil.model.hypotheses.SmallAngleSinkage`): left out when the two laws are compared.
+_LAW_STAND_INS = ("balance", "eq10")
+
+
+def _law_evidence(diags: dict) -> dict:
+    """law -> ln of the data's marginal likelihood under that static-sinkage law: the Laplace evidence
+    of every hypothesis fitted under both laws (:meth:`HypFit.evidence`, one overdispersion c_hat for
+    both, the smallest chi2 per degree of freedom of all their fits, and one design effect), weighted
+    by its prior mass (:func:`_prior_masses`) and summed: the law's probability with every cause
+    tried, not with one of them.  ``diags``: law -> :class:`Diagnosis` of the same data."""
+    names = set.intersection(*({k for k, f in d.fits.items() if f.success and k not in _LAW_STAND_INS}
+                               for d in diags.values()))
+    fits = [d.fits[k] for d in diags.values() for k in names]
+    c_hat = max(1.0, min(f.chi2_data / f.dof for f in fits))
+    deff = min(d.deff for d in diags.values())
+    out = {}
+    for law, d in diags.items():
+        mass = _prior_masses(d.fits, names)
+        lp = [d.fits[k].evidence(c_hat, deff) + math.log(mass[k]) for k in names]
+        lp = [v for v in lp if np.isfinite(v)]
+        mx = max(lp)
+        out[law] = mx + math.log(sum(math.exp(v - mx) for v in lp))
+    return out
+
+
+def _diagnose_auto(data: FitData, terrain, wheel, **kw) -> "Diagnosis":
+    """:func:`diagnose` with the static-sinkage law chosen by the data (``sinkage="auto"``).
+
+    The paper computes the static sinkage z0 from Eq. (10), a small-angle closed form; the wheel
+    sinks in fact until the soil carries its load, the vertical balance Eq. (7) = W (Wong 2008 ch. 2),
+    which differs from Eq. (10) by a few per cent of z0 and gives slightly other forces.  A soil-bin
+    testbed under dead weights sinks so; a generator or a soil may follow either.  On data with a
+    measured sinkage channel the law is observable: every hypothesis is fitted under both laws
+    (:func:`diagnose` twice) and the law whose marginal likelihood over all the causes tried
+    (:func:`_law_evidence`) exceeds the other's by more than ``BF_ALTERNATIVE`` is used; otherwise
+    Eq. (10), the paper's.  The law may name a cause but not erase Wong's error: when Wong's model
+    under the chosen law shows no effect (``none``) and under the other law it errs, the other law's
+    verdict stands (a load channel reading 12 % high on a testbed table was ``none`` under the
+    balance, which acts on the sinkage like a lower load).  Without measured sinkage Eq. (10) is used (the forces alone were not
+    compared: vehicle runs keep the paper's law).  The returned diagnosis' ``sinkage_law`` says how
+    the law was chosen (``law``, ``mode`` "auto", ``ln_bayes_factor`` balance over Eq. 10, and the
+    other law's verdict); a law under which Wong's lab terrain buries the wheel is not chosen.
+    Source: paper Eqs. (7), (10).  Raises what :func:`diagnose` raises."""
+    if "sinkage_m" not in data.channels:
+        d = diagnose(data, terrain, wheel, sinkage="eq10", **kw)
+        d.sinkage_law = {"law": "eq10", "mode": "auto", "reason": "no measured sinkage: the paper's Eq. (10) (on the "
+                         "forces alone the law was not chosen: a table of them did not tell the two apart)"}
+        return d
+    diags, buried = {}, None
+    for law in ("eq10", "balance"):
+        try:
+            diags[law] = diagnose(data, terrain, wheel, sinkage=law, **kw)
+        except LabTerrainBuriesWheel as exc:
+            buried = buried or exc
+    if not diags:
+        raise buried
+    if len(diags) == 1:
+        (law, d), = diags.items()
+        d.sinkage_law = {"law": law, "mode": "auto", "reason": "under the other law Wong's lab terrain buries the wheel"}
+        return d
+    ev = _law_evidence(diags)
+    ln_bf = ev["balance"] - ev["eq10"]
+    law = "balance" if ln_bf > math.log(BF_ALTERNATIVE) else "eq10"
+    reason = (f"the data choose the vertical balance (Bayes factor {math.exp(min(ln_bf, 700)):.3g} over Eq. 10)"
+              if law == "balance" else
+              "Eq. (10), the paper's: the data " + ("prefer it" if ln_bf < -math.log(BF_ALTERNATIVE)
+                                                    else "do not choose between the two laws")
+              + f" (Bayes factor of the vertical balance {math.exp(min(ln_bf, 700)):.3g})")
+    d, other = diags[law], diags["balance" if law == "eq10" else "eq10"]
+    if d.effect == "none" and other.effect != "none":
+        # the law may name a cause, not erase Wong's error: a cause acting like the other law (a load channel
+        # reading high acts on Eq. 10's sinkage as the balance does on the true load) is not excluded
+        reason += (f"; but with it Wong's model explains the data while with {other.sinkage_law['law']} it errs, "
+                   "and a cause acting like the change of law (a load channel reading off) is not excluded: the "
+                   f"verdict is that of {other.sinkage_law['law']}")
+        law, d, other = other.sinkage_law["law"], other, d
+    d.sinkage_law = {"law": law, "mode": "auto", "ln_bayes_factor": ln_bf, "reason": reason,
+                     "other": {"law": other.sinkage_law["law"], "effect": other.effect, "model": other.model,
+                               "confidence": other.confidence}}
+    d.notes.append("static sinkage law: " + d.sinkage_law["reason"] + "; with the other law the verdict is "
+                   f"{other.effect} ({other.model}, {other.confidence})")
+    d.summary += " Static sinkage: " + d.sinkage_law["reason"] + "."
+    return d
 
 
 def _change_point(data: FitData, pred: dict):

@@ -26,6 +26,9 @@ The hypotheses (paper numbering for Eqs.; Wong = *Theory of Ground Vehicles*, 4t
   (plate sinkage: k_eq, n; shear box: c, phi, K), and the five-value re-fit's Occam factor
   would let a two-parameter form of another cause (``wong_reece``) out-score it by parameter
   count alone.  Not tried with ``--fit-terrain``.
+* ``terrain_plate`` (k_eq, n), ``terrain_shear`` (c, phi, K: a catch-all that names no cause), the pairs
+  ``terrain_k_eq_c`` ... ``terrain_n_K`` (one value of each test), ``terrain_c_K`` and ``terrain_phi_K``:
+  terrain mismatch in several lab values (:class:`TerrainTest`).
 * ``vasilev+terrain``, ``ding+terrain``: slip sinkage with the terrain
   re-fitted against the same priors (a lab value is never exact; the combined
   model asks whether slip sinkage is still needed once it is allowed to move).
@@ -311,6 +314,11 @@ class Hypothesis:
         """The hypothesis' own parameters (besides the terrain block)."""
         return ()
 
+    def sinks_with_slip_in(self, ctx: Context) -> bool:
+        """True when, under ``ctx``'s static-sinkage law, this hypothesis of another effect than slip
+        sinkage has a sinkage that grows with slip (``sinks_with_slip``)."""
+        return self.sinks_with_slip
+
     def nulls(self, ctx: Context) -> dict[str, float]:
         """The values of the own parameters at which the effect vanishes (the smaller model the
         hypothesis then is): their defaults."""
@@ -459,8 +467,9 @@ class TerrainTest(TerrainOne):
     in all its values at once, not in one of them.  Also one value of each test together
     (:data:`TEST_PAIRS`): a field soil wetter or denser than the sample tested differs in its
     pressure-sinkage and its shear values at once (Wong 2008 ch. 2), and a pair is the sparsest
-    such change; any other set of values is left to the five-value re-fit, which names no cause.  The
-    shear test's three values together are a catch-all (``catch_all``) like the five-value re-fit:
+    such change; and K with c or with phi (:data:`SHEAR_PAIRS`), a shear test whose curves' rise and one
+    strength value are off.  Any other set of values is left to the five-value re-fit, which names no
+    cause.  The shear test's three values together are a catch-all (``catch_all``) like the five-value re-fit:
     with c, phi and K free a re-fit follows any change of the shear stress with the normal stress and
     the slip, and on the testbed tables of the benchmark's held-out batches (three loads, measured
     sinkage) it named a shear strength growing with the shear rate, a tyre-soil interface weaker than
@@ -551,6 +560,11 @@ class WongReece(Hypothesis):
         if not kernel_has_stress():
             return "the kernel's wong_forces has no stress= option yet (contract E)"
         return super().available(ctx, has_x)
+
+    def sinks_with_slip_in(self, ctx):
+        """Under the vertical-balance law the shifted stresses set the sinkage, which grows with slip as the
+        peak moves back (as :class:`WongReeceLoad`'s); under Eq. (10) the sinkage is the paper's."""
+        return self.sinks_with_slip or ctx.sinkage == "balance"
 
     def forces(self, ctx, terrain, load_n, slip, x, p):
         return wong_forces(terrain, ctx.wheel, load_n, slip, sinkage=ctx.sinkage, stress=(p["a1"], p["a2"]))

@@ -68,3 +68,12 @@ def test_a_shear_strength_growing_with_the_shear_rate_is_not_named_a_shear_test_
     row = bench_testbed.run_seed(seed, effects="held-out-7", keep_dir=str(tmp_path))
     assert row["effect"] == "rate_shear" and not row["wrong_cause"], row
     assert row["verdict"] in ("unexplained", "none"), row
+
+
+def test_the_sinkage_law_chosen_by_the_data_does_not_erase_a_load_channels_error():
+    """A testbed table whose load channel reads 12 % high (seed 8441, sand): under the vertical-balance
+    sinkage law at the reported load Wong's model explains the data (the balance's shallower sinkage acts
+    like the true, lower load), under Eq. (10) it errs by 29 % of Dp. The law may name a cause but not
+    erase Wong's error: the verdict is Eq. (10)'s, not ``none``."""
+    row = bench_testbed.run_seed(8441)
+    assert row["effect"] == "load_gain" and row["verdict"] != "none" and not row["wrong_cause"], row

@@ -797,17 +797,17 @@ def test_a_lab_value_far_beyond_its_stated_uncertainty_is_still_a_terrain_mismat
 
 
 @pytest.mark.parametrize("terrain, change, test", [
-    (CLAY, {"K": 1.5, "phi_deg": 3.0}, "shear"),
+    (CLAY, {"K": 1.5, "phi_deg": 3.0}, "phi_K"),
     (SAND, {"k_eq": 0.75, "n": 0.08}, "plate"),
     (SAND, {"K": 0.5, "k_eq": 1.3}, "k_eq_K"),
 ], ids=["clay-shear", "sand-plate", "sand-one-of-each"])
 def test_two_values_wrong_are_a_terrain_mismatch_in_those_values(terrain, change, test):
-    """Two values of one lab test off together (a faulty shear test: K x1.5 and phi +3 deg on clay; a
-    faulty plate test: k_eq x0.75 and n +0.08 on sand), or one of each (a field soil other than the
-    sample: K x0.5 and k_eq x1.3 on sand): no one-value re-fit follows them, and the five-value re-fit
-    names no cause; the re-fit of those values does (benchmark seed 8232, a clay K x1.50 and phi
-    +3.1 deg, and 8266, a sand c x0.65 and n -0.15, were `unexplained` with the five-value re-fit the
-    candidate)."""
+    """Two values of one lab test off together (a faulty shear test: K x1.5 and phi +3 deg on clay, named
+    by the pair of K and phi, as the shear test's three values together are a catch-all; a faulty plate
+    test: k_eq x0.75 and n +0.08 on sand), or one of each (a field soil other than the sample: K x0.5 and
+    k_eq x1.3 on sand): no one-value re-fit follows them, and the five-value re-fit names no cause; the
+    re-fit of those values does (benchmark seed 8232, a clay K x1.50 and phi +3.1 deg, and 8266, a sand
+    c x0.65 and n -0.15, were `unexplained` with the five-value re-fit the candidate)."""
     repl = {}
     if "K" in change:
         repl["K"] = terrain.K * change["K"]

@@ -609,7 +609,7 @@ def run_fit(
     slip_min: float = 0.1,
     models=None,
     fit_terrain: bool = False,
-    sinkage: str = "eq10",
+    sinkage: str = "auto",
     rate_hz: float = 100.0,
     cutoff_hz: float | None = None,
     inertia: bool = True,
@@ -635,7 +635,8 @@ def run_fit(
         ``vasilev, lyasko, ding, terrain_mismatch`` means the same; Wong always).
     fit_terrain : fit the terrain parameters too (k_eq = kc/b + kphi, n, c, phi, K,
         those the data identify).
-    sinkage : ``eq10`` or ``balance``.
+    sinkage : ``auto`` (default: on data with measured sinkage the static-sinkage law the data choose,
+        else Eq. 10; :func:`wheelsoil.model.diagnosis.diagnose`), ``eq10`` or ``balance``.
     rate_hz, cutoff_hz, inertia : processing of recordings (grid rate [Hz],
         low-pass cutoff [Hz], None = processing's default; wheel inertia
         compensation on/off).
@@ -734,6 +735,7 @@ def run_fit(
         _failure_report(out, inputs, ter, wheel, slip_min, str(exc), provenance=prov)
         raise ValueError(f"{exc} (a report saying so was written to {out / 'report.html'})") from None
     _cap_for_time_base(diag, info)
+    prov["settings"]["sinkage_law"] = dict(diag.sinkage_law)
     prov["settings"]["hypotheses_tried"] = list(getattr(diag, "tried", None) or diag.fits)
     prov["settings"]["diagnosis_thresholds"] = dict(getattr(diag, "thresholds", {}) or {})
     prov["settings"]["cross_validation"] = getattr(data, "group_kind", None)
@@ -891,8 +893,10 @@ def register(subparsers) -> None:
     p.add_argument("--fit-terrain", action="store_true",
                    help="also fit terrain parameters (k_eq = kc/b + kphi, n, c, phi, K; those the data "
                    "identify) for soils without lab values")
-    p.add_argument("--sinkage", choices=("eq10", "balance"), default="eq10",
-                   help="static sinkage from Eq. 10 (default) or from the vertical force balance")
+    p.add_argument("--sinkage", choices=("auto", "eq10", "balance"), default="auto",
+                   help="static sinkage from Eq. 10 (the paper's small-angle form), from the vertical force balance "
+                        "(Eq. 7 = W), or auto (default): on data with measured sinkage every model is fitted under "
+                        "both and the law the data prefer by a Bayes factor over 10 is used, else Eq. 10")
     p.add_argument("--rate", type=float, default=100.0, metavar="HZ",
                    help="recordings: processing grid rate [Hz] (default 100)")
     p.add_argument("--cutoff", type=float, default=None, metavar="HZ",
