@@ -1717,10 +1717,11 @@ def _diagnose_auto(data: FitData, terrain, wheel, **kw) -> "Diagnosis":
     measured sinkage channel the law is observable: every hypothesis is fitted under both laws
     (:func:`diagnose` twice) and the law whose marginal likelihood over all the causes tried
     (:func:`_law_evidence`) exceeds the other's by more than ``BF_ALTERNATIVE`` is used; otherwise
-    Eq. (10), the paper's.  The law may name a cause but not erase Wong's error: when Wong's model
-    under the chosen law shows no effect (``none``) and under the other law it errs, the other law's
-    verdict stands (a load channel reading 12 % high on a testbed table was ``none`` under the
-    balance, which acts on the sinkage like a lower load).  Without measured sinkage Eq. (10) is used (the forces alone were not
+    Eq. (10), the paper's.  The law may name a cause but not erase Wong's error: when the data choose
+    the balance and Wong's model under it shows no effect (``none``) while under Eq. (10) it errs,
+    Eq. (10)'s verdict stands (a load channel reading 12 % high on a testbed table was ``none`` under
+    the balance, which acts on the sinkage like a lower load).  An undetermined law keeps Eq. (10)'s
+    verdict whatever the balance's is.  Without measured sinkage Eq. (10) is used (the forces alone were not
     compared: vehicle runs keep the paper's law).  The returned diagnosis' ``sinkage_law`` says how
     the law was chosen (``law``, ``mode`` "auto", ``ln_bayes_factor`` balance over Eq. 10, and the
     other law's verdict); a law under which Wong's lab terrain buries the wheel is not chosen.
@@ -1751,12 +1752,11 @@ def _diagnose_auto(data: FitData, terrain, wheel, **kw) -> "Diagnosis":
                                                     else "do not choose between the two laws")
               + f" (Bayes factor of the vertical balance {math.exp(min(ln_bf, 700)):.3g})")
     d, other = diags[law], diags["balance" if law == "eq10" else "eq10"]
-    if d.effect == "none" and other.effect != "none":
+    if law == "balance" and d.effect == "none" and other.effect != "none":
         # the law may name a cause, not erase Wong's error: a cause acting like the other law (a load channel
         # reading high acts on Eq. 10's sinkage as the balance does on the true load) is not excluded
-        reason += (f"; but with it Wong's model explains the data while with {other.sinkage_law['law']} it errs, "
-                   "and a cause acting like the change of law (a load channel reading off) is not excluded: the "
-                   f"verdict is that of {other.sinkage_law['law']}")
+        reason += ("; but with it Wong's model explains the data while with Eq. (10) it errs, and a cause acting "
+                   "like the change of law (a load channel reading off) is not excluded: the verdict is Eq. (10)'s")
         law, d, other = other.sinkage_law["law"], other, d
     d.sinkage_law = {"law": law, "mode": "auto", "ln_bayes_factor": ln_bf, "reason": reason,
                      "other": {"law": other.sinkage_law["law"], "effect": other.effect, "model": other.model,
