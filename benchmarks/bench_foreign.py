@@ -1,6 +1,6 @@
-"""The diagnosis on runs of five independent generators (``benchmarks/foreign/`` to ``foreign5/``).
+"""The diagnosis on runs of six independent generators (``benchmarks/foreign/`` to ``foreign6/``).
 
-    python benchmarks/bench_foreign.py [--generator foreign|foreign2 [--stress|--round2]|foreign3|foreign4|foreign5 [--round2]]
+    python benchmarks/bench_foreign.py [--generator foreign|foreign2 [--stress|--round2]|foreign3|foreign4|foreign5|foreign6 [--round2]]
                                        [--only a1,v15] [--keep DIR]
 
 Each generator was written from the hardware contract, the DBC files and the paper alone, by a
@@ -36,7 +36,10 @@ as a user with that wheel would (``wheelsoil fit run.asc --terrain foreign4/lab_
 --wheel-width 0.26 --wheel-mass 62 --wheel-inertia 6.4``); its ``--round2``, seeds 731-760. ``foreign5`` (30 runs,
 ``foreign5/round1.json``, seeds 801-830; ``--round2`` 831-860): a loose loamy sand with n > 1 of its own soil file,
 a 0.43 x 0.285 m wheel of 68 kg and 8.6 kg m^2, a load car towed behind, damaged logs (other ECUs' ids, error
-frames, duplicates, a logging stall, host clock steps), PEAK TRC among the formats. Prints one row per case (verdict, latency found against the truth, its method and
+frames, duplicates, a logging stall, host clock steps), PEAK TRC among the formats. ``foreign6`` (``round1.json``, seeds
+901-930; ``--round2`` 931-960): soil-bin testbed tables, not logs, of its own two soils and a 0.20 m wheel under
+dead weights, its static sinkage from the vertical balance; each table fitted with the ``wheelsoil fit``
+arguments its truth file gives, scored against its ``acceptable_verdicts``. Prints one row per case (verdict, latency found against the truth, its method and
 reliability) and the totals, and the wall time.
 """
 
