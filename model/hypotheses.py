@@ -288,7 +288,7 @@ class Hypothesis:
     the one-value form only when its whole does not predict a measured channel better out of
     sample (the claim "only this value" must hold on new data).  "" for all others.
     ``sinks_with_slip``: a hypothesis of another effect than slip sinkage whose sinkage grows with slip;
-    the diagnosis does not try it when the measured sinkage grows with slip.
+    in the measured sinkage channel's own verdict the diagnosis counts it as a look-alike of slip sinkage.
     ``prior_group``: hypotheses of one effect with the same non-empty group share the prior mass of one
     form of that effect (the re-fits of two or three lab values: the lab tests' and the pairs'), so
     that adding forms to a group takes no more prior mass from the effect's other forms.
@@ -579,12 +579,12 @@ class WongReeceLoad(WongReece):
     the paper's own Eq. (7) load keeps Eq. (10)'s few per cent of inconsistency out of the comparison.
     The two forms differ in the sinkage (4-12 % deeper here on an independent generator's loamy sand,
     whose Wong-Reece runs the Eq. (10) form could not fit: it worsened the torque).  Not tried with
-    ``--sinkage balance`` (:class:`WongReece` then balances already), nor when the measured sinkage grows with
-    slip (``sinks_with_slip``: the deeper sinkage at higher slip is slip sinkage's signature)."""
+    ``--sinkage balance`` (:class:`WongReece` then balances already).  Its sinkage grows with slip as slip
+    sinkage's does (``sinks_with_slip``)."""
 
     name, title = "wong_reece_load", "Wong-Reece stress distribution, sinkage re-balanced"
-    #: the sinkage grows with slip as the peak moves back (as in slip sinkage, Eqs. 11-13): with a measured
-    #: sinkage that grows with slip the diagnosis does not try it (the two explain that growth alike)
+    #: the sinkage grows with slip as the peak moves back (as in slip sinkage, Eqs. 11-13): in the measured
+    #: sinkage channel's own verdict the two are look-alikes
     sinks_with_slip = True
     source = ("Wong & Reece (1967); Wong (2008) ch. 2 (entry angle from the vertical balance); kernel "
               "wong_forces(sinkage='balance', stress=(a1, a2)) at the paper's Eq. (7) load")

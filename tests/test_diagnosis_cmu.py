@@ -16,9 +16,13 @@ def test_cmu_grouser_wheel_no_wrong_cause(tmp_path):
     rep = run_fit([CMU], "dry-sand", tmp_path, wheel_radius=0.0625, wheel_width=0.06, fit_terrain=True)
     d = rep["diagnosis"]
     ch = d["channels"]
-    # the measured sinkage grows with slip: the sinkage channel finds slip sinkage
+    # the measured sinkage grows with slip: the sinkage channel finds slip sinkage, or slip sinkage and a
+    # stress distribution whose sinkage carries the load, look-alikes in that channel, as alternatives
     assert d["sinkage_evidence"]["significant"] and d["sinkage_evidence"]["slope"] > 0
-    assert ch["sinkage_m"]["measured"] and ch["sinkage_m"]["effect"] == "slip_sinkage"
+    z = ch["sinkage_m"]
+    assert z["measured"] and z["effect"] in ("slip_sinkage", "unexplained"), z
+    named = [z["model"], *z.get("alternatives", [])]
+    assert "slip_sinkage" in {d["models"][k]["effect"] for k in named}, z
     assert ch["torque_nm"]["measured"] is False
     # slip sinkage may be the overall cause only if its model lowers the error of every target
     # channel out of sample and leaves the drawbar pull no worse (rule step 3)
@@ -35,7 +39,8 @@ def test_cmu_grouser_wheel_no_wrong_cause(tmp_path):
     assert d["confidence"] in ("low", "medium")  # 12 rows: never 'high'
     assert abs(sum(d["probabilities"].values()) - 1) < 1e-9
     s = d["summary"]
-    assert "grows significantly with slip" in s and "sinkage: slip sinkage" in s and "No torque" in s
+    assert "grows significantly with slip" in s and "No torque" in s
+    assert f"sinkage: {z['effect'].replace('_', ' ')}" in s
 
 
 CMU_SET = sorted((Path(__file__).resolve().parent / "data" / "cmu-3d-terramechanics").glob("cmu_*_beta*.csv"))

@@ -228,3 +228,18 @@ def test_the_static_sinkage_law_is_chosen_by_a_tables_measured_sinkage(tmp_path)
     assert d["sinkage_law"]["law"] == "balance" and d["sinkage_law"]["ln_bayes_factor"] > 2.3, d["sinkage_law"]
     assert d["sinkage_law"]["other"]["law"] == "eq10"
     assert row["score"] == "right" and d["model"] == "ding", d["summary"]
+
+
+def test_a_stress_shift_whose_sinkage_carries_the_load_is_not_named_slip_sinkage(tmp_path):
+    """The seventh generator's Wong-Reece table (f6r1_18: a dry sand, three dead-weight loads, sinkage from the
+    vertical balance with the shifted stresses, no torque): its measured sinkage grows with slip, as slip
+    sinkage's does.  While the stress forms whose sinkage grows with slip were left out wherever the measured
+    sinkage grew, Ding + terrain was named at "medium", a wrong cause; tried, the stress shift competes."""
+    run = next(r for r in round_runs("foreign6", 1) if r["name"] == "f6r1_18")
+    row = run_case6(run["name"], run["case"], run["seed"], run["params"], tmp_path)
+    import json
+
+    d = json.loads((tmp_path / "rep_f6r1_18" / "report.json").read_text())["diagnosis"]
+    assert d["sinkage_evidence"]["significant"]
+    assert "wong_reece" in d["tried"] and d["effect"] != "slip_sinkage", d["summary"]
+    assert row["score"] in ("right", "miss"), row
