@@ -61,6 +61,7 @@ GEN3 = Path(__file__).resolve().parent / "foreign3" / "gen.py"
 GEN4 = Path(__file__).resolve().parent / "foreign4" / "gen.py"
 GEN5 = Path(__file__).resolve().parent / "foreign5" / "gen.py"
 GEN6 = Path(__file__).resolve().parent / "foreign6" / "gen.py"
+GEN7 = Path(__file__).resolve().parent / "foreign7" / "gen.py"
 
 #: name, generator case, fronts, seed, latency [s], effect options
 CASES = [
@@ -134,7 +135,7 @@ ROUND2 = [
 #: sizes, every cause on no list at two sizes) by the project after the first was scored and before any of
 #: these was run; ``foreign5/round1.json`` (801-830) by its author before any run was scored, its
 #: ``round2.json`` (831-860) by the project after the first was scored and before any of these was run
-ROUNDS = {(gen.parent.name, k): gen.parent / f"round{k}.json" for gen in (GEN3, GEN4, GEN5, GEN6) for k in (1, 2)}
+ROUNDS = {(gen.parent.name, k): gen.parent / f"round{k}.json" for gen in (GEN3, GEN4, GEN5, GEN6, GEN7) for k in (1, 2)}
 
 
 def round_runs(generator: str, k: int) -> list[dict]:
@@ -226,9 +227,21 @@ def run_case6(name: str, case: str, seed: int, params: dict, out: Path) -> dict:
     own soil, wheel and protocol) and fit it as a user would, with the command line its truth file gives
     (``wheelsoil fit NAME.csv --terrain foreign6/...toml``; the wheel from the table's sidecar JSON); returns a
     row dict as :func:`run_case` (no GNSS latency: a table has none)."""
+    return _run_csv_case(GEN6, name, case, seed, params, out)
+
+
+def run_case7(name: str, case: str, seed: int, params: dict, out: Path) -> dict:
+    """Generate one run of the eighth generator (``foreign7``: single-wheel soil-bin rig *time series*, logged
+    through slip sweeps and steps pass after pass, with measured sinkage) and fit the CSV as its truth file
+    says, as :func:`run_case6` does."""
+    return _run_csv_case(GEN7, name, case, seed, params, out)
+
+
+def _run_csv_case(gen: Path, name: str, case: str, seed: int, params: dict, out: Path) -> dict:
+    """Generate one CSV (a table or a time series) of ``gen`` and fit it with its truth's ``fit_args``."""
     from wheelsoil.cli import main as wheelsoil_main
 
-    truth = _run_generator(GEN6, _round_args(case, seed, params, None, plain=True), name, out)
+    truth = _run_generator(gen, _round_args(case, seed, params, None, plain=True), name, out)
     root = Path(__file__).resolve().parents[1]
     fit_args = [str(out / f"{name}.csv") if a.endswith(f"{name}.csv") else
                 str(root / a) if a.endswith(".toml") and not Path(a).is_absolute() else a for a in truth["fit_args"]]
@@ -278,7 +291,7 @@ def fit_and_score(name: str, truth: dict, out: Path, fronts: str, log: Path | No
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--generator", choices=("foreign", "foreign2", "foreign3", "foreign4", "foreign5", "foreign6"), default="foreign",
+    ap.add_argument("--generator", choices=("foreign", "foreign2", "foreign3", "foreign4", "foreign5", "foreign6", "foreign7"), default="foreign",
                     help="which independent generator's cases (default: foreign, 14 cases; foreign2: 36; foreign3: "
                          "its first round, 30 runs on the paper's clay from a towed vehicle, logs in ASC, BLF and "
                          "candump format fitted directly; foreign4: 30 runs of its own soil and wheel; foreign5: 30 runs of a "
@@ -309,7 +322,7 @@ def main() -> None:
     elif args.generator in ("foreign3", "foreign4", "foreign5"):
         cases = [(r["name"], r["case"], r["seed"], r["params"], r["format"])
                  for r in round_runs(args.generator, 2 if args.round2 else 1)]
-    elif args.generator == "foreign6":
+    elif args.generator in ("foreign6", "foreign7"):
         cases = [(r["name"], r["case"], r["seed"], r["params"]) for r in round_runs(args.generator, 2 if args.round2 else 1)]
     else:
         cases = STRESS if args.stress else ROUND2 if args.round2 else CASES2
@@ -323,6 +336,7 @@ def main() -> None:
                 args.generator == "foreign3" else run_case4(*c, base) if args.generator == "foreign4" else \
                 run_case5(*c, base) if args.generator == "foreign5" else \
                 run_case6(*c, base) if args.generator == "foreign6" else \
+                run_case7(*c, base) if args.generator == "foreign7" else \
                 run_case2(*c[:5], base, *c[5:])
         except subprocess.CalledProcessError as e:  # the generator refused (e.g. a run the vehicle cannot drive)
             print(f"{c[0]:<{w}} generator failed: {e.stderr.decode(errors='replace').strip().splitlines()[-1:]}")

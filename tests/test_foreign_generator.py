@@ -10,7 +10,7 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
-from bench_foreign import (CASES, CASES2, GEN, GEN2, GEN3, GEN4, GEN5, GEN6, NAMED, ROUND2,  # noqa: E402
+from bench_foreign import (CASES, CASES2, GEN, GEN2, GEN3, GEN4, GEN5, GEN6, GEN7, NAMED, ROUND2,  # noqa: E402
                            STRESS, generate, round_runs, run_case, run_case2, run_case6)
 
 
@@ -34,8 +34,9 @@ def _load(gen_path, name):
     return gen
 
 
-@pytest.mark.parametrize("folder", [GEN.parent, GEN2.parent, GEN3.parent, GEN4.parent, GEN5.parent, GEN6.parent],
-                         ids=["foreign", "foreign2", "foreign3", "foreign4", "foreign5", "foreign6"])
+@pytest.mark.parametrize("folder", [GEN.parent, GEN2.parent, GEN3.parent, GEN4.parent, GEN5.parent, GEN6.parent,
+                                    GEN7.parent],
+                         ids=["foreign", "foreign2", "foreign3", "foreign4", "foreign5", "foreign6", "foreign7"])
 def test_the_independent_generators_import_nothing_from_wheelsoil(folder):
     files = list(folder.glob("*.py"))
     assert files
@@ -243,3 +244,12 @@ def test_a_stress_shift_whose_sinkage_carries_the_load_is_not_named_slip_sinkage
     assert d["sinkage_evidence"]["significant"]
     assert "wong_reece" in d["tried"] and d["effect"] != "slip_sinkage", d["summary"]
     assert row["score"] in ("right", "miss"), row
+
+
+def test_every_run_of_the_eighth_generators_rounds_is_one_of_its_cases():
+    """foreign7 writes single-wheel rig time series: every case of its two rounds is one of its cases, round 2 on
+    other seeds than round 1."""
+    r1, r2 = round_runs("foreign7", 1), round_runs("foreign7", 2)
+    assert r1 and r2 and not {r["seed"] for r in r1} & {r["seed"] for r in r2}
+    gen = _load(GEN7, "foreign7_gen")
+    assert {r["case"] for r in r1 + r2} <= set(gen.CASES)
