@@ -259,7 +259,7 @@ def _run_csv_case(gen: Path, name: str, case: str, seed: int, params: dict, out:
     return {"name": name, "fronts": "table", "truth": f"{case} {truth['params'] or ''}".strip(),
             "listed": truth["family"] == "in", "effect": d["effect"], "model": d.get("model"),
             "confidence": d.get("confidence"), "score": score,
-            "form": d.get("model") == form if score == "right" and form else None,
+            "form": str(d.get("model")).split("+")[0] == form if score == "right" and form else None,
             "latency_true_s": None, "latency_s": None, "latency_method": None, "latency_reliable": None}
 
 

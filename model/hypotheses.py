@@ -29,7 +29,7 @@ The hypotheses (paper numbering for Eqs.; Wong = *Theory of Ground Vehicles*, 4t
 * ``terrain_plate`` (k_eq, n), ``terrain_shear`` (c, phi, K: a catch-all that names no cause), the pairs
   ``terrain_k_eq_c`` ... ``terrain_n_K`` (one value of each test), ``terrain_c_K`` and ``terrain_phi_K``:
   terrain mismatch in several lab values (:class:`TerrainTest`).
-* ``vasilev+terrain``, ``ding+terrain``: slip sinkage with the terrain
+* ``vasilev+terrain``, ``lyasko+terrain``, ``ding+terrain``: slip sinkage with the terrain
   re-fitted against the same priors (a lab value is never exact; the combined
   model asks whether slip sinkage is still needed once it is allowed to move).
 * ``wong_reece``: stress distribution.  Wong & Reece (1967): the normal stress
@@ -523,6 +523,16 @@ class VasilevTerrain(Vasilev):
     name, title = "vasilev+terrain", "Vasil'ev + terrain re-fitted"
     terrain_block = True
     nested = ("terrain", "vasilev")
+
+
+class LyaskoTerrain(Lyasko):
+    """Lyasko's slip sinkage with the terrain re-fitted against its priors (as :class:`VasilevTerrain`; on an
+    independent generator's rig logs, the bin's soil a fraction of the lab's uncertainty off, Lyasko on the
+    lab soil left the sinkage's level as a relevant error that only a terrain moving with it removes)."""
+
+    name, title = "lyasko+terrain", "Lyasko + terrain re-fitted"
+    terrain_block = True
+    nested = ("terrain", "lyasko")
 
 
 class DingTerrain(Ding):
@@ -1357,7 +1367,7 @@ HYPOTHESES: dict[str, Hypothesis] = {
     h.name: h
     for h in (Wong(), Vasilev(), Lyasko(), Ding(), TerrainMismatch(), *(_terrain_one(n) for n in TERRAIN_NAMES),
               *(_terrain_test(t, v) for t, v in LAB_TESTS.items()), *(_terrain_test(None, v) for v in TEST_PAIRS + SHEAR_PAIRS),
-              VasilevTerrain(), DingTerrain(),
+              VasilevTerrain(), LyaskoTerrain(), DingTerrain(),
               WongReece(), WongReeceLoad(), DriftLinear(), DriftStep(), *(_drift_one(n) for n in TERRAIN_NAMES),
               *(_drift_one(n, step=True) for n in TERRAIN_NAMES), DrawbarResistance(), DrawbarDrift(), ZeroDrift(),
               WheelRadius(), SpeedGain(), TyreRadius(), WheelWidth(), SensorGain(), AngleOffset(), LoadStiffness(),

@@ -48,8 +48,8 @@ __all__ = ["write_report", "report_dict", "fmt", "fmt_param", "param_unit", "SCH
 
 SCHEMA = "wheelsoil.report/1"
 #: Models always listed (a missing one says why); others the diagnosis fits are appended.
-ALL_MODELS = ("wong", "vasilev", "lyasko", "ding", "terrain_mismatch", "vasilev+terrain", "ding+terrain",
-              "wong_reece", "drift_linear")
+ALL_MODELS = ("wong", "vasilev", "lyasko", "ding", "terrain_mismatch", "vasilev+terrain", "lyasko+terrain",
+              "ding+terrain", "wong_reece", "drift_linear")
 #: report name -> the diagnosis's fit name where they differ (the terrain hypothesis)
 _FIT_ALIAS = {"terrain_mismatch": "terrain"}
 #: Top-level keys every report.json has.
@@ -62,7 +62,8 @@ CORRELATION_LIMIT = 0.95  #: |correlation| of two fitted parameters above this i
 CONDITION_LIMIT = 100.0  #: condition number of the scaled Jacobian above this is flagged (derived flags)
 _PALETTE = ("#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b", "#e377c2", "#17becf", "#bcbd22")
 COLORS = {"wong": "#444444", "vasilev": "#1f77b4", "lyasko": "#d62728", "ding": "#2ca02c",
-          "terrain_mismatch": "#9467bd", "vasilev+terrain": "#17becf", "ding+terrain": "#bcbd22",
+          "terrain_mismatch": "#9467bd", "vasilev+terrain": "#17becf", "lyasko+terrain": "#ff9896",
+          "ding+terrain": "#bcbd22",
           "wong_reece": "#8c564b", "drift_linear": "#e377c2", "drift_step": "#7f7f7f"}
 _CHANNEL_UNIT = {"drawbar_pull_n": "force", "torque_nm": "torque", "sinkage_m": "length_mm"}
 _CHANNEL_SUFFIX = {"drawbar_pull_n": "n", "torque_nm": "nm", "sinkage_m": "m"}

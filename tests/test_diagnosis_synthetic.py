@@ -247,6 +247,15 @@ def test_a_slip_sinkage_fit_whose_sinkage_growth_the_measurement_contradicts_is_
     assert _sinkage_contradicts(data, fit("slip_sinkage", ev["slope"]), ev) is None
     assert _sinkage_contradicts(data, fit("stress_distribution", 0.008), ev) is None
     assert _sinkage_contradicts(data, fit("slip_sinkage", 0.008), None) is None
+    # a measured sinkage that grows with slip (significantly), less steeply than the fitted form's, shows slip
+    # sinkage: the form's size is for the structure test of its residuals, not a contradiction
+    zg = z + 0.030 * slip
+    evg = _slope_test(slip, zg, covariate=load)
+    evg["significant"] = evg["p_positive"] < 0.01
+    assert evg["significant"] and evg["slope"] + 3 * evg["stderr"] < 0.040
+    assert _sinkage_contradicts(data, fit("slip_sinkage", 0.040), evg) is None
+    evg["significant"] = False  # the same slopes, the growth not shown: contradicted
+    assert _sinkage_contradicts(data, fit("slip_sinkage", 0.040), evg) is not None
 
 
 def test_consistency_is_reported_for_every_model():
