@@ -1897,9 +1897,11 @@ def _not_better_than_nested(data, fits, f: HypFit, target) -> list:
         pr = _paired(data, g, f)
         if any(r["worsens"] for r in pr.values()):
             out.append(n)
-        elif not all(pr[c]["improves"] for c in target) and not (f.hypothesis.terrain_block and g.effect == f.effect):
+        elif all(pr[c]["improves"] for c in target):
+            continue
+        elif not (f.hypothesis.terrain_block and g.effect == f.effect):
             out.append(n)
-        elif not all(pr[c]["improves"] for c in target):
+        else:  # slip sinkage + terrain against the slip sinkage on the lab soil: where that leaves an error
             tests = _structure_cells(data, g.cell_pred)
             left = {tests[k]["channel"] for k in _significant_tests(tests)}
             if not any(pr[c]["improves"] for c in left if c in pr):

@@ -69,7 +69,8 @@ def fit_model(data, terrain, wheel, model: str = "lyasko", *, slip_min: float = 
     data : pandas DataFrame (:func:`prepare_data`) or :class:`FitData`.
     terrain, wheel : lab terrain (prior centre) and wheel.
     model : a hypothesis name (``wong``, ``vasilev``, ``lyasko``, ``ding``, ``terrain``
-        (``terrain_mismatch``), ``vasilev+terrain``, ``lyasko+terrain``, ``ding+terrain``, ``wong_reece``, ``drift_linear``
+        (``terrain_mismatch``), ``vasilev+terrain``, ``lyasko+terrain``, ``ding+terrain``, ``wong_reece``,
+        ``drift_linear``
         and the stand-ins of :data:`~wheelsoil.model.hypotheses.HYPOTHESES`; ``drift_step`` needs the
         change point the diagnosis finds).
     terrain_params : non-empty -> the terrain (k_eq, n, c, phi, K) is fitted too, against the
