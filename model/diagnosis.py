@@ -60,11 +60,11 @@ decides with this rule (constants below; none was tuned on a benchmark):
    contains the terrain re-fit and the slip-sinkage form; a drift contains the
    terrain re-fit it varies, a one-value drift the one-value re-fit:
    ``Hypothesis.nested``) lowers the drawbar pull error below it out of
-   sample by the same paired test (slip sinkage + terrain against the slip sinkage on
-   the lab soil: or the error of a channel in which the latter's residuals keep a
+   sample by the same paired test (slip sinkage + terrain against either part
+   alone: or the error of a channel in which that part's residuals keep a
    relevant error, step 1 on them), and worsens no channel
    (what the extra part adds must pay off on data it was not fitted to, in the target
-   channels, or where the cause on the lab soil leaves an error).
+   channels, or where the smaller model leaves an error).
    The step drift is tried only when step 1's change-point test finds a step
    along the run; the change point is then fixed where it was found.
 4. **Probabilities.**  Posterior probabilities of all hypotheses tried:
@@ -1879,11 +1879,11 @@ def _target_channels(relevant: list) -> list:
 def _not_better_than_nested(data, fits, f: HypFit, target) -> list:
     """The nested hypotheses (``Hypothesis.nested``) that ``f`` does not beat out of sample; [] if none.
     ``f`` beats a nested ``g`` when it worsens no channel against it (step 2's paired test) and improves
-    every ``target`` channel, or, for a cause with the terrain re-fitted against the lab priors
-    (``terrain_block``: slip sinkage + terrain) against the same cause on the lab soil, improves a
-    channel in which ``g``'s own residuals keep a significant error of relevant size (step 1's test and
-    floors on ``g``): the terrain part, held to the lab's uncertainty, then explains an error the cause on
-    the lab soil leaves, as a rival leaving one does not hold against a candidate
+    every ``target`` channel, or, for slip sinkage with the terrain re-fitted against the lab priors
+    (``terrain_block``) against either part alone (the slip sinkage on the lab soil, the terrain re-fit),
+    improves a channel in which ``g``'s own residuals keep a significant error of relevant size (step 1's
+    test and floors on ``g``): the other part then explains an error the one part leaves (the terrain
+    held to the lab's uncertainty), as a rival leaving one does not hold against a candidate
     (:func:`_holds_against`, "relevant error").  (On an independent generator's rig logs Lyasko + terrain
     took Lyasko's sinkage error from a relevant level to the noise, the soil a fraction of the lab's
     uncertainty off, while the drawbar pull, the target, gained nothing more.  Not for a re-fit of more
@@ -1899,9 +1899,9 @@ def _not_better_than_nested(data, fits, f: HypFit, target) -> list:
             out.append(n)
         elif all(pr[c]["improves"] for c in target):
             continue
-        elif not (f.hypothesis.terrain_block and g.effect == f.effect):
+        elif not (f.hypothesis.terrain_block and f.effect == "slip_sinkage"):
             out.append(n)
-        else:  # slip sinkage + terrain against the slip sinkage on the lab soil: where that leaves an error
+        else:  # slip sinkage + terrain against either part alone: where that leaves an error
             tests = _structure_cells(data, g.cell_pred)
             left = {tests[k]["channel"] for k in _significant_tests(tests)}
             if not any(pr[c]["improves"] for c in left if c in pr):
