@@ -1,6 +1,6 @@
-"""The diagnosis on runs of six independent generators (``benchmarks/foreign/`` to ``foreign6/``).
+"""The diagnosis on runs of seven independent generators (``benchmarks/foreign/`` to ``foreign7/``).
 
-    python benchmarks/bench_foreign.py [--generator foreign|foreign2 [--stress|--round2]|foreign3|foreign4|foreign5|foreign6 [--round2]]
+    python benchmarks/bench_foreign.py [--generator foreign|foreign2 [--stress|--round2]|foreign3|foreign4|foreign5|foreign6|foreign7 [--round2]]
                                        [--only a1,v15] [--keep DIR]
 
 Each generator was written from the hardware contract, the DBC files and the paper alone, by a
@@ -39,7 +39,9 @@ a 0.43 x 0.285 m wheel of 68 kg and 8.6 kg m^2, a load car towed behind, damaged
 frames, duplicates, a logging stall, host clock steps), PEAK TRC among the formats. ``foreign6`` (``round1.json``, seeds
 901-930; ``--round2`` 931-960): soil-bin testbed tables, not logs, of its own two soils and a 0.20 m wheel under
 dead weights, its static sinkage from the vertical balance; each table fitted with the ``wheelsoil fit``
-arguments its truth file gives, scored against its ``acceptable_verdicts``. Prints one row per case (verdict, latency found against the truth, its method and
+arguments its truth file gives, scored against its ``acceptable_verdicts``; ``foreign7`` (``round1.json``,
+seeds 1001-1028; ``--round2`` 1031-1058): single-wheel soil-bin rig *time series* (slip sweeps and steps,
+pass after pass, sinkage measured), fitted the same way. Prints one row per case (verdict, latency found against the truth, its method and
 reliability) and the totals, and the wall time.
 """
 
@@ -295,7 +297,8 @@ def main() -> None:
                     help="which independent generator's cases (default: foreign, 14 cases; foreign2: 36; foreign3: "
                          "its first round, 30 runs on the paper's clay from a towed vehicle, logs in ASC, BLF and "
                          "candump format fitted directly; foreign4: 30 runs of its own soil and wheel; foreign5: 30 runs of a "
-                         "loamy sand, a load car towed behind, damaged logs; foreign6: 30 single-wheel testbed tables)")
+                         "loamy sand, a load car towed behind, damaged logs; foreign6: 30 single-wheel testbed tables; "
+                         "foreign7: 28 single-wheel rig time series)")
     ap.add_argument("--stress", action="store_true",
                     help="with --generator foreign2: 24 runs of eight of its cases as short runs (4 cycles), with 3x "
                          "the sensor noise and with 3x the soil variability, instead of its 36 cases")
@@ -304,12 +307,13 @@ def main() -> None:
                          "chosen before any was run (every listed effect clearly above the noise); with foreign3: "
                          "its second round, 30 runs on seeds 631-660 (foreign3/round2.json); with foreign4: its second round, "
                          "30 runs on seeds 731-760 (foreign4/round2.json); with foreign5: 30 runs on seeds 831-860 "
-                         "(foreign5/round2.json); with foreign6: 30 tables on seeds 931-960 (foreign6/round2.json)")
+                         "(foreign5/round2.json); with foreign6: 30 tables on seeds 931-960 (foreign6/round2.json); with "
+                         "foreign7: 28 rig time series on seeds 1031-1058 (foreign7/round2.json)")
     ap.add_argument("--only", default="", help="comma list of case names (default: all)")
     ap.add_argument("--keep", type=Path, default=None, help="keep logs, recordings and reports here")
     args = ap.parse_args()
     if args.stress and args.generator != "foreign2" or args.round2 and args.generator == "foreign":
-        ap.error("--stress needs --generator foreign2, --round2 one of foreign2 to foreign5")
+        ap.error("--stress needs --generator foreign2, --round2 one of foreign2 to foreign7")
     if args.stress and args.round2:
         ap.error("choose one of --stress and --round2")
     only = set(filter(None, args.only.split(",")))
