@@ -56,16 +56,11 @@ CHANNELS: dict[str, str] = {
 #: one accelerate cycle of a slip sweep (6-9 s of sweep in a 10-15 s cycle), so a run gives as many
 #: units whatever its procedure.
 BLOCK_S = 10.0
-#: Fitted data [s] per accelerate cycle above which the cycles processing found are not the units when
-#: there are fewer than ``MIN_CYCLE_UNITS`` of them: a vehicle's sweep holds 3-9 s of data at s > 0.1; a few
-#: "cycles" with more than two blocks' worth each span several sweeps and patches of soil (a towed run
-#: whose tractor speeds up now and then: 3 cycles of 36-50 s), so blocks of ``BLOCK_S`` are the independent
-#: units instead.  A slow single-wheel rig's one sweep may take 30 s (an independent generator's rig at
-#: 0.12 m/s, 12 sweeps of 20-25 s of data): its cycles stay the units.
+#: Fitted data [s] per accelerate cycle above which the cycles processing found are not the units:
+#: a cycle of a slip sweep holds 3-9 s of data at s > 0.1; a "cycle" with more than two blocks' worth
+#: spans several sweeps and several patches of soil (a towed run whose tractor speeds up now and then),
+#: so blocks of ``BLOCK_S`` are the independent units instead.
 MAX_CYCLE_DATA_S = 2 * BLOCK_S
-#: Long cycles stay the units when there are at least this many: half the folds the cross-validation
-#: takes at most (``crossval.MAX_FOLDS``), enough for the paired tests over them (3 are not).
-MIN_CYCLE_UNITS = 10
 
 #: Phases of a processed recording (``phase`` column) that are driving the steady-state model
 #: describes outside an accelerate cycle (:func:`wheelsoil.processing.slip.classify_phases`).
@@ -268,8 +263,7 @@ def prepare_data(df, *, slip_min: float = 0.1, source: str = "data", n_blocks: i
 
     Cross-validation groups: accelerate cycles (``cycle >= 0``; samples outside a
     cycle join the previous one) unless they hold more than ``MAX_CYCLE_DATA_S`` of
-    fitted data each and are fewer than ``MIN_CYCLE_UNITS`` (then blocks, as without cycles),
-    else for a table interleaved folds by slip rank
+    fitted data each (then blocks, as without cycles), else for a table interleaved folds by slip rank
     (leave-one-out up to 20 rows, else 10 folds, each spanning the slip range, so
     the held-out error measures interpolation, not extrapolation to unseen slips),
     and for a time series without cycles contiguous blocks of about ``BLOCK_S`` of data each (at
@@ -526,10 +520,10 @@ def _cv_groups(df, keep, run, kind, n_blocks):
                 last = filled[i]
             _, g = np.unique(filled, return_inverse=True)
             per_cycle = sum(_run_seconds(t, idx) for idx in runs) / (g.max() + 1)
-            if not (per_cycle > MAX_CYCLE_DATA_S and g.max() + 1 < MIN_CYCLE_UNITS):
+            if not per_cycle > MAX_CYCLE_DATA_S:
                 return g, "accelerate cycles"
-            # few, long "cycles" (a towed run whose tractor speeds up now and then, slip swept by the
-            # wheel): each spans several sweeps and patches of soil, too few units, so blocks are the units
+            # fewer, longer "cycles" than sweeps (a towed run whose tractor speeds up now and then, slip
+            # swept by the wheel): each holds many sweeps and patches of soil, so blocks are the units
             note = (f" ({g.max() + 1} accelerate cycles found, {per_cycle:.0f} s of fitted data each: "
                     "more than a slip sweep's worth)")
     if kind == "table" and n_blocks is None:

@@ -299,23 +299,6 @@ def test_cycles_longer_than_a_sweep_are_not_the_units():
     assert short.group_kind == "accelerate cycles"
 
 
-def test_many_long_cycles_of_a_slow_rig_stay_the_units():
-    """A single-wheel rig at a carriage speed of 0.1 m/s sweeps slip slowly: 12 cycles of 70 s hold more than
-    MAX_CYCLE_DATA_S of data each, but they are enough units (MIN_CYCLE_UNITS): each sweep is a unit, as on a
-    vehicle; 3 of them are not."""
-    from wheelsoil.model.data import MAX_CYCLE_DATA_S, MIN_CYCLE_UNITS
-
-    df = synthetic_data(SAND, DEFAULT_WHEEL, "wong", {}, kind="timeseries", duration_s=840.0, cycle_s=70.0, seed=2)
-    d = prepare_data(df)
-    dt = float(np.median(np.diff(df["t_s"])))
-    n_cycles = np.unique(d.groups).size
-    assert n_cycles >= MIN_CYCLE_UNITS and d.n * dt / n_cycles > MAX_CYCLE_DATA_S
-    assert d.group_kind == "accelerate cycles", d.group_kind
-    few = df[df["cycle"] < 3]
-    assert prepare_data(few).group_kind.startswith("contiguous blocks (3 accelerate cycles found"), \
-        prepare_data(few).group_kind
-
-
 def test_noise_estimate_is_not_inflated_by_a_load_varying_under_one_percent():
     """Load transfer moves a wheel's load by well under 1 % in a sweep, and the torque (about
     proportional to the load) by many times its noise: the smooth the noise is measured about
