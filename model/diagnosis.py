@@ -1542,8 +1542,7 @@ def diagnose(
         remain = _significant_tests(tests_b)
 
         def leaves(k):  # the rival's own residuals keep relevant structure (asked only when needed)
-            t = _structure_cells(data, fits[k].cell_pred)
-            return bool(_significant_tests(t))
+            return bool(_structured_channels(data, fits[k]))
 
         holds = {k: _holds_against(data, fits[best], fits[k], target, relevant,
                                    None if remain else lambda k=k: leaves(k))
@@ -1780,7 +1779,7 @@ def _diagnose_auto(data: FitData, terrain, wheel, **kw) -> "Diagnosis":
         # reading high acts on Eq. 10's sinkage as the balance does on the true load) is not excluded
         reason += ("; but with it Wong's model explains the data while with Eq. (10) it errs, and a cause acting "
                    "like the change of law (a load channel reading off) is not excluded: the verdict is Eq. (10)'s")
-        law, d, other = other.sinkage_law["law"], other, d
+        law, d, other = "eq10", other, d
     d.sinkage_law = {"law": law, "mode": "auto", "ln_bayes_factor": ln_bf, "reason": reason,
                      "other": {"law": other.sinkage_law["law"], "effect": other.effect, "model": other.model,
                                "confidence": other.confidence}}
@@ -1901,12 +1900,16 @@ def _not_better_than_nested(data, fits, f: HypFit, target) -> list:
             continue
         elif not (f.hypothesis.terrain_block and f.effect == "slip_sinkage"):
             out.append(n)
-        else:  # slip sinkage + terrain against either part alone: where that leaves an error
-            tests = _structure_cells(data, g.cell_pred)
-            left = {tests[k]["channel"] for k in _significant_tests(tests)}
-            if not any(pr[c]["improves"] for c in left if c in pr):
-                out.append(n)
+        elif not any(pr[c]["improves"] for c in _structured_channels(data, g) if c in pr):
+            out.append(n)  # slip sinkage + terrain improves no channel where the part alone leaves an error
     return out
+
+
+def _structured_channels(data: FitData, f: HypFit) -> set:
+    """The measured channels in which ``f``'s own cell residuals keep a significant error of relevant
+    size (step 1's tests and floors, :func:`_structure_cells`, :func:`_significant_tests`)."""
+    tests = _structure_cells(data, f.cell_pred)
+    return {tests[k]["channel"] for k in _significant_tests(tests)}
 
 
 def _whole_better(data, fits, f: HypFit) -> list:
