@@ -162,6 +162,15 @@ decides with this rule (constants below; none was tuned on a benchmark):
    could not stop a slip sinkage from being named in its place (an independent generator's Wong-Reece
    table, f6r1_18, was named Ding + terrain at "medium"); in the sinkage channel's own verdict the two
    are look-alikes (below).
+   Where the verdict would be ``unexplained`` and its candidate is a re-fit of lab values, Wong's error
+   may be one the lab's own stated uncertainty explains (:func:`_within_lab_uncertainty`): when the
+   five-value re-fit is supported, moves no value beyond ``LAB_Z`` lab standard deviations, lies no
+   farther from the lab than a soil drawn from its uncertainty does on average (prior chi-square at most
+   the number of values), leaves no relevant structure, and the measured sinkage does not grow with slip
+   -> ``none`` at ``low`` confidence, saying why (report ``diagnosis.lab_uncertainty``): a field soil
+   within the lab's uncertainty agrees with the lab, and no cause is shown beyond it (two independent
+   generators draw their ``none`` soils within it, and on them the verdict was ``unexplained``).  It
+   never overrides a named cause, nor a best explanation of another effect or a stand-in.
    Whatever the above gives, Wong's sample residuals are also compared on rising against
    falling slip within each accelerate cycle (:func:`_hysteresis_test`): every hypothesis is a
    static function of slip, load and place, and the cells pool both directions, so a channel
@@ -262,6 +271,8 @@ PRIOR_CONFLICT_ALPHA = 0.001  #: a re-fitted terrain whose prior residuals excee
 #: 1 - this (k = number of terrain parameters) is incompatible with the lab values and their stated
 #: uncertainty (prior-data conflict, Box 1980; Evans & Moshonov 2006): not a credible explanation.
 #: At the MAP the prior chi-square is shrunk below chi2_k, so this is conservative towards the lab.
+LAB_Z = 2.0  #: a re-fitted soil value within this many lab standard deviations of its lab value is not shown
+#: to differ from it (the two-sided 95 % range of the lab's stated uncertainty)
 WALD_Z = 2.0  #: an effect parameter differs from its null value when |value - null| > WALD_Z se
 LOAD_RATIO_TOL = 1.25  #: model W / measured W outside [1/1.25, 1.25] in a slip bin: inconsistent
 #: (Eq. 10's own small-angle error reaches ~20 % on library soils, wheelsoil.model.wong)
@@ -272,7 +283,7 @@ COND_FLAG = 100.0  #: condition number of the column-normalised Jacobian above t
 THRESHOLDS = {
     "alpha": ALPHA, "worsen_alpha": WORSEN_ALPHA, "min_effect_sigma": MIN_EFFECT, "min_effect_rel": MIN_REL,
     "min_gain_noise_var": MIN_GAIN, "p_name": P_NAME, "p_high": P_HIGH, "bf_alternative": BF_ALTERNATIVE,
-    "wald_z": WALD_Z, "prior_conflict_alpha": PRIOR_CONFLICT_ALPHA, "load_ratio_tol": LOAD_RATIO_TOL, "min_units_high": MIN_UNITS_HIGH,
+    "wald_z": WALD_Z, "lab_z": LAB_Z, "prior_conflict_alpha": PRIOR_CONFLICT_ALPHA, "load_ratio_tol": LOAD_RATIO_TOL, "min_units_high": MIN_UNITS_HIGH,
     "corr_flag": CORR_FLAG, "cond_flag": COND_FLAG, "max_folds": MAX_FOLDS,
 }
 
@@ -372,6 +383,7 @@ class Diagnosis:
     hysteresis_test: dict = field(default_factory=dict)
     why: str | None = None
     sinkage_law: dict = field(default_factory=dict)
+    lab_uncertainty: dict | None = None
 
     def to_dict(self) -> dict:
         """The ``diagnosis`` object of report.json (contract D), JSON-ready (SI units)."""
@@ -421,6 +433,7 @@ class Diagnosis:
             "design_effect": self.deff,
             "hysteresis_test": self.hysteresis_test,
             "sinkage_law": self.sinkage_law,
+            "lab_uncertainty": self.lab_uncertainty,
             "noise": {"sigma_cell": self.data.cells.sigma, "sigma_within_cycle": self.data.cells.sigma_within,
                       "method": self.data.cells.noise_method, "cells": self.data.cells.n},
         })
@@ -1612,7 +1625,17 @@ def diagnose(
         sep_names = [best, *alternatives, *rivals[:1]]
         sep = _separating({fits[k].effect for k in sep_names}, set(data.channels), sep_names)
     hyst = _hysteresis_test(data, wong.predictions)
-    if any(t["significant"] for t in hyst.values()):
+    lagging = any(t["significant"] for t in hyst.values())
+    lab_unc = None
+    if effect == "unexplained" and not lagging and (lab_unc := _within_lab_uncertainty(data, fits, supported, sink_ev, model)):
+        effect, model, why, sep, alternatives, holds = "none", "wong", None, None, [], {}
+        reasons.append("Wong's error lies within what the lab values' stated uncertainty allows: "
+                       f"{TITLES['terrain']} moves no soil value beyond {LAB_Z:g} lab standard deviations ("
+                       + ", ".join(f"{q} {z:+.2g}" for q, z in lab_unc["z"].items())
+                       + " sigma) and leaves no relevant structure, and the measured sinkage does not grow with "
+                       "slip; no cause is shown beyond the lab's uncertainty (the candidate was "
+                       + TITLES.get(lab_unc["candidate"], "-") + ")")
+    if lagging:
         if effect == "none":
             model = None
         effect, why = "unexplained", why or "hysteresis"
@@ -1655,6 +1678,9 @@ def diagnose(
             row["model"] = bc
             if near:
                 row["alternatives"] = near
+        if lab_unc and row["effect"] != "none":  # explained by a soil within the lab's uncertainty
+            row.update(effect="none", model="terrain", within_lab_uncertainty=True)
+            row.pop("alternatives", None)
         shown = model if model and model != "wong" else row.get("model")
         if shown and shown in paired:
             r = paired[shown][c]
@@ -1670,8 +1696,15 @@ def diagnose(
         tie_forms = [k for k in alternatives if fits[k].effect == fits[model].effect]
         forms_dist = not tie_forms
     # confidence
-    confidence, creasons = _confidence(effect, model, fits, eprobs, consistency, data, tests_w, sink_ev, reasons,
-                                       supported, probs, paired, target)
+    if lab_unc:
+        confidence, creasons = "low", [
+            "Wong's error is explained by a soil within the lab's stated uncertainty, not absent: a small effect "
+            "of another cause acting like such a soil is not excluded",
+            f"posterior probability of a terrain mismatch (a soil other than the lab's sample, within its "
+            f"uncertainty): {eprobs.get('terrain_mismatch', 0.0):.3g}"]
+    else:
+        confidence, creasons = _confidence(effect, model, fits, eprobs, consistency, data, tests_w, sink_ev, reasons,
+                                           supported, probs, paired, target)
     chosen = fits.get(model) if model else None
     gain = {
         "R0_n_before": wong.metrics["R0_n"],
@@ -1696,6 +1729,7 @@ def diagnose(
         not_excluded=not_excl,
         consistency=consistency, flags=flags, tried=tried, c_hat=c_hat, deff=deff, paired=paired, supported=supported,
         why_not=why_not, target_channels=target, hysteresis_test=hyst, why=why, sinkage_law={"law": sinkage},
+        lab_uncertainty=lab_unc,
     )
     diag._remain = remain  # noqa: SLF001
     diag._sig_w = sig_w  # noqa: SLF001
@@ -1910,6 +1944,38 @@ def _structured_channels(data: FitData, f: HypFit) -> set:
     size (step 1's tests and floors, :func:`_structure_cells`, :func:`_significant_tests`)."""
     tests = _structure_cells(data, f.cell_pred)
     return {tests[k]["channel"] for k in _significant_tests(tests)}
+
+
+def _within_lab_uncertainty(data: FitData, fits: dict, supported, sink_ev: dict | None,
+                            candidate: str | None = None) -> dict | None:
+    """Whether Wong's error is one that the lab values' own stated uncertainty explains (module doc,
+    step 5): the verdict's ``candidate`` is a re-fit of lab values (the best explanation is a soil other
+    than the lab's sample; where it is another cause, or a stand-in for one on no list, the verdict stays
+    ``unexplained``), the re-fit of all five values (``terrain``) is supported (step 3), moves none of
+    them more than ``LAB_Z`` lab standard deviations (on the prior's scale) and all of them together no
+    farther than a soil drawn from the lab's uncertainty lies on average (prior chi-square at most its
+    expectation, the number of values: a one-value mismatch that the re-fit spreads over five correlated
+    values stays beyond it), leaves no relevant structure in any channel (step 1 on its residuals), and
+    the measured sinkage, if any, does not grow with slip.
+
+    Returns ``{"model": "terrain", "z": {value: (fitted - lab) / lab sd}, "max_abs_z", "lab_z",
+    "candidate"}`` or None.  A lab value is a measurement with a stated standard deviation; a field soil
+    within it agrees with the lab, and an error of Wong's model that such a soil explains shows no cause.
+    Asked only where the verdict would otherwise be ``unexplained``: it never overrides a named cause."""
+    f = fits.get("terrain")
+    if f is None or "terrain" not in supported or not f.prior:
+        return None
+    if candidate not in fits or fits[candidate].effect != "terrain_mismatch":
+        return None  # the best explanation is another cause (or a stand-in for one on no list)
+    if sink_ev is not None and sink_ev["significant"]:
+        return None
+    z = {p: (_on_prior_scale(p, f.params[p]) - mu) / sd for p, (mu, sd) in f.prior.items()}
+    if not all(np.isfinite(v) and abs(v) <= LAB_Z for v in z.values()) or f.chi2_prior > len(z):
+        return None
+    if _structured_channels(data, f):
+        return None
+    return {"model": "terrain", "z": z, "max_abs_z": max(abs(v) for v in z.values()), "lab_z": LAB_Z,
+            "candidate": candidate}
 
 
 def _whole_better(data, fits, f: HypFit) -> list:
@@ -2189,7 +2255,15 @@ def _summary(d: Diagnosis) -> str:
     ptxt = "Holm-adjusted " + ", ".join(
         f"{k.replace('drawbar_pull_n', 'Dp').replace('torque_nm', 'T').replace('sinkage_m', 'z')} p = {t['p_holm']:.2g}"
         for k, t in tw.items() if np.isfinite(t.get("p_holm", np.nan)))
-    if d.effect == "none":
+    if d.effect == "none" and d.lab_uncertainty:
+        lu = d.lab_uncertainty
+        parts.append(f"Wong's residuals are systematic in {', '.join(d._sig_w)} ({ptxt}), but within what the lab "  # noqa: SLF001
+                     f"values' stated uncertainty allows: {TITLES['terrain']} moves no value beyond {LAB_Z:g} lab "
+                     "standard deviations (" + ", ".join(f"{q} {v:+.2g}" for q, v in lu["z"].items()) + " sigma), "
+                     "leaves no relevant structure, and the measured sinkage does not grow with slip: the data show "
+                     "no cause beyond the lab's uncertainty (the field soil agrees with the lab's within it), so "
+                     "Wong's model with the lab's values is kept.")
+    elif d.effect == "none":
         loose = _loose(tw)
         parts.append(f"Wong's residuals show no significant systematic structure of relevant size ({ptxt}; threshold "
                      f"{ALPHA:g}, size >= {MIN_EFFECT:g} cell-noise sigma and >= {MIN_REL:.0%} "
