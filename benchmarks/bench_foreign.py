@@ -1,6 +1,6 @@
-"""The diagnosis on runs of seven independent generators (``benchmarks/foreign/`` to ``foreign7/``).
+"""The diagnosis on runs of eight independent generators (``benchmarks/foreign/`` to ``foreign8/``).
 
-    python benchmarks/bench_foreign.py [--generator foreign|foreign2 [--stress|--round2]|foreign3|foreign4|foreign5|foreign6|foreign7 [--round2]]
+    python benchmarks/bench_foreign.py [--generator foreign|foreign2 [--stress|--round2]|foreign3|...|foreign8 [--round2]]
                                        [--only a1,v15] [--keep DIR]
 
 Each generator was written from the hardware contract, the DBC files and the paper alone, by a
@@ -41,7 +41,9 @@ frames, duplicates, a logging stall, host clock steps), PEAK TRC among the forma
 dead weights, its static sinkage from the vertical balance; each table fitted with the ``wheelsoil fit``
 arguments its truth file gives, scored against its ``acceptable_verdicts``; ``foreign7`` (``round1.json``,
 seeds 1001-1028; ``--round2`` 1031-1058): single-wheel soil-bin rig *time series* (slip sweeps and steps,
-pass after pass, sinkage measured), fitted the same way. Prints one row per case (verdict, latency found against the truth, its method and
+pass after pass, sinkage measured), fitted the same way; ``foreign8`` (``round1.json``, seeds 1101-1130;
+``--round2`` 1131-1160): vehicle CAN logs (candump, ASC, BLF) of a tow test against a brake trailer, its own
+soils and a 0.52 x 0.36 m wheel, fitted directly from the log with the arguments its truth file gives. Prints one row per case (verdict, latency found against the truth, its method and
 reliability) and the totals, and the wall time.
 """
 
@@ -64,6 +66,7 @@ GEN4 = Path(__file__).resolve().parent / "foreign4" / "gen.py"
 GEN5 = Path(__file__).resolve().parent / "foreign5" / "gen.py"
 GEN6 = Path(__file__).resolve().parent / "foreign6" / "gen.py"
 GEN7 = Path(__file__).resolve().parent / "foreign7" / "gen.py"
+GEN8 = Path(__file__).resolve().parent / "foreign8" / "gen.py"
 
 #: name, generator case, fronts, seed, latency [s], effect options
 CASES = [
@@ -137,7 +140,7 @@ ROUND2 = [
 #: sizes, every cause on no list at two sizes) by the project after the first was scored and before any of
 #: these was run; ``foreign5/round1.json`` (801-830) by its author before any run was scored, its
 #: ``round2.json`` (831-860) by the project after the first was scored and before any of these was run
-ROUNDS = {(gen.parent.name, k): gen.parent / f"round{k}.json" for gen in (GEN3, GEN4, GEN5, GEN6, GEN7) for k in (1, 2)}
+ROUNDS = {(gen.parent.name, k): gen.parent / f"round{k}.json" for gen in (GEN3, GEN4, GEN5, GEN6, GEN7, GEN8) for k in (1, 2)}
 
 
 def round_runs(generator: str, k: int) -> list[dict]:
@@ -239,13 +242,22 @@ def run_case7(name: str, case: str, seed: int, params: dict, out: Path) -> dict:
     return _run_csv_case(GEN7, name, case, seed, params, out)
 
 
+def run_case8(name: str, case: str, seed: int, params: dict, out: Path) -> dict:
+    """Generate one run of the ninth generator (``foreign8``: vehicle CAN logs of a tow test against a brake
+    trailer, its own soils and wheel) and fit the log as its truth file says (``wheelsoil fit NAME.log
+    --terrain foreign8/lab_....toml --wheel-radius ...``), as :func:`run_case6` does."""
+    return _run_csv_case(GEN8, name, case, seed, params, out)
+
+
 def _run_csv_case(gen: Path, name: str, case: str, seed: int, params: dict, out: Path) -> dict:
-    """Generate one CSV (a table or a time series) of ``gen`` and fit it with its truth's ``fit_args``."""
+    """Generate one data file of ``gen`` (a CSV table or time series, or a CAN log) and fit it with its truth's
+    ``fit_args`` (the data file moved to ``out``, a relative terrain file taken from the project's root)."""
     from wheelsoil.cli import main as wheelsoil_main
 
     truth = _run_generator(gen, _round_args(case, seed, params, None, plain=True), name, out)
     root = Path(__file__).resolve().parents[1]
-    fit_args = [str(out / f"{name}.csv") if a.endswith(f"{name}.csv") else
+    data = tuple(f"{name}.{ext}" for ext in ("csv", "log", "asc", "blf", "trc"))
+    fit_args = [str(out / Path(a).name) if a.endswith(data) else
                 str(root / a) if a.endswith(".toml") and not Path(a).is_absolute() else a for a in truth["fit_args"]]
     report_dir = out / f"rep_{name}"
     with warnings.catch_warnings(), open(out / f"{name}.fit.txt", "w") as log, \
@@ -258,7 +270,7 @@ def _run_csv_case(gen: Path, name: str, case: str, seed: int, params: dict, out:
     acceptable = truth["acceptable_verdicts"]
     score = "right" if d["effect"] in acceptable else ("WRONG" if d["effect"] in NAMED else "miss")
     form = truth.get("form")
-    return {"name": name, "fronts": "table", "truth": f"{case} {truth['params'] or ''}".strip(),
+    return {"name": name, "fronts": "log" if fit_args[0].endswith(data[1:]) else "table", "truth": f"{case} {truth['params'] or ''}".strip(),
             "listed": truth["family"] == "in", "effect": d["effect"], "model": d.get("model"),
             "confidence": d.get("confidence"), "score": score,
             "form": str(d.get("model")).split("+")[0] == form if score == "right" and form else None,
@@ -293,12 +305,13 @@ def fit_and_score(name: str, truth: dict, out: Path, fronts: str, log: Path | No
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--generator", choices=("foreign", "foreign2", "foreign3", "foreign4", "foreign5", "foreign6", "foreign7"), default="foreign",
+    ap.add_argument("--generator", choices=("foreign", "foreign2", "foreign3", "foreign4", "foreign5", "foreign6", "foreign7", "foreign8"),
+                    default="foreign",
                     help="which independent generator's cases (default: foreign, 14 cases; foreign2: 36; foreign3: "
                          "its first round, 30 runs on the paper's clay from a towed vehicle, logs in ASC, BLF and "
                          "candump format fitted directly; foreign4: 30 runs of its own soil and wheel; foreign5: 30 runs of a "
                          "loamy sand, a load car towed behind, damaged logs; foreign6: 30 single-wheel testbed tables; "
-                         "foreign7: 28 single-wheel rig time series)")
+                         "foreign7: 28 single-wheel rig time series; foreign8: 30 vehicle CAN logs of a tow test)")
     ap.add_argument("--stress", action="store_true",
                     help="with --generator foreign2: 24 runs of eight of its cases as short runs (4 cycles), with 3x "
                          "the sensor noise and with 3x the soil variability, instead of its 36 cases")
@@ -308,12 +321,13 @@ def main() -> None:
                          "its second round, 30 runs on seeds 631-660 (foreign3/round2.json); with foreign4: its second round, "
                          "30 runs on seeds 731-760 (foreign4/round2.json); with foreign5: 30 runs on seeds 831-860 "
                          "(foreign5/round2.json); with foreign6: 30 tables on seeds 931-960 (foreign6/round2.json); with "
-                         "foreign7: 28 rig time series on seeds 1031-1058 (foreign7/round2.json)")
+                         "foreign7: 28 rig time series on seeds 1031-1058 (foreign7/round2.json); with foreign8: 30 "
+                         "logs on seeds 1131-1160 (foreign8/round2.json)")
     ap.add_argument("--only", default="", help="comma list of case names (default: all)")
     ap.add_argument("--keep", type=Path, default=None, help="keep logs, recordings and reports here")
     args = ap.parse_args()
     if args.stress and args.generator != "foreign2" or args.round2 and args.generator == "foreign":
-        ap.error("--stress needs --generator foreign2, --round2 one of foreign2 to foreign7")
+        ap.error("--stress needs --generator foreign2, --round2 one of foreign2 to foreign8")
     if args.stress and args.round2:
         ap.error("choose one of --stress and --round2")
     only = set(filter(None, args.only.split(",")))
@@ -326,7 +340,7 @@ def main() -> None:
     elif args.generator in ("foreign3", "foreign4", "foreign5"):
         cases = [(r["name"], r["case"], r["seed"], r["params"], r["format"])
                  for r in round_runs(args.generator, 2 if args.round2 else 1)]
-    elif args.generator in ("foreign6", "foreign7"):
+    elif args.generator in ("foreign6", "foreign7", "foreign8"):
         cases = [(r["name"], r["case"], r["seed"], r["params"]) for r in round_runs(args.generator, 2 if args.round2 else 1)]
     else:
         cases = STRESS if args.stress else ROUND2 if args.round2 else CASES2
@@ -341,6 +355,7 @@ def main() -> None:
                 run_case5(*c, base) if args.generator == "foreign5" else \
                 run_case6(*c, base) if args.generator == "foreign6" else \
                 run_case7(*c, base) if args.generator == "foreign7" else \
+                run_case8(*c, base) if args.generator == "foreign8" else \
                 run_case2(*c[:5], base, *c[5:])
         except subprocess.CalledProcessError as e:  # the generator refused (e.g. a run the vehicle cannot drive)
             print(f"{c[0]:<{w}} generator failed: {e.stderr.decode(errors='replace').strip().splitlines()[-1:]}")
