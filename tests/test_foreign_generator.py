@@ -10,7 +10,7 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
-from bench_foreign import (CASES, CASES2, GEN, GEN2, GEN3, GEN4, GEN5, GEN6, GEN7, NAMED, ROUND2,  # noqa: E402
+from bench_foreign import (CASES, CASES2, GEN, GEN2, GEN3, GEN4, GEN5, GEN6, GEN7, GEN8, NAMED, ROUND2,  # noqa: E402
                            STRESS, generate, round_runs, run_case, run_case2, run_case6)
 
 
@@ -35,8 +35,9 @@ def _load(gen_path, name):
 
 
 @pytest.mark.parametrize("folder", [GEN.parent, GEN2.parent, GEN3.parent, GEN4.parent, GEN5.parent, GEN6.parent,
-                                    GEN7.parent],
-                         ids=["foreign", "foreign2", "foreign3", "foreign4", "foreign5", "foreign6", "foreign7"])
+                                    GEN7.parent, GEN8.parent],
+                         ids=["foreign", "foreign2", "foreign3", "foreign4", "foreign5", "foreign6", "foreign7",
+                              "foreign8"])
 def test_the_independent_generators_import_nothing_from_wheelsoil(folder):
     files = list(folder.glob("*.py"))
     assert files
@@ -272,3 +273,14 @@ def test_a_bin_soil_within_the_lab_uncertainty_is_none(tmp_path, run):
     assert row["score"] == "right" and d["effect"] == "none" and d["confidence"] == "low", d["summary"]
     assert lu and max(abs(v) for v in lu["z"].values()) <= lu["lab_z"]
     assert "within what the lab values' stated uncertainty allows" in d["summary"]
+
+
+def test_every_run_of_the_ninth_generators_rounds_is_one_of_its_cases():
+    """foreign8 writes vehicle CAN logs of a tow test: every run of its two rounds is one of its cases, both
+    families in each round, round 2 on other seeds than round 1."""
+    r1, r2 = round_runs("foreign8", 1), round_runs("foreign8", 2)
+    assert r1 and r2 and not {r["seed"] for r in r1} & {r["seed"] for r in r2}
+    gen = _load(GEN8, "foreign8_gen")
+    assert {r["case"] for r in r1 + r2} <= set(gen.CASES)
+    for rnd in (r1, r2):
+        assert {gen.CASES[r["case"]] for r in rnd} == {"in", "out"}
