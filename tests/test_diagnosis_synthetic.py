@@ -864,3 +864,22 @@ def test_a_soil_beyond_the_lab_uncertainty_is_not_passed_off_as_none():
     d = diagnose(_table(terrain=CLAY, truth=truth, seed=1, n=150), CLAY, W)
     _invariants(d)
     assert d.lab_uncertainty is None and d.effect != "none", d.summary
+
+
+def test_a_value_the_prior_pulls_within_the_lab_range_is_judged_by_the_datas_own_estimate():
+    """A re-fitted value 1.7 lab sd from the lab with a posterior standard error of 0.72 lab sd: the prior's pull
+    hides a data estimate of 1.7 / (1 - 0.72^2) = 3.5 sd (+/- 1.04), beyond one lab sd at the 97.5 % level (an
+    independent generator's k_eq 3.5 sd off); the same offset measured precisely (0.1 sd) lies within one sd
+    only when it is under it: 0.9 is, 1.5 is not; a value the data do not constrain is placed nowhere."""
+    from types import SimpleNamespace
+
+    from wheelsoil.model.diagnosis import _beyond_lab_sd
+
+    def fit(z, s):
+        return SimpleNamespace(prior={"n": (1.0, 0.1)}, params={"n": 1.0 + 0.1 * z},
+                               stderr_fit={"n": 0.1 * s}, stderr={"n": 0.1 * s})
+
+    assert _beyond_lab_sd(fit(1.7, 0.72), {"n": 1.7}) == ["n"]
+    assert _beyond_lab_sd(fit(0.9, 0.1), {"n": 0.9}) == []
+    assert _beyond_lab_sd(fit(1.5, 0.1), {"n": 1.5}) == ["n"]
+    assert _beyond_lab_sd(fit(1.5, 0.999), {"n": 1.5}) == []
