@@ -86,7 +86,7 @@ def test_a_deflecting_tyre_is_not_named_a_terrain_mismatch(tmp_path):
 
 def test_a_terrain_mismatch_shared_with_slip_sinkage_combinations_is_named(tmp_path):
     run, report = _fit(tmp_path, "clay", effect="terrain_mismatch", wheel=(0.55, 0.40), added_load_n=3000.0,
-                       params={"changes": {"c": {"kind": "factor", "value": 1.45}}}, seed=9180)
+                       params={"changes": {"c": {"kind": "factor", "value": 2.0}}}, seed=9180)
     d = report["diagnosis"]
     assert d["effect"] == "terrain_mismatch", d["summary"]
     assert d["effect_probabilities"]["terrain_mismatch"] >= 0.9
