@@ -166,8 +166,8 @@ decides with this rule (constants below; none was tuned on a benchmark):
    could not stop a slip sinkage from being named in its place (an independent generator's Wong-Reece
    table, f6r1_18, was named Ding + terrain at "medium"); in the sinkage channel's own verdict the two
    are look-alikes (below).
-   Where the verdict would be ``unexplained`` and its candidate is a re-fit of lab values, Wong's error
-   may be one the lab's own stated uncertainty explains (:func:`_within_lab_uncertainty`): when the
+   Where the verdict would be ``unexplained``, Wong's error may be one the lab's own stated uncertainty
+   explains (:func:`_within_lab_uncertainty`): when the
    five-value re-fit is supported, moves no value beyond ``LAB_Z`` lab standard deviations, lies no
    farther from the lab than a soil drawn from its uncertainty does on average (prior chi-square at most
    the number of values), the data's own estimate (the prior's pull undone) places no value beyond one
@@ -2040,10 +2040,10 @@ def _data_z(f: HypFit) -> dict:
     return {p: zd for p, (zd, _) in _data_estimates(f).items()}
 
 
-def _beyond_lab_sd(f: HypFit, z: dict | None = None) -> list:
+def _beyond_lab_sd(f: HypFit) -> list:
     """The lab values of the re-fit ``f`` that the data's own estimate (:func:`_data_estimates`) places beyond
     one lab standard deviation of the lab value at the one-sided 97.5 % level: shown to differ from the lab by
-    more than its stated uncertainty (``z`` is accepted for the caller's convenience and not needed)."""
+    more than its stated uncertainty."""
     zq = float(stats.norm.ppf(0.975))
     return [p for p, (zd, se) in _data_estimates(f).items() if abs(zd) - 1.0 > zq * se]
 

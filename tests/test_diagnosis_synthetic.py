@@ -879,10 +879,10 @@ def test_a_value_the_prior_pulls_within_the_lab_range_is_judged_by_the_datas_own
         return SimpleNamespace(prior={"n": (1.0, 0.1)}, params={"n": 1.0 + 0.1 * z},
                                stderr_fit={"n": 0.1 * s}, stderr={"n": 0.1 * s})
 
-    assert _beyond_lab_sd(fit(1.7, 0.72), {"n": 1.7}) == ["n"]
-    assert _beyond_lab_sd(fit(0.9, 0.1), {"n": 0.9}) == []
-    assert _beyond_lab_sd(fit(1.5, 0.1), {"n": 1.5}) == ["n"]
-    assert _beyond_lab_sd(fit(1.5, 0.999), {"n": 1.5}) == []
+    assert _beyond_lab_sd(fit(1.7, 0.72)) == ["n"]
+    assert _beyond_lab_sd(fit(0.9, 0.1)) == []
+    assert _beyond_lab_sd(fit(1.5, 0.1)) == ["n"]
+    assert _beyond_lab_sd(fit(1.5, 0.999)) == []
 
 
 def test_a_refit_within_one_lab_sd_names_no_mismatch():
