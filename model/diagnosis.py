@@ -1153,9 +1153,16 @@ def _from_prior_scale(p, u):
     return math.exp(u) if p in ("k_eq", "K") else u
 
 
-def _se_prior_scale(p, f):
-    se = f.stderr[p]
+def _se_prior_scale(p, f, se=None):
+    """Standard error of ``f``'s value ``p`` on its prior's scale (relative for the log-scale k_eq and K);
+    ``se`` (SI) defaults to the reported one (``f.stderr``)."""
+    se = f.stderr[p] if se is None else se
     return se / f.params[p] if p in ("k_eq", "K") and f.params[p] > 0 else se
+
+
+def _prior_z(f: HypFit) -> dict:
+    """value -> (fitted - lab) / lab sd of each lab value ``f`` re-fits, on the prior's scale."""
+    return {p: (_on_prior_scale(p, f.params[p]) - mu) / sd for p, (mu, sd) in f.prior.items()}
 
 
 # ----------------------------------------------------------------------------- consistency, flags
@@ -2000,7 +2007,7 @@ def _within_lab_uncertainty(data: FitData, fits: dict, supported, sink_ev: dict 
         return None  # the data prefer another cause (or a stand-in for one on no list) strongly
     if sink_ev is not None and sink_ev["significant"]:
         return None
-    z = {p: (_on_prior_scale(p, f.params[p]) - mu) / sd for p, (mu, sd) in f.prior.items()}
+    z = _prior_z(f)
     if not all(np.isfinite(v) and abs(v) <= LAB_Z for v in z.values()) or f.chi2_prior > len(z):
         return None
     if _beyond_lab_sd(f):
@@ -2022,16 +2029,14 @@ def _data_estimates(f: HypFit) -> dict:
     larger (the reported standard error).  (An independent generator's k_eq 3.5 sd off, a vehicle run
     without measured sinkage: the re-fit put it at 1.7 sd with s = 0.72; the data's estimate, 3.6 +/- 1.05.)"""
     out = {}
-    for p, (mu, sd) in f.prior.items():
-        se_post, se_rep = f.stderr_fit.get(p, np.nan), f.stderr.get(p, np.nan)
-        if p in ("k_eq", "K"):
-            se_post, se_rep = se_post / f.params[p], se_rep / f.params[p]
-        s = se_post / sd
+    z = _prior_z(f)
+    for p, (_, sd) in f.prior.items():
+        s = _se_prior_scale(p, f, f.stderr_fit.get(p, np.nan)) / sd
         if not np.isfinite(s) or s * s >= 0.99:
             continue
-        z = (_on_prior_scale(p, f.params[p]) - mu) / sd
-        widen = max(1.0, (se_rep / sd) / s) if np.isfinite(se_rep) and s > 0 else 1.0
-        out[p] = (z / (1.0 - s * s), s / math.sqrt(1.0 - s * s) * widen)
+        se_rep = _se_prior_scale(p, f, f.stderr.get(p, np.nan)) / sd
+        widen = max(1.0, se_rep / s) if np.isfinite(se_rep) and s > 0 else 1.0
+        out[p] = (z[p] / (1.0 - s * s), s / math.sqrt(1.0 - s * s) * widen)
     return out
 
 
