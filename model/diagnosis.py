@@ -58,7 +58,8 @@ decides with this rule (constants below; none was tuned on a benchmark):
    from its lab value is what that cause says, and is reported as such),
    and a hypothesis that contains a smaller one (slip sinkage + terrain
    contains the terrain re-fit and the slip-sinkage form; a drift contains the
-   terrain re-fit it varies, a one-value drift the one-value re-fit:
+   terrain re-fit it varies, a one-value drift the one-value re-fit (with the levels re-fitted, the
+   five-value re-fit):
    ``Hypothesis.nested``) lowers the drawbar pull error below it out of
    sample by the same paired test (slip sinkage + terrain against either part
    alone: or the error of a channel in which that part's residuals keep a
@@ -1067,6 +1068,24 @@ def _effect_of(f: HypFit, fits: dict, not_beaten: list = ()) -> str:
     return f.effect
 
 
+def _gate_closed(data: FitData, fits: dict, h, steps) -> str | None:
+    """Why the ``gated`` hypothesis ``h`` (``Hypothesis.gated``, registered last) is not tried, or None: its
+    ``whole`` (the five-value drift it narrows) has less evidence than another of the fits so far
+    (overdispersion and design effect from the best of them, the step forms' change-point choice paid for,
+    as in the posterior).  A narrower form of a catch-all is asked for when the catch-all explains the data
+    best (step 5); the gate spares its fits elsewhere."""
+    ok = {k: f for k, f in fits.items() if f.success}
+    if h.whole not in ok:
+        return f"{h.whole} not fitted"
+    best = min(ok.values(), key=lambda f: f.chi2_data / f.dof)
+    c_hat, deff = max(1.0, best.chi2_data / best.dof), _design_effect(data, best)
+    ev = {k: f.evidence(c_hat, deff) - (math.log(steps[1]) if steps is not None and isinstance(f.hypothesis, DriftStep)
+                                        else 0.0) for k, f in ok.items()}
+    if max(ev, key=ev.get) == h.whole:
+        return None
+    return f"{h.whole} does not explain the data best: no drift of its kind to narrow"
+
+
 def _catch_all(f: HypFit) -> bool:
     """True for the hypothesis space's catch-alls, which name no cause on their own (module doc, step 5;
     ``Hypothesis.catch_all``): the re-fit of all five lab soil values (``terrain``), its drifting forms
@@ -1439,7 +1458,7 @@ def diagnose(
         h = HYPOTHESES[name]
         if bar is not None:
             bar.set_postfix_str(name)
-        why = h.available(ctx, has_x)
+        why = h.available(ctx, has_x) or (h.gated and _gate_closed(data, fits, h, steps))
         if why:
             not_tried.setdefault(why, []).append(name)
             if bar is not None:

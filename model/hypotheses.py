@@ -103,6 +103,10 @@ The hypotheses (paper numbering for Eqs.; Wong = *Theory of Ground Vehicles*, 4t
   have ten: when one value moves, the Occam factor of the five-value forms
   would hide the drift behind a two-parameter stand-in (``dp_drift``,
   ``zero_drift``).
+* ``drift_<value>+terrain``, ``drift_step_<value>+terrain``: the same one-value
+  drifts with the five values' levels re-fitted against their lab priors (a
+  field soil is never exactly the lab's); each shares its value's prior mass
+  with the form above.
 
 Units: SI throughout (phi in rad, c in Pa, k_eq in N/m^(n+2)).
 """
@@ -295,6 +299,7 @@ class Hypothesis:
     ``catch_all``: a re-fit free enough to follow causes on no list as well as the lab error it
     stands for (the five-value re-fit and its drifts, the shear test's three values); it names no
     cause on its own (:mod:`wheelsoil.model.diagnosis`, step 5).
+    ``gated``: tried only when its ``whole`` has the most evidence of the hypotheses registered before it.
     """
 
     name: ClassVar[str] = ""
@@ -309,6 +314,9 @@ class Hypothesis:
     sinks_with_slip: ClassVar[bool] = False
     prior_group: ClassVar[str] = ""
     catch_all: ClassVar[bool] = False
+    #: tried only when its ``whole`` has the most evidence of the hypotheses registered before it: the data show
+    #: the kind of change it narrows, best (the diagnosis' gate; it spares the fits on data without it)
+    gated: ClassVar[bool] = False
 
     def own_params(self, ctx: Context) -> tuple[HParam, ...]:
         """The hypothesis' own parameters (besides the terrain block)."""
@@ -753,15 +761,45 @@ class DriftStepOne(DriftOne, DriftStep):
     whole = "drift_step"
 
 
-def _drift_one(name: str, step: bool = False) -> DriftOne:
+class DriftOneTerrain(DriftOne):
+    """:class:`DriftOne` with the mid-run levels of all five values re-fitted against their lab priors
+    (``terrain_block``): one value drifts, on a field soil that is never exactly the lab's.  With the other
+    four at the lab values an independent generator's vehicle logs of a k_eq compaction, on a soil drawn
+    within the lab's uncertainty, were explained only by the five-value drift (the one-value form's
+    posterior below 1e-300); with them free, by the k_eq drift.  It shares the prior mass of its value's
+    drift with :class:`DriftOne` (``prior_group``) and contains the five-value re-fit (``nested``).  Tried
+    only when the five-value drift of its kind explains the data best of the hypotheses registered before
+    it (``gated``: then a narrower form of it is asked for, diagnosis step 5), and not with
+    ``ctx.fit_terrain`` (:class:`DriftOne` then re-fits the terrain already)."""
+
+    terrain_block = True
+    gated = True
+
+    def own_params(self, ctx):
+        return (next(q for q in DriftLinear.own_params(self, ctx) if q.name == _SLOPE[self.param]),)
+
+    def available(self, ctx, has_x):
+        if ctx.fit_terrain:
+            return "with --fit-terrain the one-value drift re-fits the terrain already"
+        return super().available(ctx, has_x)
+
+
+class DriftStepOneTerrain(DriftOneTerrain, DriftStepOne):
+    """:class:`DriftStepOne` with the five values' levels re-fitted (:class:`DriftOneTerrain`)."""
+
+
+def _drift_one(name: str, step: bool = False, levels: bool = False) -> DriftOne:
     """The one-value drift of terrain value ``name``: linear along the run, or a ``step``."""
     title, source = ((f"another patch of ground with another {name} alone", "a change of soil along the track (Wong 2008 "
                       "ch. 2); one soil value steps at the change point") if step else
                      (f"{name} alone drifting along the run", "repeated passes compact the soil (Wong 2008 ch. 2); linear "
                       "drift of one soil value"))
-    cls = type(f"Drift{'Step' if step else ''}_{name}", (DriftStepOne if step else DriftOne,), {
-        "param": name, "name": f"drift_{'step_' if step else ''}{name}", "nested": (f"terrain_{name}",),
-        "title": title, "source": source})
+    base = ((DriftStepOneTerrain if step else DriftOneTerrain) if levels else (DriftStepOne if step else DriftOne))
+    cls = type(f"Drift{'Step' if step else ''}_{name}{'_levels' if levels else ''}", (base,), {
+        "param": name, "name": f"drift_{'step_' if step else ''}{name}{'+terrain' if levels else ''}",
+        "nested": ("terrain",) if levels else (f"terrain_{name}",),
+        "title": title + (", the five levels re-fitted" if levels else ""), "source": source,
+        "prior_group": f"{'step' if step else 'drift'} of {name}"})
     return cls()
 
 
@@ -1372,7 +1410,9 @@ HYPOTHESES: dict[str, Hypothesis] = {
               *(_drift_one(n, step=True) for n in TERRAIN_NAMES), DrawbarResistance(), DrawbarDrift(), ZeroDrift(),
               WheelRadius(), SpeedGain(), TyreRadius(), WheelWidth(), SensorGain(), AngleOffset(), LoadStiffness(),
               SpeedStiffness(), SpeedSinkage(), Rebound(), ShearSlip(), CurvedEnvelope(), StressK(), VerticalBalance(),
-              SmallAngleSinkage())
+              SmallAngleSinkage(),
+              # last: tried only when the drift they narrow explains the data best (``gated``)
+              *(_drift_one(n, step=s, levels=True) for s in (False, True) for n in TERRAIN_NAMES))
 }
 
 
