@@ -106,7 +106,9 @@ The hypotheses (paper numbering for Eqs.; Wong = *Theory of Ground Vehicles*, 4t
 * ``drift_<value>+terrain``, ``drift_step_<value>+terrain``: the same one-value
   drifts with the five values' levels re-fitted against their lab priors (a
   field soil is never exactly the lab's); each shares its value's prior mass
-  with the form above.
+  with the form above.  ``drift_<v>_<w>+terrain``, ``drift_step_<v>_<w>+terrain``:
+  two values drifting so (:data:`DRIFT_PAIRS`).  All are tried only when the
+  five-value drift they narrow explains the data best (``gated``).
 
 Units: SI throughout (phi in rad, c in Pa, k_eq in N/m^(n+2)).
 """
@@ -763,20 +765,28 @@ class DriftStepOne(DriftOne, DriftStep):
 
 class DriftOneTerrain(DriftOne):
     """:class:`DriftOne` with the mid-run levels of all five values re-fitted against their lab priors
-    (``terrain_block``): one value drifts, on a field soil that is never exactly the lab's.  With the other
-    four at the lab values an independent generator's vehicle logs of a k_eq compaction, on a soil drawn
-    within the lab's uncertainty, were explained only by the five-value drift (the one-value form's
-    posterior below 1e-300); with them free, by the k_eq drift.  It shares the prior mass of its value's
-    drift with :class:`DriftOne` (``prior_group``) and contains the five-value re-fit (``nested``).  Tried
-    only when the five-value drift of its kind explains the data best of the hypotheses registered before
-    it (``gated``: then a narrower form of it is asked for, diagnosis step 5), and not with
-    ``ctx.fit_terrain`` (:class:`DriftOne` then re-fits the terrain already)."""
+    (``terrain_block``): one value (``values``: one; or two, a pair of :data:`DRIFT_PAIRS`) drifts, on a
+    field soil that is never exactly the lab's.  With the other four at the lab values an independent
+    generator's vehicle logs of a k_eq compaction, on a soil drawn within the lab's uncertainty, were
+    explained only by the five-value drift (the one-value form's posterior below 1e-300); with them free,
+    by the k_eq drift.  Its independent generators' drifts changed two values as often as one (compaction
+    k_eq with n or K, another patch of ground with another k_eq and phi), so two values drift too, the pairs
+    the terrain mismatch re-fits (:data:`TEST_PAIRS`, the plate test's and :data:`SHEAR_PAIRS`).  A one-value
+    form shares its value's prior mass with :class:`DriftOne` (``prior_group``), the pairs share one form's
+    (as the two-value re-fits do); each contains the five-value re-fit (``nested``).  Tried only when the
+    five-value drift of its kind explains the data best of the hypotheses registered before it (``gated``:
+    then a narrower form of it is asked for, diagnosis step 5), and not with ``ctx.fit_terrain``."""
 
     terrain_block = True
     gated = True
+    values: ClassVar[tuple[str, ...]] = ()
 
     def own_params(self, ctx):
-        return (next(q for q in DriftLinear.own_params(self, ctx) if q.name == _SLOPE[self.param]),)
+        slopes = [_SLOPE[v] for v in self.values]
+        return tuple(q for q in DriftLinear.own_params(self, ctx) if q.name in slopes)
+
+    def nulls(self, ctx):
+        return {_SLOPE[v]: 0.0 for v in self.values}
 
     def available(self, ctx, has_x):
         if ctx.fit_terrain:
@@ -788,18 +798,37 @@ class DriftStepOneTerrain(DriftOneTerrain, DriftStepOne):
     """:class:`DriftStepOne` with the five values' levels re-fitted (:class:`DriftOneTerrain`)."""
 
 
-def _drift_one(name: str, step: bool = False, levels: bool = False) -> DriftOne:
+#: The pairs of soil values that drift together in :class:`DriftOneTerrain`: the plate test's, one value of
+#: each test and the shear test's pairs with K (the pairs the terrain mismatch re-fits).
+DRIFT_PAIRS = (LAB_TESTS["plate"], *TEST_PAIRS, *SHEAR_PAIRS)
+
+
+def _drift_one(name: str, step: bool = False) -> DriftOne:
     """The one-value drift of terrain value ``name``: linear along the run, or a ``step``."""
     title, source = ((f"another patch of ground with another {name} alone", "a change of soil along the track (Wong 2008 "
                       "ch. 2); one soil value steps at the change point") if step else
                      (f"{name} alone drifting along the run", "repeated passes compact the soil (Wong 2008 ch. 2); linear "
                       "drift of one soil value"))
-    base = ((DriftStepOneTerrain if step else DriftOneTerrain) if levels else (DriftStepOne if step else DriftOne))
-    cls = type(f"Drift{'Step' if step else ''}_{name}{'_levels' if levels else ''}", (base,), {
-        "param": name, "name": f"drift_{'step_' if step else ''}{name}{'+terrain' if levels else ''}",
-        "nested": ("terrain",) if levels else (f"terrain_{name}",),
-        "title": title + (", the five levels re-fitted" if levels else ""), "source": source,
-        "prior_group": f"{'step' if step else 'drift'} of {name}"})
+    cls = type(f"Drift{'Step' if step else ''}_{name}", (DriftStepOne if step else DriftOne,), {
+        "param": name, "name": f"drift_{'step_' if step else ''}{name}", "nested": (f"terrain_{name}",),
+        "title": title, "source": source, "prior_group": f"{'step' if step else 'drift'} of {name}"})
+    return cls()
+
+
+def _drift_levels(values: tuple[str, ...], step: bool = False) -> DriftOneTerrain:
+    """The drift of the terrain values ``values`` (one or two), linear along the run or a ``step``, the five
+    levels re-fitted (:class:`DriftOneTerrain`): ``drift_<v>[_<w>]+terrain``, ``drift_step_<v>[_<w>]+terrain``."""
+    what = " and ".join(values) + (" alone" if len(values) == 1 else "")
+    title = (f"another patch of ground with another {what}" if step else f"{what} drifting along the run")
+    source = ("a change of soil along the track (Wong 2008 ch. 2)" if step else
+              "repeated passes compact the soil (Wong 2008 ch. 2)") + "; the levels against the lab priors"
+    group = (f"{'step' if step else 'drift'} of {values[0]}" if len(values) == 1
+             else f"two values {'stepping' if step else 'drifting'}")
+    key = "_".join(values)
+    cls = type(f"Drift{'Step' if step else ''}_{key}_levels", (DriftStepOneTerrain if step else DriftOneTerrain,), {
+        "param": values[0], "values": values, "name": f"drift_{'step_' if step else ''}{key}+terrain",
+        "nested": ("terrain",), "title": title + ", the five levels re-fitted", "source": source,
+        "prior_group": group})
     return cls()
 
 
@@ -1412,7 +1441,8 @@ HYPOTHESES: dict[str, Hypothesis] = {
               SpeedStiffness(), SpeedSinkage(), Rebound(), ShearSlip(), CurvedEnvelope(), StressK(), VerticalBalance(),
               SmallAngleSinkage(),
               # last: tried only when the drift they narrow explains the data best (``gated``)
-              *(_drift_one(n, step=s, levels=True) for s in (False, True) for n in TERRAIN_NAMES))
+              *(_drift_levels(v, step=s) for s in (False, True) for v in ((n,) for n in TERRAIN_NAMES)),
+              *(_drift_levels(v, step=s) for s in (False, True) for v in DRIFT_PAIRS))
 }
 
 

@@ -142,6 +142,24 @@ def test_a_drift_in_one_soil_value_on_a_field_soil_off_the_lab_is_named(tmp_path
     assert abs(fitted["value"] - 2 * math.log(0.7)) < 3 * fitted["se"] + 0.1  # lab/0.7 to lab x 0.7
 
 
+def test_another_patch_of_ground_differing_in_two_values_on_a_field_soil_is_named(tmp_path):
+    # the field soil off the lab as above, another patch of ground from 55 % of the run with another k_eq and
+    # phi (an independent generator's patches changed two values): only the five-value step explained it
+    # (a catch-all, no cause named); the pair's step with the five levels re-fitted does
+    lab = load_terrain("sand")
+    field = dataclasses.replace(lab, c=lab.c * 1.2, phi=lab.phi + math.radians(1.2), K=lab.K * 0.85, n=lab.n + 0.04,
+                                kphi=lab.kphi * 1.1)
+    run = simulate_run(field, effect="terrain_drift", wheel=(0.47, 0.32), added_load_n=5000.0,
+                       params={"changes": {"k_eq": {"kind": "factor", "value": 0.8}, "phi": {"kind": "delta", "value": -2.5}},
+                               "mode": "patch", "change_at": 0.55},
+                       seed=9511, duration_s=150.0, gnss_latency_s=0.05, drop_rate=0.002, front_wheels="reference")
+    report = run_fit([write_simulation(run, tmp_path / "run.mcap")], "sand", tmp_path / "report")
+    d = report["diagnosis"]
+    assert d["effect"] == "terrain_drift", d["summary"]
+    assert d["model"] == "drift_step_k_eq_phi+terrain", d["summary"]
+    assert d["models"][d["model"]]["params"]["g_phi"]["value"] < 0  # phi falls on the second patch
+
+
 def test_a_terrain_mismatch_a_stress_shift_fits_as_well_is_not_named_a_stress_distribution(tmp_path):
     run, report = _fit(tmp_path, "clay", effect="terrain_mismatch", wheel=(0.55, 0.40), added_load_n=3000.0,
                        params={"changes": {"c": {"kind": "factor", "value": 0.72}}}, seed=436)

@@ -565,13 +565,15 @@ def test_a_one_value_refit_falls_short_when_its_whole_predicts_a_channel_better(
 
     one = fit("terrain_phi", {"drawbar_pull_n": 0.3, "torque_nm": 1.0})
     wholes = {k: h.whole for k, h in HYPOTHESES.items() if h.whole}
+    drifting = ("k_eq", "n", "c", "phi", "K", "k_eq_n", "k_eq_c", "k_eq_phi", "k_eq_K", "n_c", "n_phi", "n_K", "c_K",
+                "phi_K")  # one value or two, the five levels re-fitted
     assert wholes == {**{f"terrain_{p}": "terrain" for p in ("k_eq", "n", "c", "phi", "K", "plate", "shear", "k_eq_c",
                                                              "k_eq_phi", "k_eq_K", "n_c", "n_phi", "n_K", "c_K",
                                                              "phi_K")},
                       **{f"drift_{p}": "drift_linear" for p in ("k_eq", "n", "c", "phi", "K")},
                       **{f"drift_step_{p}": "drift_step" for p in ("k_eq", "n", "c", "phi", "K")},
-                      **{f"drift_{p}+terrain": "drift_linear" for p in ("k_eq", "n", "c", "phi", "K")},
-                      **{f"drift_step_{p}+terrain": "drift_step" for p in ("k_eq", "n", "c", "phi", "K")}}
+                      **{f"drift_{p}+terrain": "drift_linear" for p in drifting},
+                      **{f"drift_step_{p}+terrain": "drift_step" for p in drifting}}
     better = fit("terrain", {"drawbar_pull_n": 0.3, "torque_nm": 0.2})
     assert _whole_better(data, {"terrain_phi": one, "terrain": better}, one) == ["torque_nm"]
     same = fit("terrain", {"drawbar_pull_n": 0.3, "torque_nm": 1.0})
