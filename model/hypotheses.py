@@ -763,7 +763,7 @@ class DriftStepOne(DriftOne, DriftStep):
     whole = "drift_step"
 
 
-class DriftOneTerrain(DriftOne):
+class DriftLevels(DriftOne):
     """:class:`DriftOne` with the mid-run levels of all five values re-fitted against their lab priors
     (``terrain_block``): one value (``values``: one; or two, a pair of :data:`DRIFT_PAIRS`) drifts, on a
     field soil that is never exactly the lab's.  With the other four at the lab values an independent
@@ -790,15 +790,15 @@ class DriftOneTerrain(DriftOne):
 
     def available(self, ctx, has_x):
         if ctx.fit_terrain:
-            return "with --fit-terrain the one-value drift re-fits the terrain already"
+            return "with --fit-terrain every drift re-fits the terrain already"
         return super().available(ctx, has_x)
 
 
-class DriftStepOneTerrain(DriftOneTerrain, DriftStepOne):
-    """:class:`DriftStepOne` with the five values' levels re-fitted (:class:`DriftOneTerrain`)."""
+class DriftStepLevels(DriftLevels, DriftStepOne):
+    """:class:`DriftStepOne` with the five values' levels re-fitted (:class:`DriftLevels`)."""
 
 
-#: The pairs of soil values that drift together in :class:`DriftOneTerrain`: the plate test's, one value of
+#: The pairs of soil values that drift together in :class:`DriftLevels`: the plate test's, one value of
 #: each test and the shear test's pairs with K (the pairs the terrain mismatch re-fits).
 DRIFT_PAIRS = (LAB_TESTS["plate"], *TEST_PAIRS, *SHEAR_PAIRS)
 
@@ -815,9 +815,9 @@ def _drift_one(name: str, step: bool = False) -> DriftOne:
     return cls()
 
 
-def _drift_levels(values: tuple[str, ...], step: bool = False) -> DriftOneTerrain:
+def _drift_levels(values: tuple[str, ...], step: bool = False) -> DriftLevels:
     """The drift of the terrain values ``values`` (one or two), linear along the run or a ``step``, the five
-    levels re-fitted (:class:`DriftOneTerrain`): ``drift_<v>[_<w>]+terrain``, ``drift_step_<v>[_<w>]+terrain``."""
+    levels re-fitted (:class:`DriftLevels`): ``drift_<v>[_<w>]+terrain``, ``drift_step_<v>[_<w>]+terrain``."""
     what = " and ".join(values) + (" alone" if len(values) == 1 else "")
     title = (f"another patch of ground with another {what}" if step else f"{what} drifting along the run")
     source = ("a change of soil along the track (Wong 2008 ch. 2)" if step else
@@ -825,8 +825,8 @@ def _drift_levels(values: tuple[str, ...], step: bool = False) -> DriftOneTerrai
     group = (f"{'step' if step else 'drift'} of {values[0]}" if len(values) == 1
              else f"two values {'stepping' if step else 'drifting'}")
     key = "_".join(values)
-    cls = type(f"Drift{'Step' if step else ''}_{key}_levels", (DriftStepOneTerrain if step else DriftOneTerrain,), {
-        "param": values[0], "values": values, "name": f"drift_{'step_' if step else ''}{key}+terrain",
+    cls = type(f"Drift{'Step' if step else ''}_{key}_levels", (DriftStepLevels if step else DriftLevels,), {
+        "values": values, "name": f"drift_{'step_' if step else ''}{key}+terrain",
         "nested": ("terrain",), "title": title + ", the five levels re-fitted", "source": source,
         "prior_group": group})
     return cls()
@@ -1441,8 +1441,7 @@ HYPOTHESES: dict[str, Hypothesis] = {
               SpeedStiffness(), SpeedSinkage(), Rebound(), ShearSlip(), CurvedEnvelope(), StressK(), VerticalBalance(),
               SmallAngleSinkage(),
               # last: tried only when the drift they narrow explains the data best (``gated``)
-              *(_drift_levels(v, step=s) for s in (False, True) for v in ((n,) for n in TERRAIN_NAMES)),
-              *(_drift_levels(v, step=s) for s in (False, True) for v in DRIFT_PAIRS))
+              *(_drift_levels(v, step=s) for s in (False, True) for v in (*((n,) for n in TERRAIN_NAMES), *DRIFT_PAIRS)))
 }
 
 
