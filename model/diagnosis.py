@@ -1068,22 +1068,22 @@ def _effect_of(f: HypFit, fits: dict, not_beaten: list = ()) -> str:
     return f.effect
 
 
-def _gate_closed(data: FitData, fits: dict, h, steps) -> str | None:
-    """Why the ``gated`` hypothesis ``h`` (``Hypothesis.gated``, registered last) is not tried, or None: its
-    ``whole`` (the five-value drift it narrows) has less evidence than another of the fits so far
-    (overdispersion and design effect from the best of them, the step forms' change-point choice paid for,
-    as in the posterior).  A narrower form of a catch-all is asked for when the catch-all explains the data
-    best (step 5); the gate spares its fits elsewhere."""
-    ok = {k: f for k, f in fits.items() if f.success}
-    if h.whole not in ok:
-        return f"{h.whole} not fitted"
+def _gate_closed(data: FitData, fits: dict, whole: str, steps) -> str | None:
+    """Why the ``gated`` hypotheses narrowing ``whole`` (``Hypothesis.gated``, registered last) are not tried,
+    or None: ``whole`` (the five-value drift they narrow) has less evidence than another hypothesis fitted
+    (the gated ones aside; overdispersion and design effect from the best fit, the step forms' change-point
+    choice paid for, as in the posterior).  A narrower form of a catch-all is asked for when the catch-all
+    explains the data best (step 5); the gate spares its fits elsewhere."""
+    ok = {k: f for k, f in fits.items() if f.success and not f.hypothesis.gated}
+    if whole not in ok:
+        return f"{whole} not fitted"
     best = min(ok.values(), key=lambda f: f.chi2_data / f.dof)
     c_hat, deff = max(1.0, best.chi2_data / best.dof), _design_effect(data, best)
     ev = {k: f.evidence(c_hat, deff) - (math.log(steps[1]) if steps is not None and isinstance(f.hypothesis, DriftStep)
                                         else 0.0) for k, f in ok.items()}
-    if max(ev, key=ev.get) == h.whole:
+    if max(ev, key=ev.get) == whole:
         return None
-    return f"{h.whole} does not explain the data best: no drift of its kind to narrow"
+    return f"{whole} does not explain the data best: no drift of its kind to narrow"
 
 
 def _catch_all(f: HypFit) -> bool:
@@ -1454,11 +1454,16 @@ def diagnose(
 
         bar = tqdm(total=len(all_names), desc="fitting hypotheses", unit="model", leave=False)
     not_tried: dict[str, list] = {}  # reason -> hypotheses (one note per reason)
+    gates: dict[str, str | None] = {}  # whole -> why its gated narrower forms are not tried (None: they are)
     for name in all_names:
         h = HYPOTHESES[name]
         if bar is not None:
             bar.set_postfix_str(name)
-        why = h.available(ctx, has_x) or (h.gated and _gate_closed(data, fits, h, steps))
+        why = h.available(ctx, has_x)
+        if not why and h.gated:  # the gated are registered last: every other hypothesis is fitted by now
+            if h.whole not in gates:
+                gates[h.whole] = _gate_closed(data, fits, h.whole, steps)
+            why = gates[h.whole]
         if why:
             not_tried.setdefault(why, []).append(name)
             if bar is not None:
