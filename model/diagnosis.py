@@ -1074,16 +1074,27 @@ def _gate_closed(data: FitData, fits: dict, whole: str, steps) -> str | None:
     (the gated ones aside; overdispersion and design effect from the best fit, the step forms' change-point
     choice paid for, as in the posterior).  A narrower form of a catch-all is asked for when the catch-all
     explains the data best (step 5); the gate spares its fits elsewhere."""
-    ok = {k: f for k, f in fits.items() if f.success and not f.hypothesis.gated}
-    if whole not in ok:
+    _, _, ev = _log_evidence(data, {k: f for k, f in fits.items() if not f.hypothesis.gated}, steps)
+    if whole not in ev:
         return f"{whole} not fitted"
-    best = min(ok.values(), key=lambda f: f.chi2_data / f.dof)
-    c_hat, deff = max(1.0, best.chi2_data / best.dof), _design_effect(data, best)
-    ev = {k: f.evidence(c_hat, deff) - (math.log(steps[1]) if steps is not None and isinstance(f.hypothesis, DriftStep)
-                                        else 0.0) for k, f in ok.items()}
     if max(ev, key=ev.get) == whole:
         return None
     return f"{whole} does not explain the data best: no drift of its kind to narrow"
+
+
+def _log_evidence(data: FitData, fits: dict, steps) -> tuple:
+    """``(c_hat, deff, log evidence by hypothesis)`` of the converged ``fits``: one overdispersion ``c_hat`` and
+    design effect ``deff`` from the best fit (smallest chi-square per degree of freedom; 1 without one), the
+    step forms' evidence paying ln(number of candidate splits) for their change point (``steps``, module doc
+    step 4)."""
+    ok = {k: f for k, f in fits.items() if f.success}
+    if not ok:
+        return 1.0, 1.0, {}
+    best = min(ok.values(), key=lambda f: f.chi2_data / f.dof)
+    c_hat, deff = max(1.0, best.chi2_data / best.dof), _design_effect(data, best)
+    penalty = math.log(steps[1]) if steps is not None else 0.0
+    return c_hat, deff, {k: f.evidence(c_hat, deff) - (penalty if isinstance(f.hypothesis, DriftStep) else 0.0)
+                         for k, f in ok.items()}
 
 
 def _catch_all(f: HypFit) -> bool:
@@ -1510,14 +1521,7 @@ def diagnose(
             f.channel_metrics[c] = {"R0": m["R0_n"], "M0_pct": m["M0_pct"], "R2": m["R2"]}
     wong = fits["wong"]
     # probabilities (common overdispersion from the best fit)
-    ok_fits = {k: f for k, f in fits.items() if f.success}
-    c_hat = max(1.0, min(f.chi2_data / f.dof for f in ok_fits.values())) if ok_fits else 1.0
-    deff = _design_effect(data, min(ok_fits.values(), key=lambda f: f.chi2_data / f.dof)) if ok_fits else 1.0
-    logev = {k: f.evidence(c_hat, deff) for k, f in ok_fits.items()}
-    if steps is not None:  # the step forms' change point is chosen among steps[1] splits
-        for k in logev:
-            if isinstance(fits[k].hypothesis, DriftStep):
-                logev[k] -= math.log(steps[1])
+    c_hat, deff, logev = _log_evidence(data, fits, steps)
     mass = _prior_masses(fits, logev)
     lp = {k: v + math.log(mass[k]) for k, v in logev.items() if np.isfinite(v)}
     mx = max(lp.values())
