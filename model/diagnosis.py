@@ -1280,6 +1280,10 @@ def _separating(effects: set, channels: set, names=()) -> str | None:
     if geometry and e & {"terrain_mismatch", "terrain_drift", "slip_sinkage"}:
         parts.append("the tyre's loaded radius and contact width (footprint) under this load, or plate-sinkage and "
                      "shear tests of this soil (a wheel-geometry error acts on the forces like a change of the soil)")
+    if {"terrain", "terrain_shear"} & set(names):  # a catch-all re-fit of the soil: is it the soil?
+        parts.append("plate-sinkage and shear tests of this soil where the wheel ran, over the normal stresses under "
+                     "the wheel: values like the re-fit's show a soil other than the lab's sample; values like the "
+                     "lab's, a cause on no list acting on the forces as such a soil would")
     if {"zero_drift", "dp_drift"} & set(names) and e & {"terrain_drift", "terrain_mismatch"}:
         parts.append("the transducer's zeros with the wheel lifted before and after the run (a drifting zero "
                      "moves them; the soil does not)")
@@ -1666,6 +1670,12 @@ def diagnose(
                 lead = f"only {TITLES[best]} explains the data, no re-fit (or drift) of fewer lab values does"
             if fits[best].effect == "terrain_mismatch":  # what it found, against the lab's values
                 lead += "; its values: " + ", ".join(_lab_text(fits[best], q) for q in fits[best].prior)
+                est = _data_estimates(fits[best])
+                if off := _beyond_lab_sd(fits[best]):
+                    lead += ("; the data's own estimate (the lab prior's pull undone) places "
+                             + ", ".join(f"{q} {est[q][0]:+.2g} +/- {est[q][1]:.2g}" for q in off)
+                             + " lab sd from the lab value (beyond one lab sd; on the benchmarks' runs causes on no "
+                             "list moved one or two values so as often as a mismatch did)")
             reasons.append(lead + ": Wong with the lab's terrain errs, but the data do not show which value is "
                            "wrong, nor that a soil value is what is wrong (" + _LOOK_ALIKES[fits[best].effect][0] + ")")
         elif fits[best].effect == "terrain_mismatch" and not _outside_lab_sd(fits[best]):

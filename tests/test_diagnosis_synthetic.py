@@ -457,6 +457,7 @@ def test_the_separating_measurement_names_what_tells_each_stand_in_from_a_listed
     text = _separating({"slip_sinkage", "unexplained"}, {"drawbar_pull_n", "torque_nm"}, ["speed_sinkage"])
     assert text and "another forward speed" in text, text
     assert _separating({"none"}, {"drawbar_pull_n"}, []) is None
+    assert "where the wheel ran" in _separating({"terrain_mismatch"}, {"drawbar_pull_n"}, ["terrain"])
 
 
 def test_a_named_cause_says_which_causes_on_no_list_it_does_not_exclude():
@@ -480,6 +481,10 @@ def test_only_the_five_value_terrain_refit_explains_it_then_no_cause_is_named():
     _invariants(d)
     assert d.model == "terrain" and d.effect == "unexplained" and d.why == "catch_all", d.summary
     assert "the data do not show which value is wrong" in d.summary and d.not_excluded is None
+    # the value the data place beyond one lab sd (K x0.5: 2.3 lab sd) is reported, with its standard error
+    assert "the data's own estimate (the lab prior's pull undone) places K -" in d.summary
+    # what would tell a soil of other values from a cause acting like one: the soil's own tests, where it ran
+    assert "plate-sinkage and shear tests of this soil where the wheel ran" in d.separating_measurement
     assert d.to_dict()["channels"]["drawbar_pull_n"]["effect"] == "unexplained"
 
 
