@@ -403,11 +403,14 @@ class Diagnosis:
         models = {}
         for k, f in self.fits.items():
             params = {}
+            est, beyond = (_data_estimates(f), _beyond_lab_sd(f)) if f.prior and f.success else ({}, [])
             for p, v in f.params.items():
                 params[p] = {"value": v, "se": f.stderr.get(p), "se_fit": f.stderr_fit.get(p),
                              "unit": f.units.get(p, ""), "at_bound": p in f.at_bound,
                              "prior": None if p not in f.prior else {"mean": f.prior[p][0], "sd": f.prior[p][1],
                                                                       "log_scale": p in ("k_eq", "K")}}
+                if p in est:  # the data's own estimate, in prior sd from the prior's mean (the prior's pull undone)
+                    params[p]["data_estimate"] = {"z": est[p][0], "se": est[p][1], "beyond_one_sd": p in beyond}
             metrics = {}
             for c in self.data.channels:
                 cm = f.channel_metrics.get(c, {})

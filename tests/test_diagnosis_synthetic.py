@@ -483,6 +483,8 @@ def test_only_the_five_value_terrain_refit_explains_it_then_no_cause_is_named():
     assert "the data do not show which value is wrong" in d.summary and d.not_excluded is None
     # the value the data place beyond one lab sd (K x0.5: 2.3 lab sd) is reported, with its standard error
     assert "the data's own estimate (the lab prior's pull undone) places K -" in d.summary
+    est = d.to_dict()["models"]["terrain"]["params"]["K"]["data_estimate"]
+    assert est["beyond_one_sd"] and est["z"] < -1.0 - 1.96 * est["se"], est
     # what would tell a soil of other values from a cause acting like one: the soil's own tests, where it ran
     assert "plate-sinkage and shear tests of this soil where the wheel ran" in d.separating_measurement
     assert d.to_dict()["channels"]["drawbar_pull_n"]["effect"] == "unexplained"
