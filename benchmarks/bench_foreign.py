@@ -274,7 +274,16 @@ def _run_csv_case(gen: Path, name: str, case: str, seed: int, params: dict, out:
             "listed": truth["family"] == "in", "effect": d["effect"], "model": d.get("model"),
             "confidence": d.get("confidence"), "score": score,
             "form": str(d.get("model")).split("+")[0] == form if score == "right" and form else None,
-            "latency_true_s": None, "latency_s": None, "latency_method": None, "latency_reliable": None}
+            "latency_true_s": None, "latency_s": None, "latency_method": None, "latency_reliable": None,
+            "terrain_beyond": _terrain_beyond(d)}
+
+
+def _terrain_beyond(d: dict) -> list | None:
+    """For a verdict whose candidate is the five-value re-fit (report.json ``diagnosis`` ``d``): the soil values
+    its data estimate places beyond one lab sd (``data_estimate.beyond_one_sd``); else None."""
+    five = d["models"].get("terrain") if d.get("model") == "terrain" else None
+    return None if five is None else [p for p, e in five["params"].items()
+                                      if (e.get("data_estimate") or {}).get("beyond_one_sd")]
 
 
 def fit_and_score(name: str, truth: dict, out: Path, fronts: str, log: Path | None = None,
@@ -300,7 +309,7 @@ def fit_and_score(name: str, truth: dict, out: Path, fronts: str, log: Path | No
             "effect": d["effect"], "model": d.get("model"), "confidence": d.get("confidence"), "score": score,
             "form": d.get("model") == model if score == "right" and ok == "slip_sinkage" else None,
             "latency_true_s": truth["gnss_latency_s"], "latency_s": q.get("gnss_latency_s"),
-            "latency_method": lat.get("method"), "latency_reliable": lat.get("reliable")}
+            "latency_method": lat.get("method"), "latency_reliable": lat.get("reliable"), "terrain_beyond": _terrain_beyond(d)}
 
 
 def main() -> None:
@@ -366,12 +375,21 @@ def main() -> None:
         form = "" if r["form"] is None else (" form right" if r["form"] else " form wrong")
         print(f"{r['name']:<{w}} {r['fronts']:<6} {r['truth'][:34]:<34} "
               f"{r['effect'] + ' (' + str(r['model']) + ', ' + str(r['confidence']) + ')':<44} {r['score'] + form:<6} "
-              f"{lat} ({lat_true}): {r['latency_method']}, {r['latency_reliable']}", flush=True)
+              f"{lat} ({lat_true}): {r['latency_method']}, {r['latency_reliable']}"
+              + ("" if r["terrain_beyond"] is None else f"; beyond 1 lab sd: {','.join(r['terrain_beyond']) or '-'}"),
+              flush=True)
     fam = [r for r in rows if r["listed"]]
     print(f"\nin family right {sum(r['score'] == 'right' for r in fam)}/{len(fam)}; wrong named causes "
           f"{sum(r['score'] == 'WRONG' for r in rows)}/{len(rows)}; latency within 20 ms "
           f"{sum(r['latency_s'] is not None and abs(r['latency_s'] - r['latency_true_s']) <= 0.02 for r in rows)}/{len(rows)}"
           f"; files in {base}; wall time {time.perf_counter() - t0:.0f} s")
+    # the five-value re-fit the candidate (no cause named): do the values it moves tell a mismatch from the rest?
+    five = [r for r in rows if r["terrain_beyond"] is not None]
+    if five:
+        print("the five-value re-fit the candidate, one or two values beyond one lab sd by the data's estimate: "
+              + "; ".join(f"{label} {sum(1 <= len(r['terrain_beyond']) <= 2 for r in part)}/{len(part)}"
+                          for label, part in (("in family", [r for r in five if r["listed"]]),
+                                              ("out of family", [r for r in five if not r["listed"]]))))
 
 
 if __name__ == "__main__":
