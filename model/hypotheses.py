@@ -568,7 +568,7 @@ class WongReece(Hypothesis):
     maximum inside the contact (the kernel's condition), and the box holds the measured coefficients with
     room (Wong & Reece 1967: c1 ~ 0.2-0.43, c2 ~ 0.15-0.32; Wong 2008 ch. 2).  a2 was bounded at 0.3, the top
     of that range: independent generators drew a2 up to 0.4 (a1 + a2 < 1 their only limit), and the fits of
-    8 of their 19 stress shifts sat at the bound.  a1 = a2 = 0 is the paper's distribution."""
+    5 of their 19 stress shifts sat at the bound.  a1 = a2 = 0 is the paper's distribution."""
 
     name, effect, title = "wong_reece", "stress_distribution", "Wong-Reece stress distribution"
     source = "Wong & Reece (1967); Wong (2008) ch. 2; kernel wong_forces(stress=(a1, a2))"
