@@ -1677,8 +1677,8 @@ def diagnose(
                 if off := _beyond_lab_sd(fits[best]):
                     lead += ("; the data's own estimate (the lab prior's pull undone) places "
                              + ", ".join(f"{q} {est[q][0]:+.2g} +/- {est[q][1]:.2g}" for q in off)
-                             + " lab sd from the lab value (beyond one lab sd; on the benchmarks' runs causes on no "
-                             "list moved one or two values so as often as a mismatch did)")
+                             + " lab sd from the lab value (beyond one lab sd; on independent generators' runs, causes "
+                             "on no list moved one or two values that far as often as mismatches did)")
             reasons.append(lead + ": Wong with the lab's terrain errs, but the data do not show which value is "
                            "wrong, nor that a soil value is what is wrong (" + _LOOK_ALIKES[fits[best].effect][0] + ")")
         elif fits[best].effect == "terrain_mismatch" and not _outside_lab_sd(fits[best]):
