@@ -262,7 +262,7 @@ from .hypotheses import EFFECTS, HYPOTHESES, Context, DriftStep, TerrainTest, ge
 from .hypotheses import LIBRARY_PRIOR_WIDEN, load_reference, speed_reference
 from .wong import sinkage_eq10
 
-__all__ = ["Diagnosis", "diagnose", "LabTerrainBuriesWheel", "structure_test", "binned_residuals",
+__all__ = ["Diagnosis", "diagnose", "LabTerrainBuriesWheel", "structure_test", "binned_residuals", "data_estimates",
            "SLIP_SINKAGE_MODELS", "TITLES", "CHANNEL_TITLES", "THRESHOLDS"]
 
 ALPHA = 0.01  #: family-wise significance level (structure tests, Holm; "improves" per channel)
@@ -403,7 +403,7 @@ class Diagnosis:
         models = {}
         for k, f in self.fits.items():
             params = {}
-            est, beyond = (_data_estimates(f), _beyond_lab_sd(f)) if f.prior and f.success else ({}, [])
+            est, beyond = (data_estimates(f), _beyond_lab_sd(f)) if f.prior and f.success else ({}, [])
             for p, v in f.params.items():
                 params[p] = {"value": v, "se": f.stderr.get(p), "se_fit": f.stderr_fit.get(p),
                              "unit": f.units.get(p, ""), "at_bound": p in f.at_bound,
@@ -1673,7 +1673,7 @@ def diagnose(
                 lead = f"only {TITLES[best]} explains the data, no re-fit (or drift) of fewer lab values does"
             if fits[best].effect == "terrain_mismatch":  # what it found, against the lab's values
                 lead += "; its values: " + ", ".join(_lab_text(fits[best], q) for q in fits[best].prior)
-                est = _data_estimates(fits[best])
+                est = data_estimates(fits[best])
                 if off := _beyond_lab_sd(fits[best]):
                     lead += ("; the data's own estimate (the lab prior's pull undone) places "
                              + ", ".join(f"{q} {est[q][0]:+.2g} +/- {est[q][1]:.2g}" for q in off)
@@ -2059,10 +2059,11 @@ def _within_lab_uncertainty(data: FitData, fits: dict, supported, sink_ev: dict 
             "candidate": candidate}
 
 
-def _data_estimates(f: HypFit) -> dict:
-    """The data's own estimate of each lab value of the re-fit ``f``, in lab standard deviations from the lab
-    value (on the prior's scale), with its standard error: value -> (z_data, se_data); a value the data do
-    not constrain (posterior standard error s of 0.995 lab sd or more) is left out.  The fit is a posterior:
+def data_estimates(f: HypFit) -> dict:
+    """The data's own estimate of each lab value of the re-fit ``f`` (a converged :class:`HypFit` with lab
+    priors), in lab standard deviations from the lab value (on the prior's scale: ln k_eq and ln K), with its
+    standard error: value -> (z_data, se_data), floats; a value the data do not constrain (posterior standard
+    error s of 0.995 lab sd or more) is left out; {} for a fit without priors.  Never raises.  The fit is a posterior:
     where the data constrain a value weakly, the lab prior pulls it towards the lab value, and "within the
     lab's uncertainty" would follow from the prior, not from the data.  The data's estimate undoes that
     shrinkage (Gaussian conjugacy, per value: posterior = prior + (1 - s^2) (data - prior), s from the
@@ -2082,25 +2083,25 @@ def _data_estimates(f: HypFit) -> dict:
 
 
 def _data_z(f: HypFit) -> dict:
-    """value -> the data's own estimate in lab sd (:func:`_data_estimates`)."""
-    return {p: zd for p, (zd, _) in _data_estimates(f).items()}
+    """value -> the data's own estimate in lab sd (:func:`data_estimates`)."""
+    return {p: zd for p, (zd, _) in data_estimates(f).items()}
 
 
 def _beyond_lab_sd(f: HypFit) -> list:
-    """The lab values of the re-fit ``f`` that the data's own estimate (:func:`_data_estimates`) places beyond
+    """The lab values of the re-fit ``f`` that the data's own estimate (:func:`data_estimates`) places beyond
     one lab standard deviation of the lab value at the one-sided 97.5 % level: shown to differ from the lab by
     more than its stated uncertainty."""
     zq = float(stats.norm.ppf(0.975))
-    return [p for p, (zd, se) in _data_estimates(f).items() if abs(zd) - 1.0 > zq * se]
+    return [p for p, (zd, se) in data_estimates(f).items() if abs(zd) - 1.0 > zq * se]
 
 
 def _outside_lab_sd(f: HypFit) -> list:
-    """The lab values of the re-fit ``f`` whose data estimate (:func:`_data_estimates`) lies beyond one lab
+    """The lab values of the re-fit ``f`` whose data estimate (:func:`data_estimates`) lies beyond one lab
     standard deviation of the lab value: what a named terrain mismatch must point at (a soil within the lab's
     stated uncertainty agrees with the lab; on the held-out testbed tables 14 of the 15 causes on no list
     named a one- or two-value mismatch had their values within it, 0.2-1.0 sd, against 1.5-4.1 sd for 7 of
     the 8 mismatches named right on the independent generators and our vehicle benchmark)."""
-    return [p for p, (zd, _) in _data_estimates(f).items() if abs(zd) > 1.0]
+    return [p for p, (zd, _) in data_estimates(f).items() if abs(zd) > 1.0]
 
 
 def _whole_better(data, fits, f: HypFit) -> list:

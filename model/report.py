@@ -14,6 +14,7 @@ from the pipeline, the provenance and the processed signals of each input) into
   the fit marked with its reason; ``dp_vs_slip.png`` (paper Figs. 4-5),
   ``residuals.png`` (Wong's residuals vs slip, load, time) and
   ``sinkage_vs_slip.png``; curves that overlap are drawn once and said to;
+  ``soil_values.png`` (the five-value re-fit against the lab, in lab sd);
 * ``report.html``: one file, figures embedded as base64 PNG ``data:`` URIs,
   inline CSS only (responsive: readable at phone width, tables scroll; a
   print style), no scripts, fonts or links, so it opens offline.
@@ -40,7 +41,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .diagnosis import CHANNEL_TITLES, SLIP_SINKAGE_MODELS, TITLES
+from .diagnosis import CHANNEL_TITLES, LAB_Z, SLIP_SINKAGE_MODELS, TITLES, data_estimates
 from .diagnosis import json_ready as _clean
 
 __all__ = ["write_report", "report_dict", "fmt", "fmt_param", "param_unit", "SCHEMA", "ALL_MODELS",
@@ -1011,7 +1012,48 @@ def _figures(diag, wheel, out_dir: Path, plt) -> tuple:
                                            "numbers)")
     if "sinkage_m" in data.channels and step > 1:
         notes.setdefault("sinkage_vs_slip.png", []).append(f"every {_ordinal(step)} sample is drawn")
+    soil = _soil_figure(diag, out_dir / "soil_values.png", plt)
+    if soil is not None:
+        files.append(soil)
     return files, notes
+
+
+def _soil_figure(diag, path: Path, plt) -> Path | None:
+    """soil_values.png: the re-fit of all five lab values (``terrain``) against the lab, each value in lab
+    standard deviations from its lab value (ln k_eq and ln K): the re-fitted value (the lab prior's pull
+    included) and the data's own estimate with its 95 % interval (:func:`~wheelsoil.model.diagnosis.data_estimates`),
+    over the band of the lab's stated uncertainty (1 sd) and ``LAB_Z`` sd.  Where would a user re-measure
+    the soil, and is the soil what differs at all?  Returns the path, or None when the five-value re-fit was
+    not fitted (``--fit-terrain``) or did not converge."""
+    f = diag.fits.get("terrain")
+    if f is None or not f.success or not f.prior:
+        return None
+    names = list(f.prior)
+    z_fit = {p: (math.log(f.params[p]) if p in ("k_eq", "K") else f.params[p]) for p in names}
+    z_fit = {p: (z_fit[p] - f.prior[p][0]) / f.prior[p][1] for p in names}
+    est = data_estimates(f)
+    x = np.arange(len(names))
+    fig, ax = plt.subplots(figsize=(8.5, 4.6), layout="constrained")
+    ax.axhspan(-1.0, 1.0, color="#2ca02c", alpha=0.15, label="the lab's stated uncertainty (1 sd)")
+    for y in (-LAB_Z, LAB_Z):
+        ax.axhline(y, color="#2ca02c", lw=0.8, ls="--", label=f"{LAB_Z:g} lab sd" if y > 0 else None)
+    ax.axhline(0.0, color="k", lw=0.8)
+    ax.plot(x, [z_fit[p] for p in names], "o", mfc="none", mec="#1f77b4", ms=9, mew=1.6,
+            label="re-fitted value (lab prior included)")
+    shown = [i for i, p in enumerate(names) if p in est]
+    ax.errorbar([x[i] for i in shown], [est[names[i]][0] for i in shown],
+                yerr=[1.96 * est[names[i]][1] for i in shown], fmt="s", color="#d62728", capsize=4,
+                label="the data's own estimate (prior's pull undone), 95 %")
+    for i, p in enumerate(names):
+        if p not in est:
+            ax.annotate("not constrained\nby the data", (x[i], 0.0), textcoords="offset points", xytext=(0, 12),
+                        ha="center", fontsize=8, color="#555555")
+    ax.set_xticks(x, [{"phi": "phi", "K": "K (ln)", "k_eq": "k_eq (ln)"}.get(p, p) for p in names])
+    ax.set_ylabel("(value - lab) / lab sd")
+    ax.set_title("The soil the data point at: all five lab values re-fitted, against the lab", fontsize=10)
+    ax.grid(alpha=0.3, axis="y")
+    _legend(ax, fontsize=8, loc="best", markerscale=1.0)
+    return _save(fig, path, plt)
 
 
 def _ordinal(k: int) -> str:
@@ -1502,6 +1544,11 @@ def _html(rep: dict, figs: list, overviews: list) -> str:
                          "units and 95 % confidence intervals), load and time.",
         "sinkage_vs_slip.png": "Sinkage against slip: each model's curve at the median load; grey dots measured "
                                "sinkage when measured.",
+        "soil_values.png": "The re-fit of all five lab soil values, each in lab standard deviations from the lab "
+                           "value: the fitted value and the data's own estimate with its 95 % interval, against the "
+                           "lab's stated uncertainty. A value far outside the band says where to re-measure the soil "
+                           "(plate-sinkage and shear tests where the wheel ran); causes on no list can move a value "
+                           "as far, so the figure shows where the data point, not the cause.",
     }
     for f in figs:
         name = Path(f).name
@@ -1534,7 +1581,7 @@ def _fit_rows(data, signals, run: int):
 
 
 #: The figures a report writes (a report directory's earlier ones are removed first).
-FIGURE_FILES = ("overview.png", "dp_vs_slip.png", "residuals.png", "sinkage_vs_slip.png")
+FIGURE_FILES = ("overview.png", "dp_vs_slip.png", "residuals.png", "sinkage_vs_slip.png", "soil_values.png")
 
 
 def _is_figure(path: Path) -> bool:

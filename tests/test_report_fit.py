@@ -65,7 +65,8 @@ def test_write_report_files_json_and_html(tmp_path):
     on_disk = _strict_json(tmp_path / "report.json")
     assert on_disk == rep
     pngs = sorted(p.name for p in tmp_path.glob("*.png"))
-    assert pngs == ["dp_vs_slip.png", "residuals.png", "sinkage_vs_slip.png"]  # a table: no overview
+    # a table: no overview; the five-value re-fit against the lab's uncertainty
+    assert pngs == ["dp_vs_slip.png", "residuals.png", "sinkage_vs_slip.png", "soil_values.png"]
     _check_self_contained((tmp_path / "report.html").read_text(), len(pngs))
     assert rep["diagnosis"]["effect"] == "slip_sinkage"
     assert rep["models"]["lyasko"]["params"]["m1"] == pytest.approx(0.6, abs=0.15)
