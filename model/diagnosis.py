@@ -262,7 +262,7 @@ from .hypotheses import EFFECTS, HYPOTHESES, Context, DriftStep, TerrainTest, ge
 from .hypotheses import LIBRARY_PRIOR_WIDEN, load_reference, speed_reference
 from .wong import sinkage_eq10
 
-__all__ = ["Diagnosis", "diagnose", "LabTerrainBuriesWheel", "structure_test", "binned_residuals", "data_estimates",
+__all__ = ["Diagnosis", "diagnose", "LabTerrainBuriesWheel", "structure_test", "binned_residuals", "data_estimates", "prior_z",
            "SLIP_SINKAGE_MODELS", "TITLES", "CHANNEL_TITLES", "THRESHOLDS"]
 
 ALPHA = 0.01  #: family-wise significance level (structure tests, Holm; "improves" per channel)
@@ -1193,8 +1193,10 @@ def _se_prior_scale(p, f, se=None):
     return se / f.params[p] if p in ("k_eq", "K") and f.params[p] > 0 else se
 
 
-def _prior_z(f: HypFit) -> dict:
-    """value -> (fitted - lab) / lab sd of each lab value ``f`` re-fits, on the prior's scale."""
+def prior_z(f: HypFit) -> dict:
+    """value -> (fitted - lab) / lab sd (float) of each lab value the re-fit ``f`` (a :class:`HypFit` with lab
+    priors) re-fits, on the prior's scale (ln k_eq, ln K): the posterior's place, the lab prior's pull included
+    (:func:`data_estimates` undoes it).  Never raises."""
     return {p: (_on_prior_scale(p, f.params[p]) - mu) / sd for p, (mu, sd) in f.prior.items()}
 
 
@@ -2048,7 +2050,7 @@ def _within_lab_uncertainty(data: FitData, fits: dict, supported, sink_ev: dict 
         return None  # the data prefer another cause (or a stand-in for one on no list) strongly
     if sink_ev is not None and sink_ev["significant"]:
         return None
-    z = _prior_z(f)
+    z = prior_z(f)
     if not all(np.isfinite(v) and abs(v) <= LAB_Z for v in z.values()) or f.chi2_prior > len(z):
         return None
     if _beyond_lab_sd(f):
@@ -2071,7 +2073,7 @@ def data_estimates(f: HypFit) -> dict:
     larger (the reported standard error).  (An independent generator's k_eq 3.5 sd off, a vehicle run
     without measured sinkage: the re-fit put it at 1.7 sd with s = 0.72; the data's estimate, 3.6 +/- 1.05.)"""
     out = {}
-    z = _prior_z(f)
+    z = prior_z(f)
     for p, (_, sd) in f.prior.items():
         s = _se_prior_scale(p, f, f.stderr_fit.get(p, np.nan)) / sd
         if not np.isfinite(s) or s * s >= 0.99:

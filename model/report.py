@@ -41,7 +41,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .diagnosis import CHANNEL_TITLES, LAB_Z, SLIP_SINKAGE_MODELS, TITLES, data_estimates
+from .diagnosis import CHANNEL_TITLES, LAB_Z, SLIP_SINKAGE_MODELS, TITLES, data_estimates, prior_z
 from .diagnosis import json_ready as _clean
 
 __all__ = ["write_report", "report_dict", "fmt", "fmt_param", "param_unit", "SCHEMA", "ALL_MODELS",
@@ -1029,9 +1029,7 @@ def _soil_figure(diag, path: Path, plt) -> Path | None:
     if f is None or not f.success or not f.prior:
         return None
     names = list(f.prior)
-    z_fit = {p: (math.log(f.params[p]) if p in ("k_eq", "K") else f.params[p]) for p in names}
-    z_fit = {p: (z_fit[p] - f.prior[p][0]) / f.prior[p][1] for p in names}
-    est = data_estimates(f)
+    z_fit, est = prior_z(f), data_estimates(f)
     x = np.arange(len(names))
     fig, ax = plt.subplots(figsize=(8.5, 4.6), layout="constrained")
     ax.axhspan(-1.0, 1.0, color="#2ca02c", alpha=0.15, label="the lab's stated uncertainty (1 sd)")
