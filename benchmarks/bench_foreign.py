@@ -385,15 +385,16 @@ def main() -> None:
               + ("" if r["terrain_beyond"] is None else f"; beyond 1 lab sd: {','.join(r['terrain_beyond']) or '-'}"),
               flush=True)
     fam = [r for r in rows if r["listed"]]
+    timed = [r for r in rows if r["latency_s"] is not None and r["latency_true_s"] is not None]
+    lat_err = [r["latency_s"] - r["latency_true_s"] for r in timed]
     print(f"\nin family right {sum(r['score'] == 'right' for r in fam)}/{len(fam)}; wrong named causes "
           f"{sum(r['score'] == 'WRONG' for r in rows)}/{len(rows)}; latency within 20 ms "
-          f"{sum(r['latency_s'] is not None and r['latency_true_s'] is not None and abs(r['latency_s'] - r['latency_true_s']) <= 0.02 for r in rows)}/{len(rows)}"
+          f"{sum(abs(e) <= 0.02 for e in lat_err)}/{len(rows)}"
           f"; files in {base}; wall time {time.perf_counter() - t0:.0f} s")
-    lat_err = [r["latency_s"] - r["latency_true_s"] for r in rows if r["latency_s"] is not None and r["latency_true_s"] is not None]
     if lat_err:
         print(f"GNSS latency found minus the generator's: median {1e3 * float(np.median(lat_err)):+.0f} ms "
               f"({1e3 * min(lat_err):+.0f} .. {1e3 * max(lat_err):+.0f} ms over {len(lat_err)} runs); flagged reliable "
-              f"and within 20 ms: {sum(r['latency_reliable'] is True and abs(r['latency_s'] - r['latency_true_s']) <= 0.02 for r in rows if r['latency_s'] is not None and r['latency_true_s'] is not None)}"
+              f"and within 20 ms: {sum(r['latency_reliable'] is True and abs(e) <= 0.02 for r, e in zip(timed, lat_err))}"
               f" of {sum(r['latency_reliable'] is True for r in rows)} flagged reliable")
     # the five-value re-fit the candidate (no cause named): do the values it moves tell a mismatch from the rest?
     five = [r for r in rows if r["terrain_beyond"] is not None]

@@ -403,7 +403,8 @@ class Diagnosis:
         models = {}
         for k, f in self.fits.items():
             params = {}
-            est, beyond = (data_estimates(f), _beyond_lab_sd(f)) if f.prior and f.success else ({}, [])
+            est = data_estimates(f) if f.prior and f.success else {}
+            beyond = _beyond_lab_sd(f, est)
             for p, v in f.params.items():
                 params[p] = {"value": v, "se": f.stderr.get(p), "se_fit": f.stderr_fit.get(p),
                              "unit": f.units.get(p, ""), "at_bound": p in f.at_bound,
@@ -1676,7 +1677,7 @@ def diagnose(
             if fits[best].effect == "terrain_mismatch":  # what it found, against the lab's values
                 lead += "; its values: " + ", ".join(_lab_text(fits[best], q) for q in fits[best].prior)
                 est = data_estimates(fits[best])
-                if off := _beyond_lab_sd(fits[best]):
+                if off := _beyond_lab_sd(fits[best], est):
                     lead += ("; the data's own estimate (the lab prior's pull undone) places "
                              + ", ".join(f"{q} {est[q][0]:+.2g} +/- {est[q][1]:.2g}" for q in off)
                              + " lab sd from the lab value (beyond one lab sd; on independent generators' runs, causes "
@@ -2089,12 +2090,12 @@ def _data_z(f: HypFit) -> dict:
     return {p: zd for p, (zd, _) in data_estimates(f).items()}
 
 
-def _beyond_lab_sd(f: HypFit) -> list:
-    """The lab values of the re-fit ``f`` that the data's own estimate (:func:`data_estimates`) places beyond
-    one lab standard deviation of the lab value at the one-sided 97.5 % level: shown to differ from the lab by
-    more than its stated uncertainty."""
+def _beyond_lab_sd(f: HypFit, est: dict | None = None) -> list:
+    """The lab values of the re-fit ``f`` that the data's own estimate (:func:`data_estimates`; ``est`` when the
+    caller has it already) places beyond one lab standard deviation of the lab value at the one-sided 97.5 %
+    level: shown to differ from the lab by more than its stated uncertainty."""
     zq = float(stats.norm.ppf(0.975))
-    return [p for p, (zd, se) in data_estimates(f).items() if abs(zd) - 1.0 > zq * se]
+    return [p for p, (zd, se) in (data_estimates(f) if est is None else est).items() if abs(zd) - 1.0 > zq * se]
 
 
 def _outside_lab_sd(f: HypFit) -> list:
