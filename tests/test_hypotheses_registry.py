@@ -229,6 +229,14 @@ def test_a_transducer_gain_scales_the_reading_with_the_wheels_inertia():
     np.testing.assert_allclose(f.torque_nm, 0.8 * base.torque_nm - 0.2 * inertia["torque_nm"])
     g0 = gain.predict(CTX, W, S, X, {"g_dp": 0.1, "g_t": -0.2})  # no reading known: Wong's scaled
     np.testing.assert_allclose(g0.torque_nm, 0.8 * base.torque_nm)
+    # its sibling on a re-fitted soil: the same gains on the forces of the soil it is given
+    gt = get_hypothesis("sensor_gain+terrain")
+    assert gt.effect == "unexplained" and set(gt.nested) == {"terrain", "sensor_gain"}
+    p = {**_defaults(gt), "g_dp": 0.1, "g_t": -0.2, "n": 0.9}
+    soil = wong_forces(gt.terrain(CTX, p), DEFAULT_WHEEL, W, S)
+    ft = gt.predict(CTX, W, S, X, p, inertia=inertia)
+    np.testing.assert_allclose(ft.torque_nm, 0.8 * soil.torque_nm - 0.2 * inertia["torque_nm"])
+    assert not np.allclose(soil.torque_nm, base.torque_nm)
     w = get_hypothesis("wong").predict(CTX, W, S, X, {}, inertia=inertia)
     np.testing.assert_allclose(w.drawbar_pull_n, base.drawbar_pull_n)
     # prepare_data takes the inertial part from the readings, per sample and per cell
