@@ -1455,9 +1455,9 @@ HYPOTHESES: dict[str, Hypothesis] = {
               VasilevTerrain(), LyaskoTerrain(), DingTerrain(),
               WongReece(), WongReeceLoad(), DriftLinear(), DriftStep(), *(_drift_one(n) for n in TERRAIN_NAMES),
               *(_drift_one(n, step=True) for n in TERRAIN_NAMES), DrawbarResistance(), DrawbarDrift(), ZeroDrift(),
-              WheelRadius(), SpeedGain(), TyreRadius(), WheelWidth(), SensorGain(), SensorGainTerrain(), AngleOffset(), LoadStiffness(),
-              SpeedStiffness(), SpeedSinkage(), Rebound(), ShearSlip(), CurvedEnvelope(), StressK(), VerticalBalance(),
-              SmallAngleSinkage(),
+              WheelRadius(), SpeedGain(), TyreRadius(), WheelWidth(), SensorGain(), SensorGainTerrain(), AngleOffset(),
+              LoadStiffness(), SpeedStiffness(), SpeedSinkage(), Rebound(), ShearSlip(), CurvedEnvelope(), StressK(),
+              VerticalBalance(), SmallAngleSinkage(),
               # last: tried only when the drift they narrow explains the data best (``gated``)
               *(_drift_levels(v, step=s) for s in (False, True) for v in (*((n,) for n in TERRAIN_NAMES), *DRIFT_PAIRS)))
 }

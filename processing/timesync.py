@@ -25,6 +25,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import optimize, stats
 
+from .filters import filter_to_grid, lowpass_segments
+
 __all__ = ["GPS_EPOCH_UNIX_S", "fit_gps_time_mapping", "LatencyEstimate", "estimate_latency",
            "estimate_latency_traction"]
 
@@ -260,14 +262,15 @@ def estimate_latency_traction(t_gnss_s: np.ndarray, v_gnss: np.ndarray, t_ref_s:
     while accelerating changes ``T/(rW)`` at a given slip (``T`` is not
     proportional to ``W``, Eq. 10's sinkage grows with ``W``), in step with
     ``dV/dt``, which would otherwise read as a lag. The GNSS speed's white
-    noise makes the slip a regressor with errors, which biases the lag that
-    minimises the scatter (errors in variables: short by a third of the truth with
-    0.015 m/s at 20 Hz in the ninth benchmark generator's runs); so with
+    noise makes the slip a regressor with errors, which pulls the lag that
+    minimises the scatter short (errors in variables: about a third of the lag
+    with 0.015 m/s at 20 Hz in the ninth benchmark generator's runs); so with
     ``smooth_hz`` every signal the fit uses (GNSS speed, wheel speed, traction
     coefficient, load) first passes the same zero-phase low-pass
-    (:func:`.filters.lowpass`, per gap-free segment), which keeps the lag and the
-    slow torque-slip relation and removes most of that noise (None: no smoothing). Slips outside :data:`TRACTION_SLIP_RANGE` and
-    speeds ``r omega < min_speed_mps`` are not used.
+    (:func:`.filters.lowpass`, per gap-free segment), which keeps the lag and
+    the slow torque-slip relation and removes most of that noise (None: no
+    smoothing). Slips outside :data:`TRACTION_SLIP_RANGE` and speeds
+    ``r omega < min_speed_mps`` are not used.
 
     Parameters: ``t_gnss_s`` (N,) host receive times [s] of the GNSS speed and
     ``v_gnss`` (N,) [m/s]; ``t_ref_s`` (M,) sorted host times [s] of the
@@ -290,8 +293,6 @@ def estimate_latency_traction(t_gnss_s: np.ndarray, v_gnss: np.ndarray, t_ref_s:
     x_r = np.asarray(traction_coeff, dtype=np.float64)
     ld = None if load_n is None else np.asarray(load_n, dtype=np.float64)
     if smooth_hz:
-        from .filters import filter_to_grid, lowpass_segments
-
         fs_r = 1.0 / float(np.median(np.diff(t_r)))
         w_r, x_r = lowpass_segments(w_r, fs_r, smooth_hz), lowpass_segments(x_r, fs_r, smooth_hz)
         ld = None if ld is None else lowpass_segments(ld, fs_r, smooth_hz)
