@@ -262,8 +262,8 @@ from .hypotheses import EFFECTS, HYPOTHESES, Context, DriftStep, TerrainTest, ge
 from .hypotheses import LIBRARY_PRIOR_WIDEN, load_reference, speed_reference
 from .wong import sinkage_eq10
 
-__all__ = ["Diagnosis", "diagnose", "LabTerrainBuriesWheel", "structure_test", "binned_residuals", "data_estimates", "prior_z",
-           "SLIP_SINKAGE_MODELS", "TITLES", "CHANNEL_TITLES", "THRESHOLDS"]
+__all__ = ["Diagnosis", "diagnose", "LabTerrainBuriesWheel", "structure_test", "binned_residuals", "data_estimates",
+           "prior_z", "SLIP_SINKAGE_MODELS", "TITLES", "CHANNEL_TITLES", "THRESHOLDS"]
 
 ALPHA = 0.01  #: family-wise significance level (structure tests, Holm; "improves" per channel)
 WORSEN_ALPHA = 0.10  #: one-sided level at which a worse held-out error counts as "worsens" (lenient on purpose)

@@ -267,9 +267,10 @@ def estimate_latency_traction(t_gnss_s: np.ndarray, v_gnss: np.ndarray, t_ref_s:
     with 0.015 m/s at 20 Hz in the ninth benchmark generator's runs); so with
     ``smooth_hz`` every signal the fit uses (GNSS speed, wheel speed, traction
     coefficient, load) first passes the same zero-phase low-pass
-    (:func:`.filters.lowpass`, per gap-free segment), which keeps the lag and
-    the slow torque-slip relation and removes most of that noise (None: no
-    smoothing). Slips outside :data:`TRACTION_SLIP_RANGE` and speeds
+    (:func:`.filters.lowpass`, per gap-free segment; the wheel's ``t_ref_s`` is
+    taken as a uniform grid at its median step, as processing's grid is), which
+    keeps the lag and the slow torque-slip relation and removes most of that
+    noise (None: no smoothing). Slips outside :data:`TRACTION_SLIP_RANGE` and speeds
     ``r omega < min_speed_mps`` are not used.
 
     Parameters: ``t_gnss_s`` (N,) host receive times [s] of the GNSS speed and
