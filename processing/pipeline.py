@@ -58,7 +58,8 @@ from .filters import DEFAULT_CUTOFF_HZ, MAX_FILL_SAMPLES, filter_to_grid, segmen
 from .slip import PHASES, accel_cycles, classify_phases, slip_ratio
 from .timebase import (MAX_GRID_ROWS, cycle_loss, find_clock_steps, find_time_outliers, robust_period,
                        split_joined_parts)
-from .timesync import LatencyEstimate, estimate_latency, estimate_latency_traction, fit_gps_time_mapping
+from .timesync import (TOOTH_LAG_MIN_Z, LatencyEstimate, ToothLag, estimate_latency, estimate_latency_traction,
+                       estimate_tooth_lag, fit_gps_time_mapping)
 from .wft import angle_jumps, assemble_wft_samples, rotate_to_hub, rotation_ripple
 
 __all__ = ["ProcessResult", "process_recording", "COLUMNS", "MAX_FILL_SAMPLES"]
@@ -459,7 +460,7 @@ def _agree(a: LatencyEstimate, b: LatencyEstimate) -> bool:
 
 
 def _wheel_speed_lag(t_w: np.ndarray, angle_rad: np.ndarray, period_w: float, t_wss: np.ndarray,
-                     omega_wss: np.ndarray, radius_m: float) -> LatencyEstimate:
+                     omega_wss: np.ndarray, radius_m: float, period_wss: float):
     """How late the wheel-speed module reads the measured wheel against the transducer's clock.
 
     The WFT's wheel angle (500 Hz, hardware.md ``WFT_RL_Angle``) is sampled on the transducer's own
@@ -473,9 +474,13 @@ def _wheel_speed_lag(t_w: np.ndarray, angle_rad: np.ndarray, period_w: float, t_
 
     ``t_w`` (N,) transducer sample times [s], ``angle_rad`` (N,) wheel angle [rad] (NaN where lost,
     wrapping at 2 pi), ``period_w`` its sample period [s]; ``t_wss`` (M,) the module's frame times
-    [s], ``omega_wss`` (M,) its speed of the measured wheel [rad/s]; ``radius_m`` r [m]. Returns the
-    :class:`.timesync.LatencyEstimate` (``latency_s`` > 0: the module late). Raises ``ValueError``
-    when the angle gives no speed or the two do not overlap (the estimator's messages).
+    [s], ``omega_wss`` (M,) its speed of the measured wheel [rad/s], ``period_wss`` its period [s];
+    ``radius_m`` r [m]. Returns ``(constant, per_tooth)``: the constant lag, a
+    :class:`.timesync.LatencyEstimate` (``latency_s`` > 0: the module late), and the delay that grows
+    as the wheel slows (a tone wheel timed per tooth: ``lag + pitch/omega``,
+    :func:`.timesync.estimate_tooth_lag`), a :class:`.timesync.ToothLag`, or why there is none (str).
+    Raises ``ValueError`` when the angle gives no speed or the two do not overlap (the estimator's
+    messages).
     """
     step = np.angle(np.exp(1j * np.diff(angle_rad)))  # wrapped to (-pi, pi]: one sample turns < half a turn
     dt = np.diff(t_w)
@@ -486,9 +491,53 @@ def _wheel_speed_lag(t_w: np.ndarray, angle_rad: np.ndarray, period_w: float, t_
     if np.nanmedian(om) < 0:  # the angle counting the other way
         om = -om
     t_mid = 0.5 * (t_w[1:] + t_w[:-1])
-    ref = filter_to_grid(t_mid, om, period_w, t_mid, LATENCY_REF_CUTOFF_HZ) * radius_m
-    return estimate_latency(t_wss, np.abs(omega_wss) * radius_m, t_mid, ref, usable_ref=np.isfinite(ref),
-                            min_latency_s=WSS_LAG_RANGE_S[0], max_latency_s=WSS_LAG_RANGE_S[1])
+    ref = filter_to_grid(t_mid, om, period_w, t_mid, LATENCY_REF_CUTOFF_HZ)
+    const = estimate_latency(t_wss, np.abs(omega_wss) * radius_m, t_mid, ref * radius_m, usable_ref=np.isfinite(ref),
+                             min_latency_s=WSS_LAG_RANGE_S[0], max_latency_s=WSS_LAG_RANGE_S[1])
+    try:
+        tooth = estimate_tooth_lag(t_wss, omega_wss, _module_speed(t_wss, omega_wss, period_wss), t_mid, ref,
+                                   start_lag_s=const.latency_s, min_lag_s=WSS_LAG_RANGE_S[0],
+                                   max_lag_s=WSS_LAG_RANGE_S[1], min_omega_radps=0.3 / radius_m)
+    except ValueError as exc:
+        tooth = str(exc)
+    return const, tooth
+
+
+def _module_speed(t_s: np.ndarray, omega: np.ndarray, period_s: float) -> np.ndarray:
+    """A wheel-speed module's |omega| (n,) [rad/s] at its reading times ``t_s`` (n,) [s], low-passed
+    zero-phase at :data:`LATENCY_REF_CUTOFF_HZ`: the speed a per-tooth delay's 1/omega is taken of."""
+    return filter_to_grid(t_s, np.abs(omega), period_s, t_s, LATENCY_REF_CUTOFF_HZ)
+
+
+def _tooth_not_applied(tooth, const: LatencyEstimate) -> str:
+    """Why the per-tooth delay ``tooth`` (:func:`_wheel_speed_lag`) is not removed, or "" when it is."""
+    if isinstance(tooth, str):
+        return tooth
+    if const.note:
+        return const.note
+    if not tooth.pitch_rad > TOOTH_LAG_MIN_Z * tooth.stderr_pitch_rad:
+        return (f"pitch {tooth.pitch_rad:.3g} +- {tooth.stderr_pitch_rad:.2g} rad: not {TOOTH_LAG_MIN_Z:g} "
+                "standard errors above zero (the delay does not grow as the wheel slows)")
+    if not tooth.stderr_lag_s <= WSS_LAG_SE_S:
+        return f"standard error {tooth.stderr_lag_s * 1e3:.1f} ms > {WSS_LAG_SE_S * 1e3:g} ms"
+    if abs(tooth.gain - 1) > WSS_LAG_GAIN_TOL:
+        return f"speed gain {tooth.gain:.3f}: not the same wheel's speed"
+    return ""
+
+
+def _unlag(t_ns: np.ndarray, omega: np.ndarray, lag) -> tuple[np.ndarray, np.ndarray]:
+    """A wheel speed's readings (``t_ns`` int64 (n,) sorted times, ``omega`` (n,) [rad/s]) moved back to
+    the moments they describe: by the constant ``lag`` [s] (float), by the per-tooth delay of a
+    :class:`.timesync.ToothLag` (readings it would put out of order dropped, :meth:`ToothLag.unlag`), or
+    unchanged (None). Returns the times and speeds kept."""
+    if lag is None:
+        return t_ns, omega
+    if not isinstance(lag, ToothLag):
+        return t_ns - int(round(lag * 1e9)), omega
+    t_s = (t_ns - t_ns[0]) * 1e-9
+    w = _module_speed(t_s, omega, robust_period(t_ns))
+    keep = lag.unlag(t_s, w)
+    return t_ns[keep] - np.round(lag.delay_s(w[keep]) * 1e9).astype(np.int64), omega[keep]
 
 
 def _lag_not_applied(lag: LatencyEstimate) -> str:
@@ -1292,7 +1341,7 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
     ws_ref = sig["wheel_speed"]
     got = get("wheel_speed", measured=True)
     wss_t = wss_rel = None
-    wss_shift_ns = 0  # the module's lag behind the transducer's clock, when removed
+    wss_lag = None  # the module's lag behind the transducer's clock, when removed (for _unlag)
     if got is not None and got[0].shape[0] < 3:
         warns.append(f"only {got[0].shape[0]} wheel speed frames ({label('wheel_speed')}): not used")
         got = None
@@ -1307,21 +1356,39 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
         wss_rel = rel_s(wss_t)
         if wft_angle is not None:
             try:
-                lag = _wheel_speed_lag(*wft_angle, wft_period, wss_rel, w_rl, r)
+                lag, tooth = _wheel_speed_lag(*wft_angle, wft_period, wss_rel, w_rl, r, period)
             except ValueError as exc:
                 quality["wheel_speed_lag"] = {"estimate_s": None, "applied": False, "note": str(exc)}
             else:
                 why = _lag_not_applied(lag)
-                quality["wheel_speed_lag"] = {"estimate_s": lag.latency_s, "stderr_s": lag.stderr_s,
-                                              "gain": lag.gain, "applied": not why, "note": why}
-                if not why:
-                    wss_shift_ns = int(round(lag.latency_s * 1e9))
-                    wss_t = wss_t - wss_shift_ns
-                    wss_rel = rel_s(wss_t)
+                why_t = _tooth_not_applied(tooth, lag)
+                quality["wheel_speed_lag"] = q_lag = {"estimate_s": lag.latency_s, "stderr_s": lag.stderr_s,
+                                                      "gain": lag.gain, "applied": not why or not why_t, "note": why}
+                if isinstance(tooth, ToothLag):
+                    q_lag["per_tooth"] = {"lag_s": tooth.lag_s, "stderr_lag_s": tooth.stderr_lag_s,
+                                          "pitch_rad": tooth.pitch_rad, "stderr_pitch_rad": tooth.stderr_pitch_rad,
+                                          "teeth": 2 * math.pi / tooth.pitch_rad if tooth.pitch_rad > 0 else None,
+                                          "applied": not why_t, "note": why_t}
+                if not why_t:
+                    wss_lag = tooth
+                    q_lag["note"] = "the per-tooth delay is removed instead (per_tooth)"
+                    warns.append(f"the wheel speeds ({ws_ref.message}) read late against the transducer's clock (its "
+                                 f"wheel angle), and later as the wheel slows: {tooth.lag_s * 1e3:.1f} ms + "
+                                 f"{tooth.pitch_rad:.3g} rad / omega (a tone wheel timed per tooth; pitch "
+                                 f"{tooth.pitch_rad:.3g} +- {tooth.stderr_pitch_rad:.2g} rad, "
+                                 f"~{2 * math.pi / tooth.pitch_rad:.0f} teeth): each reading moved back by its "
+                                 "delay, so slip belongs to the moment of the forces; "
+                                 "ProcessResult.quality['wheel_speed_lag']")
+                elif not why:
+                    wss_lag = lag.latency_s
                     warns.append(f"the wheel speeds ({ws_ref.message}) read {lag.latency_s * 1e3:.1f} +- "
                                  f"{lag.stderr_s * 1e3:.1f} ms late against the transducer's clock (its wheel "
                                  "angle): their times moved back by that much, so slip belongs to the moment "
                                  "of the forces; ProcessResult.quality['wheel_speed_lag']")
+                if wss_lag is not None:
+                    wss_t, w_rl = _unlag(wss_t, w_rl, wss_lag)
+                    got = (wss_t, w_rl)
+                    wss_rel = rel_s(wss_t)
         omega, domega = filter_to_grid(wss_rel, w_rl, period, t_grid, cutoff, derivative=True)
 
     # ---- 3a'. inertia: T = My - I_w domega/dt (hardware.md) ------------------------------
@@ -1414,14 +1481,16 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
         # delay: a gateway, the frame's cycle) or not (a filter in one sensor, a tone wheel timed per
         # tooth); both are tried when the fronts are in the module's message, and the one whose
         # GNSS latency agrees better with the slip-traction estimate (which needs no front wheel) is kept
-        shared = [wss_shift_ns] + ([0] if wss_shift_ns and any(f.message == ws_ref.message for f, _ in f_raw) else [])
+        shared = [wss_lag] + ([None] if wss_lag is not None and any(f.message == ws_ref.message for f, _ in f_raw)
+                              else [])
 
-        def wheel_reference(shift: int):
-            """The wheel-reference latency with the fronts in the module's message moved back ``shift`` ns:
-            (estimate, or why there is none; fronts coupled to the measured wheel; fronts the reference; label)."""
+        def wheel_reference(shift):
+            """The wheel-reference latency with the fronts in the module's message moved back by ``shift`` (the
+            module's lag, for :func:`_unlag`): (estimate, or why there is none; fronts coupled to the measured
+            wheel; fronts the reference; label)."""
             ref_t = ref_v = usable = None
             label_ = ""
-            f_series = [(s[0] - (shift if f.message == ws_ref.message else 0), s[1]) for f, s in f_raw]
+            f_series = [_unlag(*s, shift if f.message == ws_ref.message else None) for f, s in f_raw]
             coupled_ = False
             if f_series:
                 ft = f_series[0][0]
@@ -1464,8 +1533,8 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
         shift, est, coupled, front_ref, wheel_ref_label = min(
             ((sh, *wheel_reference(sh)) for sh in shared), key=lambda t: off_traction(t[1]))
         if len(shared) > 1:
-            quality["wheel_speed_lag"]["fronts_shifted"] = bool(shift)
-            if not shift:
+            quality["wheel_speed_lag"]["fronts_shifted"] = shift is not None
+            if shift is None:
                 warns.append("the front wheels' speeds are not as late as the measured wheel's (the GNSS latency "
                              "against them agrees with the slip-traction estimate only unshifted): only the "
                              "measured wheel's times were moved back")

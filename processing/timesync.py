@@ -9,6 +9,8 @@ estimated from the data:
   fix): ``gps_s = gps_at_t0_s + (1 + drift) * (host_s - t0_s)``. Robust by an
   initial Theil-Sen line (scipy.stats.theilslopes on at most 400 points) and
   least squares on the points within 5 MADs (at least 2 ms) of it.
+* :func:`estimate_tooth_lag` — a wheel-speed module's delay that grows at low
+  speed (a tone wheel timed per tooth): ``lag + pitch / omega``.
 * :func:`estimate_latency` — the delay of the GNSS velocity behind a
   reference speed measured without delay: ``v_gnss(t) = a * v_ref(t - tau) + b``
   (the gain ``a`` absorbs an effective rolling radius different from r, ``b``
@@ -28,7 +30,7 @@ from scipy import optimize, stats
 from .filters import filter_to_grid, lowpass_segments
 
 __all__ = ["GPS_EPOCH_UNIX_S", "fit_gps_time_mapping", "LatencyEstimate", "estimate_latency",
-           "estimate_latency_traction"]
+           "estimate_latency_traction", "ToothLag", "estimate_tooth_lag"]
 
 #: 1980-01-06T00:00:00 (GPS epoch) in Unix seconds (UTC, no leap seconds).
 GPS_EPOCH_UNIX_S = 315_964_800
@@ -177,6 +179,121 @@ def estimate_latency(t_gnss_s: np.ndarray, v_gnss: np.ndarray, t_ref_s: np.ndarr
     if tau <= min_latency_s + 0.004 or tau >= max_latency_s - 0.004:
         note = _edge_note(min_latency_s, max_latency_s)
     return LatencyEstimate(tau, stderr, a, b, float(np.sqrt(mse)), n, note)
+
+
+@dataclass
+class ToothLag:
+    """A wheel-speed module's delay that grows as the wheel slows (:func:`estimate_tooth_lag`).
+
+    ``delay(omega) = lag_s + pitch_rad / |omega|`` [s], at most ``max_s``: a module that times the
+    wheel over its last tooth interval (or over a fixed window, and over the last interval when
+    fewer teeth pass in it) reports the speed of the middle of that interval, some time after its
+    last edge: one tooth period ``2 pi / (N omega)`` later on average for N teeth, plus a constant
+    delay of its own (a frame cycle, a gateway). ``pitch_rad`` is the angle the wheel turns in the
+    speed-dependent part (2 pi / N for such a module), with standard errors ``stderr_lag_s``,
+    ``stderr_pitch_rad``; ``gain`` the module's speed over the reference's, ``residual_rms``
+    [rad/s], ``n`` readings used."""
+
+    lag_s: float
+    pitch_rad: float
+    stderr_lag_s: float
+    stderr_pitch_rad: float
+    gain: float
+    residual_rms: float
+    n: int
+    max_s: float
+
+    def delay_s(self, omega_radps: np.ndarray) -> np.ndarray:
+        """The delay [s] (same shape as ``omega_radps`` [rad/s]; NaN or 0 speed: ``max_s``)."""
+        w = np.abs(np.asarray(omega_radps, dtype=np.float64))
+        with np.errstate(divide="ignore", invalid="ignore"):
+            d = self.lag_s + self.pitch_rad / w
+        return np.where(np.isfinite(d), np.minimum(d, self.max_s), self.max_s)
+
+    def unlag(self, t_s: np.ndarray, omega_radps: np.ndarray) -> np.ndarray:
+        """The times [s] the readings (``t_s`` (n,) sorted times [s], ``omega_radps`` (n,) the
+        module's speeds, best low-passed: the delay uses 1/omega) belong to: ``t - delay(omega)``;
+        returns a bool mask (n,) of the readings to keep with ``t_s[mask] - delay[mask]``: a reading
+        whose moved time is not after every earlier one's repeats an older interval (the wheel slowing
+        faster than its teeth pass) and is dropped, so the times stay strictly increasing."""
+        tn = np.asarray(t_s, dtype=np.float64) - self.delay_s(omega_radps)
+        prev = np.concatenate([[-np.inf], np.maximum.accumulate(tn)[:-1]])
+        return tn > prev
+
+
+#: A per-tooth delay (:class:`ToothLag`) is taken when its pitch is this many standard errors
+#: above zero (three sigma: a one-sided p of about 0.001).
+TOOTH_LAG_MIN_Z = 3.0
+
+
+def estimate_tooth_lag(t_mod_s: np.ndarray, omega_mod: np.ndarray, omega_mod_smooth: np.ndarray,
+                       t_ref_s: np.ndarray, omega_ref: np.ndarray, *, start_lag_s: float,
+                       min_lag_s: float, max_lag_s: float, min_omega_radps: float) -> ToothLag:
+    """Fit a wheel-speed module's speed-dependent delay against a reference read without delay.
+
+    The model (:class:`ToothLag`): ``omega_mod(t) = g * omega_ref(t - lag - pitch / omega)``, fitted
+    by ``scipy.optimize.least_squares`` (bounds ``min_lag_s <= lag <= max_lag_s``, ``pitch >= 0``,
+    gain ``g`` in 0.8..1.2) from ``lag = start_lag_s`` (the constant delay of
+    :func:`estimate_latency`), pitch 0, g 1. The speed in ``1/omega`` is the module's own,
+    low-passed (``omega_mod_smooth``): the only speed there is for the wheels without a reference.
+
+    ``t_mod_s`` (M,) the module's reading times [s], ``omega_mod`` (M,) its speeds [rad/s] (|.|
+    taken), ``omega_mod_smooth`` (M,) the same low-passed; ``t_ref_s`` (N,) sorted reference times
+    [s], ``omega_ref`` (N,) the reference speed (the wheel angle's derivative on the forces' clock,
+    low-passed); readings slower than ``min_omega_radps`` or whose delay reaches ``max_lag_s`` are
+    not used. Standard errors are the Gauss-Newton ones inflated by ``(1 + rho)/(1 - rho)`` for the
+    residuals' lag-1 autocorrelation, as :func:`estimate_latency`'s. Source: the delay of a
+    period-measuring speed sensor, a tooth period at low speed (e.g. Bosch, *Automotive Handbook*,
+    wheel-speed sensors; any tone-wheel period counter). Raises ``ValueError`` with fewer than 100
+    usable readings or when the speed never changes its rate.
+    """
+    t_m = np.asarray(t_mod_s, dtype=np.float64)
+    w_m = np.abs(np.asarray(omega_mod, dtype=np.float64))
+    w_s = np.abs(np.asarray(omega_mod_smooth, dtype=np.float64))
+    t_r = np.asarray(t_ref_s, dtype=np.float64)
+    w_r = np.asarray(omega_ref, dtype=np.float64)
+    fin = np.isfinite(w_r)
+    t_r, w_r = t_r[fin], w_r[fin]
+    if t_r.size < 10:
+        raise ValueError("fewer than 10 reference speeds")
+    dw_r = np.gradient(w_r, t_r)
+    use = np.isfinite(w_m) & np.isfinite(w_s) & (w_s >= min_omega_radps) & (t_m > t_r[0]) & (t_m < t_r[-1])
+    t_m, w_m, inv = t_m[use], w_m[use], 1.0 / w_s[use]
+    if t_m.size < 100:
+        raise ValueError(f"only {t_m.size} wheel speed readings above {min_omega_radps:g} rad/s overlap the "
+                         "reference (need 100)")
+
+    def parts(x):
+        d = x[0] + x[1] * inv
+        tq = t_m - d
+        return d, np.interp(tq, t_r, w_r), np.interp(tq, t_r, dw_r)
+
+    def resid(x):
+        d, wr, _ = parts(x)
+        return np.where(d < max_lag_s, w_m - x[2] * wr, 0.0)
+
+    def jac(x):
+        d, wr, dwr = parts(x)
+        inside = (d < max_lag_s)[:, None]
+        return np.where(inside, np.column_stack([x[2] * dwr, x[2] * dwr * inv, -wr]), 0.0)
+
+    x0 = [min(max(start_lag_s, min_lag_s), max_lag_s - 1e-3), 0.0, 1.0]
+    sol = optimize.least_squares(resid, x0, jac=jac, bounds=([min_lag_s, 0.0, 0.8], [max_lag_s, 1.0, 1.2]),
+                                 x_scale=[0.01, 0.1, 0.01])
+    d = sol.x[0] + sol.x[1] * inv
+    m = d < max_lag_s
+    r = sol.fun[m]
+    J = sol.jac[m]
+    n = int(m.sum())
+    if n < 100 or np.linalg.cond(J.T @ J) > 1e12:
+        raise ValueError("the wheel speed never changes its rate enough to fit a speed-dependent delay")
+    s2 = float(r @ r) / max(n - 3, 1)
+    rho = float(np.corrcoef(r[:-1], r[1:])[0, 1]) if n > 3 else 0.0
+    rho = min(max(rho, 0.0), 0.95) if np.isfinite(rho) else 0.0
+    cov = s2 * np.linalg.inv(J.T @ J) * (1 + rho) / (1 - rho)
+    return ToothLag(lag_s=float(sol.x[0]), pitch_rad=float(sol.x[1]), stderr_lag_s=float(np.sqrt(cov[0, 0])),
+                    stderr_pitch_rad=float(np.sqrt(cov[1, 1])), gain=float(sol.x[2]),
+                    residual_rms=float(np.sqrt(s2)), n=n, max_s=float(max_lag_s))
 
 
 def _lag_grid(lo_s: float, hi_s: float) -> np.ndarray:

@@ -128,7 +128,8 @@ def write_recording(path, truth: Truth, *, latency_s: float = 0.1, seed: int = 0
                     config=None, ts_edit=None, drop_wft_runs=(), drop_frames: dict | None = None,
                     burst_s: float = 0.0, fronts_coupled: bool = False, at_max: dict | None = None,
                     fx_w_gain: float = 1.0, fx_w_offset_n: float = 0.0, angle_jumps=(),
-                    gnss_outages=(), wheel_speed_lag_s: float = 0.0, rl_lag_s: float = 0.0) -> dict:
+                    gnss_outages=(), wheel_speed_lag_s: float = 0.0, rl_lag_s: float = 0.0,
+                    wheel_speed_pitch_rad: float = 0.0) -> dict:
     """Encode ``truth`` as frames and write an MCAP recording.
 
     ``drop_wft_bursts``: that many runs of 1..12 lost WFT samples;
@@ -158,7 +159,9 @@ def write_recording(path, truth: Truth, *, latency_s: float = 0.1, seed: int = 0
     the INS coasts through a GNSS outage, its velocity drifting by ``drift_mps2 (t - t0)``, still flagged
     valid, the accuracy figures 40 instead of 10; ``wheel_speed_lag_s``: every
     wheel speed is the speed that long before its frame (a module that reads late); ``rl_lag_s``:
-    the measured (left-rear) wheel's channel alone lags that much more (a filter in its sensor).
+    the measured (left-rear) wheel's channel alone lags that much more (a filter in its sensor);
+    ``wheel_speed_pitch_rad``: every wheel speed lags ``pitch / omega`` more, at most 0.3 s in all
+    (a module timing each wheel over its last tooth interval: one tooth period late).
 
     Returns ``{"path", "lost_samples", "start_ns", "dropped_frames"}``
     (``dropped_frames``: message -> frames removed by ``drop_frames``).
@@ -225,8 +228,13 @@ def write_recording(path, truth: Truth, *, latency_s: float = 0.1, seed: int = 0
     m_ws = wss.get_message_by_name("WSS_WheelSpeeds")
     if not no_wheel_speed:
         for tw in np.arange(0.003, t[-1], 0.01):
+            def late(w):  # the per-tooth part of the delay at the wheel speed w [rad/s]
+                return min(wheel_speed_pitch_rad / abs(w), 0.3 - wheel_speed_lag_s) if w else 0.0
+
             v = np.interp(tw - wheel_speed_lag_s, t, truth.speed_mps)
+            v = np.interp(tw - wheel_speed_lag_s - late(v / truth.radius_m), t, truth.speed_mps)
             om = np.interp(tw - wheel_speed_lag_s - rl_lag_s, t, truth.omega_radps)
+            om = np.interp(tw - wheel_speed_lag_s - rl_lag_s - late(om), t, truth.omega_radps)
             if fronts_coupled:
                 v = om * truth.radius_m
             if wheel_speed_zero and wheel_speed_zero[0] <= tw < wheel_speed_zero[1]:

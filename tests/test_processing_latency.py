@@ -136,3 +136,66 @@ def test_a_lag_of_the_measured_wheels_channel_alone_leaves_the_fronts(truth, tmp
     m = s["valid"].to_numpy() & (s["phase"] == "accel").to_numpy()
     err = s["slip"].to_numpy()[m] - np.interp(s["t_s"].to_numpy()[m], truth.t_s, truth.slip)
     assert np.sqrt(np.mean(err ** 2)) < 0.01
+
+
+def test_a_module_timed_per_tooth_is_found_and_removed(truth, tmp_path, monkeypatch):
+    """A wheel-speed module that times each wheel over its last tooth interval (48 teeth: one tooth
+    period, 2 pi / (48 omega), late, plus 5 ms of its own) while the GNSS speed arrives 80 ms late:
+    the delay's growth at low speed is found against the transducer's wheel angle and each reading
+    moved back by its own delay, the fronts' too, so the GNSS latency found against the free-rolling
+    fronts is its own. With one constant shift (the per-tooth fit switched off) the fronts, slower
+    than the slipping measured wheel, stay late and the latency comes out further off."""
+    import wheelsoil.processing.pipeline as pp
+
+    pitch = 2 * np.pi / 48
+    info = write_recording(tmp_path / "teeth.mcap", truth, latency_s=0.08, wheel_speed_lag_s=0.005,
+                           wheel_speed_pitch_rad=pitch, seed=7)
+    res = process_recording(info["path"])
+    q = res.quality["wheel_speed_lag"]
+    tooth = q["per_tooth"]
+    assert tooth["applied"] and q["fronts_shifted"], q
+    assert tooth["pitch_rad"] == pytest.approx(pitch, rel=0.1)
+    assert tooth["lag_s"] == pytest.approx(0.005, abs=0.003)
+    assert any("a tone wheel timed per tooth" in w for w in res.warnings)
+    err = abs(res.gnss_latency_s - 0.08)
+    assert err < 0.005
+    s = res.signals
+    m = s["valid"].to_numpy() & (s["phase"] == "accel").to_numpy()
+    slip_err = s["slip"].to_numpy()[m] - np.interp(s["t_s"].to_numpy()[m], truth.t_s, truth.slip)
+    assert np.sqrt(np.mean(slip_err ** 2)) < 0.01
+
+    monkeypatch.setattr(pp, "TOOTH_LAG_MIN_Z", np.inf)  # the constant shift alone
+    const = process_recording(info["path"])
+    assert not const.quality["wheel_speed_lag"]["per_tooth"]["applied"]
+    assert abs(const.gnss_latency_s - 0.08) > err + 0.005
+
+
+def test_a_constant_module_lag_is_not_taken_for_a_per_tooth_one(truth, tmp_path):
+    """The module 60 ms late at every speed: the per-tooth pitch is not shown above zero, and the
+    constant shift is what is removed."""
+    info = write_recording(tmp_path / "late.mcap", truth, latency_s=0.02, wheel_speed_lag_s=0.06, seed=11)
+    q = process_recording(info["path"]).quality["wheel_speed_lag"]
+    assert q["applied"] and not q["per_tooth"]["applied"] and "standard errors above zero" in q["per_tooth"]["note"]
+
+
+def test_estimate_tooth_lag_recovers_a_known_delay():
+    """``omega_mod(t) = omega(t - 8 ms - 0.2 rad / omega)`` on a speed swinging between 1 and 9 rad/s:
+    the fit returns the constant and the pitch within a few standard errors, and the moved times
+    (:meth:`ToothLag.unlag`) put the readings back on the true speed."""
+    from wheelsoil.processing.timesync import estimate_tooth_lag
+
+    rng = np.random.default_rng(2)
+    omega = lambda t: 5.0 + 4.0 * np.sin(0.7 * t)  # noqa: E731
+    t_ref = np.arange(0.0, 60.0, 0.002)
+    t_mod = np.arange(0.0, 60.0, 0.01)
+    delay = 0.008 + 0.2 / omega(t_mod)  # the delay at the current speed (the module's 1/omega)
+    w_mod = omega(t_mod - delay) * (1 + rng.normal(0, 0.002, t_mod.size))
+    fit = estimate_tooth_lag(t_mod, w_mod, omega(t_mod), t_ref, omega(t_ref), start_lag_s=0.03,
+                             min_lag_s=-0.1, max_lag_s=0.3, min_omega_radps=0.5)
+    assert abs(fit.pitch_rad - 0.2) < max(4 * fit.stderr_pitch_rad, 0.004)
+    assert abs(fit.lag_s - 0.008) < max(4 * fit.stderr_lag_s, 0.0005)
+    keep = fit.unlag(t_mod, omega(t_mod))
+    moved = t_mod[keep] - fit.delay_s(omega(t_mod[keep]))
+    assert np.all(np.diff(moved) > 0)
+    unmoved = np.sqrt(np.mean((w_mod - omega(t_mod)) ** 2))
+    assert np.sqrt(np.mean((w_mod[keep] - omega(moved)) ** 2)) < 0.2 * unmoved
