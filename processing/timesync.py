@@ -185,7 +185,8 @@ def estimate_latency(t_gnss_s: np.ndarray, v_gnss: np.ndarray, t_ref_s: np.ndarr
 class ToothLag:
     """A wheel-speed module's delay that grows as the wheel slows (:func:`estimate_tooth_lag`).
 
-    ``delay(omega) = lag_s + pitch_rad / |omega|`` [s], at most ``max_s``: a module that times the
+    ``delay(omega) = lag_s + pitch_rad / max(|omega|, min_omega_radps)`` [s], at most ``max_s``
+    (below the slowest speed fitted the delay is not extrapolated): a module that times the
     wheel over its last tooth interval (or over a fixed window, and over the last interval when
     fewer teeth pass in it) reports the speed of the middle of that interval, some time after its
     last edge: one tooth period ``2 pi / (N omega)`` later on average for N teeth, plus a constant
@@ -202,13 +203,13 @@ class ToothLag:
     residual_rms: float
     n: int
     max_s: float
+    min_omega_radps: float
 
     def delay_s(self, omega_radps: np.ndarray) -> np.ndarray:
-        """The delay [s] (same shape as ``omega_radps`` [rad/s]; NaN or 0 speed: ``max_s``)."""
+        """The delay [s] (same shape as ``omega_radps`` [rad/s]; NaN speed: the slowest's)."""
         w = np.abs(np.asarray(omega_radps, dtype=np.float64))
-        with np.errstate(divide="ignore", invalid="ignore"):
-            d = self.lag_s + self.pitch_rad / w
-        return np.where(np.isfinite(d), np.minimum(d, self.max_s), self.max_s)
+        w = np.where(w >= self.min_omega_radps, w, self.min_omega_radps)  # NaN too
+        return np.minimum(self.lag_s + self.pitch_rad / w, self.max_s)
 
     def unlag(self, t_s: np.ndarray, omega_radps: np.ndarray) -> np.ndarray:
         """The times [s] the readings (``t_s`` (n,) sorted times [s], ``omega_radps`` (n,) the
@@ -293,7 +294,8 @@ def estimate_tooth_lag(t_mod_s: np.ndarray, omega_mod: np.ndarray, omega_mod_smo
     cov = s2 * np.linalg.inv(J.T @ J) * (1 + rho) / (1 - rho)
     return ToothLag(lag_s=float(sol.x[0]), pitch_rad=float(sol.x[1]), stderr_lag_s=float(np.sqrt(cov[0, 0])),
                     stderr_pitch_rad=float(np.sqrt(cov[1, 1])), gain=float(sol.x[2]),
-                    residual_rms=float(np.sqrt(s2)), n=n, max_s=float(max_lag_s))
+                    residual_rms=float(np.sqrt(s2)), n=n, max_s=float(max_lag_s),
+                    min_omega_radps=float(min_omega_radps))
 
 
 def _lag_grid(lo_s: float, hi_s: float) -> np.ndarray:

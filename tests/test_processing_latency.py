@@ -199,3 +199,22 @@ def test_estimate_tooth_lag_recovers_a_known_delay():
     assert np.all(np.diff(moved) > 0)
     unmoved = np.sqrt(np.mean((w_mod - omega(t_mod)) ** 2))
     assert np.sqrt(np.mean((w_mod[keep] - omega(moved)) ** 2)) < 0.2 * unmoved
+
+
+def test_a_per_tooth_delay_at_standstill_is_the_slowest_fitted_speeds():
+    """Below the slowest speed fitted (and for a lost reading) the delay is that speed's, not
+    extrapolated towards infinity; a wheel slowing to rest keeps its readings in time order, and
+    only the readings its growing delay would put before earlier ones are dropped: no more than
+    that growth's worth."""
+    from wheelsoil.processing.timesync import ToothLag
+
+    lag = ToothLag(lag_s=0.005, pitch_rad=0.13, stderr_lag_s=0.001, stderr_pitch_rad=0.01, gain=1.0,
+                   residual_rms=0.01, n=1000, max_s=0.3, min_omega_radps=1.0)
+    assert np.allclose(lag.delay_s(np.array([0.0, np.nan, 0.5, -1.0])), 0.135)
+    t = np.arange(0.0, 5.0, 0.01)
+    w = np.clip(10.0 * (1.0 - t / 0.5), 0.0, None)  # 10 rad/s to rest in 0.5 s, then standing
+    keep = lag.unlag(t, w)
+    moved = t[keep] - lag.delay_s(w[keep])
+    assert np.all(np.diff(moved) > 0)
+    growth = lag.delay_s(np.array([1.0]))[0] - lag.delay_s(np.array([10.0]))[0]
+    assert 0 < np.count_nonzero(~keep) * 0.01 <= growth + 0.01
