@@ -1534,8 +1534,9 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
         # the fronts shifted as the measured wheel (one module, one lag), unless that disagrees with the
         # slip-traction estimate and unshifted agrees (a lag of the measured wheel's channel alone)
         shift, est, coupled, front_ref, wheel_ref_label = shared[0], *wheel_reference(shared[0])
-        if len(shared) > 1 and tr0 is not None and not tr0.note and not agrees(est):
-            if agrees((other := (shared[1], *wheel_reference(shared[1])))[1]):
+        if len(shared) > 1 and not agrees(est):
+            other = (shared[1], *wheel_reference(shared[1]))
+            if agrees(other[1]):
                 shift, est, coupled, front_ref, wheel_ref_label = other
         if len(shared) > 1:
             quality["wheel_speed_lag"]["fronts_shifted"] = shift is not None
