@@ -12,9 +12,9 @@ Steps (each in its own module):
    transducer's clock, from the WFT's wheel angle (:func:`_wheel_speed_lag`;
    removed from the wheel speeds' times when determined and over 5 ms, so
    slip belongs to the moment of the forces; a delay that grows as the wheel
-   slows, per reading; from the fronts' too unless the GNSS latency against
-   them then disagrees with the slip-traction estimate and unshifted agrees);
-   and the GNSS latency (:mod:`.timesync`)
+   slows, per reading, the fronts' too; a constant one from the fronts' too
+   when that makes the GNSS latency against them agree better with the
+   slip-traction estimate); and the GNSS latency (:mod:`.timesync`)
    from up to three estimators: the free-rolling front wheels' r*omega (or,
    when none is logged or the 4x4 drives them, the measured wheel where it
    transmits no torque: coasting, another axle braking), the measured wheel's
@@ -1478,13 +1478,13 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
             errs["traction"] = "needs the measured wheel's speed, torque and load"
         f_raw = [(f, s) for f, s in ((f, get(f, measured=True)) for f in fronts)
                  if s is not None and s[0].shape[0] >= 3]
-        # the module's lag was measured on the measured wheel: its front channels share it (a common
-        # delay: a gateway, the frame's cycle, a tone wheel timed per tooth) or not (a filter in one
-        # sensor); when the fronts are in the module's message they are shifted too, unless the GNSS
-        # latency against them then disagrees with the slip-traction estimate (which needs no front
-        # wheel) and unshifted agrees
-        shared = [wss_lag] + ([None] if wss_lag is not None and any(f.message == ws_ref.message for f, _ in f_raw)
-                              else [])
+        # the module's lag was measured on the measured wheel: its front channels share a constant one
+        # (a common delay: a gateway, the frame's cycle) or not (a filter in one sensor); both are tried
+        # when the fronts are in the module's message, and the one whose GNSS latency agrees better with
+        # the slip-traction estimate (which needs no front wheel) is kept. A per-tooth delay is how the
+        # module times every wheel: the fronts' readings move back by it at their own speed.
+        fronts_in = wss_lag is not None and any(f.message == ws_ref.message for f, _ in f_raw)
+        shared = [wss_lag] + ([None] if fronts_in and isinstance(wss_lag, float) else [])
 
         def wheel_reference(shift):
             """The wheel-reference latency with the fronts in the module's message moved back by ``shift`` (the
@@ -1527,18 +1527,14 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
 
         tr0 = cands.get("traction")
 
-        def agrees(est_) -> bool:  # with the slip-traction estimate, within both total standard errors
-            return (isinstance(est_, LatencyEstimate) and tr0 is not None and not tr0.note
-                    and _agree(est_, _with_systematic("traction", tr0)))
+        def off_traction(est_) -> float:  # how far from the slip-traction estimate (inf: not comparable)
+            ok = isinstance(est_, LatencyEstimate) and tr0 is not None and not tr0.note
+            return abs(est_.latency_s - tr0.latency_s) if ok else math.inf
 
-        # the fronts shifted as the measured wheel (one module, one lag), unless that disagrees with the
-        # slip-traction estimate and unshifted agrees (a lag of the measured wheel's channel alone)
-        shift, est, coupled, front_ref, wheel_ref_label = shared[0], *wheel_reference(shared[0])
-        if len(shared) > 1 and not agrees(est):
-            other = (shared[1], *wheel_reference(shared[1]))
-            if agrees(other[1]):
-                shift, est, coupled, front_ref, wheel_ref_label = other
-        if len(shared) > 1:
+        # the shift whose estimate agrees best (on a tie the first: the module's lag)
+        shift, est, coupled, front_ref, wheel_ref_label = min(
+            ((sh, *wheel_reference(sh)) for sh in shared), key=lambda t: off_traction(t[1]))
+        if fronts_in:
             quality["wheel_speed_lag"]["fronts_shifted"] = shift is not None
             if shift is None:
                 warns.append("the front wheels' speeds are not as late as the measured wheel's (the GNSS latency "
