@@ -81,13 +81,21 @@ def test_the_fourth_generators_towed_clay_runs_fitted_from_their_logs(tmp_path, 
     log): the logs are fitted directly, no effect gives `none`; kc and kphi x0.75 lie within the lab's
     default uncertainty of k_eq (30 %, one sd of its logarithm 0.96 sd away): the k_eq re-fit finds it, and no
     mismatch is named (`within_lab`; it was named a k_eq mismatch before: a soil within the lab's uncertainty
-    agrees with the lab)."""
+    agrees with the lab). Its wheel-speed module reports each wheel's last tooth period (48 teeth), so its
+    readings are late by about a tooth period, longer at the free-rolling fronts' low speed than at the
+    slipping rear wheel's: the per-tooth delay is found against the transducer's angle and each reading
+    moved back by its own, so the GNSS latency found against the fronts is its own (before, with one
+    constant shift, 30-40 ms short)."""
     import json
 
     from bench_foreign import run_case3
 
     r = next(x for x in round_runs("foreign3", 1) if x["name"] == run)
     row = run_case3(r["name"], r["case"], r["seed"], r["params"], r["format"], tmp_path)
+    rep = json.loads((tmp_path / f"rep_{run}" / "report.json").read_text())
+    tooth = rep["data_quality"][0]["processing_quality"]["wheel_speed_lag"]["per_tooth"]
+    assert tooth["applied"] and 40 < tooth["teeth"] < 56, tooth
+    assert abs(row["latency_s"] - row["latency_true_s"]) < 0.015, row
     if r["case"] == "none":
         assert row["score"] == "right" and row["effect"] == "none", row
     else:
