@@ -57,11 +57,12 @@ decides with this rule (constants below; none was tuned on a benchmark):
    ``1 - PRIOR_CONFLICT_ALPHA`` quantile; a one-value mismatch or drift far
    from its lab value is what that cause says, and is reported as such),
    and a hypothesis that contains a smaller one (slip sinkage + terrain
-   contains the terrain re-fit and the slip-sinkage form; a drift contains the
+   contains the terrain re-fit and the slip-sinkage form, Wong-Reece + terrain
+   the terrain re-fit and the stress shift; a drift contains the
    terrain re-fit it varies, a one-value drift the one-value re-fit (with the levels re-fitted, the
    five-value re-fit):
    ``Hypothesis.nested``) lowers the drawbar pull error below it out of
-   sample by the same paired test (slip sinkage + terrain against either part
+   sample by the same paired test (slip sinkage or Wong-Reece + terrain against either part
    alone: or the error of a channel in which that part's residuals keep a
    relevant error, step 1 on them), and worsens no channel
    (what the extra part adds must pay off on data it was not fitted to, in the target
@@ -1983,11 +1984,17 @@ def _target_channels(relevant: list) -> list:
     return ["drawbar_pull_n"] if "drawbar_pull_n" in relevant else list(relevant)
 
 
+#: The listed causes whose forms on a re-fitted soil (``terrain_block``: slip sinkage + terrain, Wong-Reece +
+#: terrain) beat a part alone by improving a channel it leaves an error in (:func:`_not_better_than_nested`).
+_CAUSE_ON_SOIL = ("slip_sinkage", "stress_distribution")
+
+
 def _not_better_than_nested(data, fits, f: HypFit, target) -> list:
     """The nested hypotheses (``Hypothesis.nested``) that ``f`` does not beat out of sample; [] if none.
     ``f`` beats a nested ``g`` when it worsens no channel against it (step 2's paired test) and improves
-    every ``target`` channel, or, for slip sinkage with the terrain re-fitted against the lab priors
-    (``terrain_block``) against either part alone (the slip sinkage on the lab soil, the terrain re-fit),
+    every ``target`` channel, or, for slip sinkage or a stress shift with the terrain re-fitted against the
+    lab priors (``terrain_block``, :data:`_CAUSE_ON_SOIL`) against either part alone (the cause on the lab
+    soil, the terrain re-fit),
     improves a channel in which ``g``'s own residuals keep a significant error of relevant size (step 1's
     test and floors on ``g``): the other part then explains an error the one part leaves (the terrain
     held to the lab's uncertainty), as a rival leaving one does not hold against a candidate
@@ -2006,10 +2013,10 @@ def _not_better_than_nested(data, fits, f: HypFit, target) -> list:
             out.append(n)
         elif all(pr[c]["improves"] for c in target):
             continue
-        elif not (f.hypothesis.terrain_block and f.effect == "slip_sinkage"):
+        elif not (f.hypothesis.terrain_block and f.effect in _CAUSE_ON_SOIL):
             out.append(n)
         elif not any(pr[c]["improves"] for c in _structured_channels(data, g) if c in pr):
-            out.append(n)  # slip sinkage + terrain improves no channel where the part alone leaves an error
+            out.append(n)  # the cause + terrain improves no channel where the part alone leaves an error
     return out
 
 
