@@ -39,7 +39,8 @@ The hypotheses (paper numbering for Eqs.; Wong = *Theory of Ground Vehicles*, 4t
   they carry the load the paper's distribution carries at Eq. (10)'s sinkage (Eq. 7 at both): the
   entry angle from the vertical balance with the distribution used, as in Wong's analysis.
 * ``wong_reece+terrain``: the ``wong_reece`` stresses with the terrain re-fitted against the lab's
-  priors, as slip sinkage + terrain.
+  priors, as slip sinkage + terrain; its look-alike on no list, a shear strength changing with slip,
+  is tried on a re-fitted soil too (``shear_slip+terrain``).
 * ``dp_resistance``: not a listed cause but the generic alternative "something
   acts on the drawbar pull alone" (bulldozing, a tyre's rolling resistance, an
   Fx offset): effect ``unexplained``.  A listed cause that this explains as well
@@ -1362,6 +1363,18 @@ class ShearSlip(Hypothesis):
                            tau_scale=1.0 + p["b"] * np.asarray(slip, float))
 
 
+class ShearSlipTerrain(ShearSlip):
+    """The slip-dependent shear strength of :class:`ShearSlip` on a soil re-fitted against the lab's priors:
+    the stand-in on the footing of the listed cause it mimics, ``wong_reece+terrain`` (a stress shift on a
+    re-fitted soil took hump-shaped shear curves, on the lab's soil a shear strength changing with slip, for
+    a stress shift: independent generators' and the held-out batches' shear humps named stress
+    distributions at "medium").  Effect ``unexplained``."""
+
+    name, title = "shear_slip+terrain", "a shear strength changing with slip + terrain re-fitted (no listed cause)"
+    terrain_block = True
+    nested = ("terrain", "shear_slip")
+
+
 def _peak_stress(ctx: Context) -> float:
     """sigma0 [Pa]: the lab terrain's peak normal stress under the wheel at the run's static load
     (else the reference load ``w_ref``): Eq. (2) at the Eq. (10) sinkage z0, k_eq z0^n.  The reference
@@ -1471,7 +1484,7 @@ HYPOTHESES: dict[str, Hypothesis] = {
               WongReece(), WongReeceLoad(), WongReeceTerrain(), DriftLinear(), DriftStep(), *(_drift_one(n) for n in TERRAIN_NAMES),
               *(_drift_one(n, step=True) for n in TERRAIN_NAMES), DrawbarResistance(), DrawbarDrift(), ZeroDrift(),
               WheelRadius(), SpeedGain(), TyreRadius(), WheelWidth(), SensorGain(), SensorGainTerrain(), AngleOffset(),
-              LoadStiffness(), SpeedStiffness(), SpeedSinkage(), Rebound(), ShearSlip(), CurvedEnvelope(), StressK(),
+              LoadStiffness(), SpeedStiffness(), SpeedSinkage(), Rebound(), ShearSlip(), ShearSlipTerrain(), CurvedEnvelope(), StressK(),
               VerticalBalance(), SmallAngleSinkage(),
               # last: tried only when the drift they narrow explains the data best (``gated``)
               *(_drift_levels(v, step=s) for s in (False, True) for v in (*((n,) for n in TERRAIN_NAMES), *DRIFT_PAIRS)))
