@@ -366,3 +366,20 @@ def test_the_load_dependent_modulus_takes_a_multi_load_tables_median_as_its_refe
     assert load_reference(None, loads) == 12000.0
     assert load_reference(None, 12000.0 * (1 + 0.02 * np.sin(np.arange(30)))) is None
     assert load_reference(None, [12000.0]) is None
+
+
+@pytest.mark.parametrize("name, part, own", [("wong_reece+terrain", "wong_reece", {"a1": 0.2, "a2": 0.15}),
+                                             ("shear_slip+terrain", "shear_slip", {"b": -0.3})])
+def test_a_cause_on_a_refitted_soil_is_that_cause_on_the_soil_it_is_given(name, part, own):
+    """A stress shift and its look-alike on no list, each on a soil re-fitted against the lab's priors (as
+    slip sinkage + terrain): the part's own forces on the re-fitted soil, of the part's effect; the soil moved."""
+    h, g = get_hypothesis(name), get_hypothesis(part)
+    assert h.terrain_block and set(h.nested) == {"terrain", part} and h.effect == g.effect
+    p = {**_defaults(h), **own, "n": 0.9}
+    soil = h.terrain(CTX, p)
+    f = h.predict(CTX, W, S, X, p)
+    ref = g.forces(CTX, soil, W, S, X, own)
+    np.testing.assert_allclose(f.drawbar_pull_n, ref.drawbar_pull_n, rtol=1e-9)
+    np.testing.assert_allclose(f.torque_nm, ref.torque_nm, rtol=1e-9)
+    lab = g.predict(CTX, W, S, X, own)
+    assert not np.allclose(f.torque_nm, lab.torque_nm)
