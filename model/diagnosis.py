@@ -1087,6 +1087,19 @@ def _gate_closed(data: FitData, fits: dict, whole: str, steps) -> str | None:
     return f"{whole} does not explain the data best: no drift of its kind to narrow"
 
 
+def _evidence_gate(data: FitData, fits: dict, a: str, b: str, steps) -> str | None:
+    """Why a hypothesis tried only where ``a`` has more evidence than ``b`` (``Hypothesis.tried_if``, both fitted
+    before it) is not tried, or None (``b`` not fitted: tried).  Evidence as in the posterior
+    (:func:`_log_evidence` over the fits so far)."""
+    _, _, ev = _log_evidence(data, fits, steps)
+    if a not in ev:
+        return f"{HYPOTHESES[a].title} not fitted"
+    if b in ev and ev[a] <= ev[b]:
+        return (f"{HYPOTHESES[a].title} has no more evidence than {HYPOTHESES[b].title}: its look-alike on the same "
+                "footing is not needed")
+    return None
+
+
 def _log_evidence(data: FitData, fits: dict, steps) -> tuple:
     """``(c_hat, deff, log evidence by hypothesis)`` of the converged ``fits``: one overdispersion ``c_hat`` and
     design effect ``deff`` from the best fit (smallest chi-square per degree of freedom; 1 without one), the
@@ -1486,6 +1499,8 @@ def diagnose(
             if h.whole not in gates:
                 gates[h.whole] = _gate_closed(data, fits, h.whole, steps)
             why = gates[h.whole]
+        if not why and h.tried_if:
+            why = _evidence_gate(data, fits, *h.tried_if, steps)
         if why:
             not_tried.setdefault(why, []).append(name)
             if bar is not None:

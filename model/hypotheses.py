@@ -323,6 +323,9 @@ class Hypothesis:
     #: tried only when its ``whole`` has the most evidence of the hypotheses registered before it: the data show
     #: the kind of change it narrows, best (the diagnosis' gate; it spares the fits on data without it)
     gated: ClassVar[bool] = False
+    #: ``(a, b)``: tried only when hypothesis ``a`` has more evidence than ``b`` (both registered before it; the
+    #: diagnosis' evidence gate): a look-alike on the footing ``a`` takes, tried only where ``a`` needs it
+    tried_if: ClassVar[tuple[str, ...]] = ()
 
     def own_params(self, ctx: Context) -> tuple[HParam, ...]:
         """The hypothesis' own parameters (besides the terrain block)."""
@@ -1368,11 +1371,15 @@ class ShearSlipTerrain(ShearSlip):
     the stand-in on the footing of the listed cause it mimics, ``wong_reece+terrain`` (a stress shift on a
     re-fitted soil took hump-shaped shear curves, on the lab's soil a shear strength changing with slip, for
     a stress shift: independent generators' and the held-out batches' shear humps named stress
-    distributions at "medium").  Effect ``unexplained``."""
+    distributions at "medium").  Tried only where the stress shift on a re-fitted soil has more evidence than
+    on the lab's (``tried_if``).  Effect ``unexplained``."""
 
     name, title = "shear_slip+terrain", "a shear strength changing with slip + terrain re-fitted (no listed cause)"
     terrain_block = True
     nested = ("terrain", "shear_slip")
+    #: where the shift on the lab's soil has the more evidence, its look-alike there is plain ``shear_slip``
+    #: (tried always, the footing equal): this one would only contest a stress shift that needs no re-fitted soil
+    tried_if = ("wong_reece+terrain", "wong_reece")
 
 
 def _peak_stress(ctx: Context) -> float:
