@@ -1368,17 +1368,15 @@ class ShearSlip(Hypothesis):
 
 class ShearSlipTerrain(ShearSlip):
     """The slip-dependent shear strength of :class:`ShearSlip` on a soil re-fitted against the lab's priors:
-    the stand-in on the footing of the listed cause it mimics, ``wong_reece+terrain`` (a stress shift on a
-    re-fitted soil took hump-shaped shear curves, on the lab's soil a shear strength changing with slip, for
-    a stress shift: independent generators' and the held-out batches' shear humps named stress
-    distributions at "medium").  Tried only where the stress shift on a re-fitted soil has more evidence than
-    on the lab's (``tried_if``).  Effect ``unexplained``."""
+    the stand-in given the footing of the listed cause it mimics, ``wong_reece+terrain``.  Without it, the
+    stress shift on a re-fitted soil was named for hump-shaped shear curves at "medium" (two of an independent
+    generator's runs, a held-out vehicle seed and a held-out testbed table).  Tried only where the shift on a
+    re-fitted soil has more evidence than on the lab's (``tried_if``); elsewhere the look-alike on the lab's
+    soil, plain ``shear_slip``, is the shift's rival.  Effect ``unexplained``."""
 
     name, title = "shear_slip+terrain", "a shear strength changing with slip + terrain re-fitted (no listed cause)"
     terrain_block = True
     nested = ("terrain", "shear_slip")
-    #: where the shift on the lab's soil has the more evidence, its look-alike there is plain ``shear_slip``
-    #: (tried always, the footing equal): this one would only contest a stress shift that needs no re-fitted soil
     tried_if = ("wong_reece+terrain", "wong_reece")
 
 
