@@ -519,11 +519,7 @@ def _tooth_not_applied(tooth, const: LatencyEstimate) -> str:
     if not tooth.pitch_rad > TOOTH_LAG_MIN_Z * tooth.stderr_pitch_rad:
         return (f"pitch {tooth.pitch_rad:.3g} +- {tooth.stderr_pitch_rad:.2g} rad: not {TOOTH_LAG_MIN_Z:g} "
                 "standard errors above zero (the delay does not grow as the wheel slows)")
-    if not tooth.stderr_lag_s <= WSS_LAG_SE_S:
-        return f"standard error {tooth.stderr_lag_s * 1e3:.1f} ms > {WSS_LAG_SE_S * 1e3:g} ms"
-    if abs(tooth.gain - 1) > WSS_LAG_GAIN_TOL:
-        return f"speed gain {tooth.gain:.3f}: not the same wheel's speed"
-    return ""
+    return _lag_imprecise(tooth.stderr_lag_s, tooth.gain)
 
 
 def _unlag(t_ns: np.ndarray, omega: np.ndarray, lag) -> tuple[np.ndarray, np.ndarray]:
@@ -541,14 +537,22 @@ def _unlag(t_ns: np.ndarray, omega: np.ndarray, lag) -> tuple[np.ndarray, np.nda
     return t_ns[keep] - np.round(lag.delay_s(w[keep]) * 1e9).astype(np.int64), omega[keep]
 
 
+def _lag_imprecise(stderr_s: float, gain: float) -> str:
+    """Why a wheel-speed lag of standard error ``stderr_s`` [s], found with the module's speed ``gain`` times
+    the angle's, is not removed (too imprecise, or another wheel's speed), or ""."""
+    if not stderr_s <= WSS_LAG_SE_S:
+        return f"standard error {stderr_s * 1e3:.1f} ms > {WSS_LAG_SE_S * 1e3:g} ms"
+    if abs(gain - 1) > WSS_LAG_GAIN_TOL:
+        return f"speed gain {gain:.3f}: not the same wheel's speed"
+    return ""
+
+
 def _lag_not_applied(lag: LatencyEstimate) -> str:
     """Why the wheel-speed lag ``lag`` (:func:`_wheel_speed_lag`) is not removed, or "" when it is."""
     if lag.note:
         return lag.note
-    if not lag.stderr_s <= WSS_LAG_SE_S:
-        return f"standard error {lag.stderr_s * 1e3:.1f} ms > {WSS_LAG_SE_S * 1e3:g} ms"
-    if abs(lag.gain - 1) > WSS_LAG_GAIN_TOL:
-        return f"speed gain {lag.gain:.3f}: not the same wheel's speed"
+    if why := _lag_imprecise(lag.stderr_s, lag.gain):
+        return why
     if abs(lag.latency_s) < WSS_LAG_MIN_S:
         return f"under {WSS_LAG_MIN_S * 1e3:g} ms"
     return ""

@@ -107,6 +107,17 @@ class LatencyEstimate:
     note: str = ""
 
 
+def _ar1_inflation(resid: np.ndarray | None) -> float:
+    """``(1 + rho)/(1 - rho)`` for the lag-1 autocorrelation ``rho`` of the residuals ``resid`` (n,), ``rho``
+    clipped to 0..0.95 (1 for fewer than 4 residuals, None or an undefined ``rho``): the factor by which
+    correlated residuals inflate a least-squares variance (the estimators' standard errors)."""
+    if resid is None or resid.size <= 3:
+        return 1.0
+    rho = float(np.corrcoef(resid[:-1], resid[1:])[0, 1])
+    rho = min(max(rho, 0.0), 0.95) if np.isfinite(rho) else 0.0
+    return (1 + rho) / (1 - rho)
+
+
 def _fit_at(tau: float, t_g: np.ndarray, v_g: np.ndarray, t_ref: np.ndarray, v_ref: np.ndarray,
             keep_ref: np.ndarray):
     """Linear fit v_g ~ a*v_ref(t_g - tau) + b on usable points; returns (sse, a, b, mask, x)."""
@@ -172,9 +183,7 @@ def estimate_latency(t_gnss_s: np.ndarray, v_gnss: np.ndarray, t_ref_s: np.ndarr
     jtj = J.T @ J
     if not (ok.sum() > 3 and np.any(slope[ok] != 0)) or np.linalg.cond(jtj) > 1e12:
         raise ValueError("the reference speed never changes its rate: the latency cannot be estimated")
-    rho = float(np.corrcoef(resid[:-1], resid[1:])[0, 1]) if n > 3 else 0.0
-    rho = min(max(rho, 0.0), 0.95) if np.isfinite(rho) else 0.0
-    stderr = float(np.sqrt(s2 * np.linalg.inv(jtj)[2, 2] * (1 + rho) / (1 - rho)))
+    stderr = float(np.sqrt(s2 * np.linalg.inv(jtj)[2, 2] * _ar1_inflation(resid)))
     note = ""
     if tau <= min_latency_s + 0.004 or tau >= max_latency_s - 0.004:
         note = _edge_note(min_latency_s, max_latency_s)
@@ -289,9 +298,7 @@ def estimate_tooth_lag(t_mod_s: np.ndarray, omega_mod: np.ndarray, omega_mod_smo
     if n < 100 or np.linalg.cond(J.T @ J) > 1e12:
         raise ValueError("the wheel speed never changes its rate enough to fit a speed-dependent delay")
     s2 = float(r @ r) / max(n - 3, 1)
-    rho = float(np.corrcoef(r[:-1], r[1:])[0, 1]) if n > 3 else 0.0
-    rho = min(max(rho, 0.0), 0.95) if np.isfinite(rho) else 0.0
-    cov = s2 * np.linalg.inv(J.T @ J) * (1 + rho) / (1 - rho)
+    cov = s2 * np.linalg.inv(J.T @ J) * _ar1_inflation(r)
     return ToothLag(lag_s=float(sol.x[0]), pitch_rad=float(sol.x[1]), stderr_lag_s=float(np.sqrt(cov[0, 0])),
                     stderr_pitch_rad=float(np.sqrt(cov[1, 1])), gain=float(sol.x[2]),
                     residual_rms=float(np.sqrt(s2)), n=n, max_s=float(max_lag_s),
@@ -455,9 +462,7 @@ def estimate_latency_traction(t_gnss_s: np.ndarray, v_gnss: np.ndarray, t_ref_s:
     s2 = s0 / max(n - p, 1)
     h = 0.006
     curv = (sse(tau + h) - 2 * s0 + sse(tau - h)) / h**2
-    rho = float(np.corrcoef(r[:-1], r[1:])[0, 1]) if r is not None and n > 3 else 0.0
-    rho = min(max(rho, 0.0), 0.95) if np.isfinite(rho) else 0.0
-    stderr = float(np.sqrt(2 * s2 / curv * (1 + rho) / (1 - rho))) if curv > 0 else float("inf")
+    stderr = float(np.sqrt(2 * s2 / curv * _ar1_inflation(r))) if curv > 0 else float("inf")
     note = ""
     edge = max(TRACTION_EDGE_S, 2 * stderr) if np.isfinite(stderr) else TRACTION_EDGE_S
     if tau <= min_latency_s + edge or tau >= max_latency_s - edge:
