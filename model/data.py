@@ -56,6 +56,14 @@ CHANNELS: dict[str, str] = {
 #: one accelerate cycle of a slip sweep (6-9 s of sweep in a 10-15 s cycle), so a run gives as many
 #: units whatever its procedure.
 BLOCK_S = 10.0
+
+#: Most cross-validation folds of a table (interleaved by slip rank): leave-one-out up to this many rows,
+#: beyond it folds of ceil(n / MAX_TABLE_FOLDS) rows each, as many as that gives (30 rows: 15 folds of 2).
+#: The folds are the units of the diagnosis' paired test (a t over the folds, n - 1 degrees of freedom),
+#: so their number is its power; capped as cycles are (``crossval.MAX_FOLDS``, the same 20) to bound the
+#: refits.  (It was 10 folds from 21 rows on: a table of 21 rows had half the units of one of 20.)
+MAX_TABLE_FOLDS = 20
+
 #: Fitted data [s] per accelerate cycle above which the cycles processing found are not the units:
 #: a cycle of a slip sweep holds 3-9 s of data at s > 0.1; a "cycle" with more than two blocks' worth
 #: spans several sweeps and several patches of soil (a towed run whose tractor speeds up now and then),
@@ -264,7 +272,8 @@ def prepare_data(df, *, slip_min: float = 0.1, source: str = "data", n_blocks: i
     Cross-validation groups: accelerate cycles (``cycle >= 0``; samples outside a
     cycle join the previous one) unless they hold more than ``MAX_CYCLE_DATA_S`` of
     fitted data each (then blocks, as without cycles), else for a table interleaved folds by slip rank
-    (leave-one-out up to 20 rows, else 10 folds, each spanning the slip range, so
+    (leave-one-out up to ``MAX_TABLE_FOLDS`` rows, else as many folds of equal size as keep their
+    number at most that, each spanning the slip range, so
     the held-out error measures interpolation, not extrapolation to unseen slips),
     and for a time series without cycles contiguous blocks of about ``BLOCK_S`` of data each (at
     least 5 per run).
@@ -527,7 +536,7 @@ def _cv_groups(df, keep, run, kind, n_blocks):
             note = (f" ({g.max() + 1} accelerate cycles found, {per_cycle:.0f} s of fitted data each: "
                     "more than a slip sweep's worth)")
     if kind == "table" and n_blocks is None:
-        k = n if n <= 20 else 10
+        k = n if n <= MAX_TABLE_FOLDS else math.ceil(n / math.ceil(n / MAX_TABLE_FOLDS))  # sizes differ by <= 1
         rank = np.empty(n, int)
         rank[np.argsort(pd.to_numeric(df["slip"], errors="coerce").to_numpy(float)[keep], kind="stable")] = np.arange(n)
         return rank % k, "leave-one-out" if k == n else f"{k} interleaved slip-rank folds"

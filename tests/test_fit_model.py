@@ -1,5 +1,7 @@
 """Fitting hypotheses to cell means: recovery, agreement with scipy, noise, standard errors, data checks."""
 
+import math
+
 import numpy as np
 import pandas as pd
 import pytest
@@ -279,6 +281,22 @@ def test_a_recording_without_accelerate_cycles_gets_units_of_about_a_cycle(durat
     assert np.unique(d.groups).size == max(5, round(used_s / BLOCK_S))
     assert np.all(np.diff(d.groups) >= 0)
     assert prepare_data(_table(1)).group_kind != "contiguous blocks"
+
+
+@pytest.mark.parametrize("n", [12, 20, 21, 30, 39, 60])
+def test_a_tables_folds_are_leave_one_out_up_to_the_cap_then_as_many_equal_folds_as_it_allows(n):
+    """A table's cross-validation folds are the units of the paired tests: leave-one-out up to
+    MAX_TABLE_FOLDS rows, beyond it folds of ceil(n / MAX_TABLE_FOLDS) rows (sizes differing by at most one),
+    never more than the cap, each spanning the slip range (interleaved by slip rank)."""
+    from wheelsoil.model.data import MAX_TABLE_FOLDS
+
+    d = prepare_data(_table(3, n=n), slip_min=0.0)
+    sizes = np.bincount(d.groups)
+    per = math.ceil(d.n / MAX_TABLE_FOLDS)
+    assert sizes.size == (d.n if d.n <= MAX_TABLE_FOLDS else math.ceil(d.n / per)) <= MAX_TABLE_FOLDS
+    assert sizes.max() - sizes.min() <= 1
+    lo = d.slip[np.argsort(d.slip)[: sizes.size]]  # the lowest slips lie in different folds
+    assert np.unique(d.groups[np.isin(d.slip, lo)]).size == sizes.size
 
 
 def test_cycles_longer_than_a_sweep_are_not_the_units():
