@@ -61,7 +61,7 @@ from .timebase import (MAX_GRID_ROWS, cycle_loss, find_clock_steps, find_time_ou
                        split_joined_parts)
 from .timesync import (TOOTH_LAG_MIN_Z, LatencyEstimate, ToothLag, estimate_latency, estimate_latency_traction,
                        estimate_tooth_lag, fit_gps_time_mapping)
-from .wft import angle_jumps, assemble_wft_samples, rotate_to_hub, rotation_ripple
+from .wft import angle_jumps, assemble_wft_samples, remove_ripple, rotate_to_hub, rotation_ripple
 
 __all__ = ["ProcessResult", "process_recording", "COLUMNS", "MAX_FILL_SAMPLES"]
 
@@ -1277,6 +1277,7 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
                                      "(the transducer or its encoding clipped; Status did not flag it): those "
                                      "samples are treated as lost, like an overload")
             t_w = rel_s(ws.timestamp_ns)
+            my = np.where(bad, np.nan, cols["wft_my"]) if "wft_my" in cols else None
             if all(k in cols for k in ("wft_fx_w", "wft_fz_w", "wft_angle")):
                 cols["wft_angle"], jumps = angle_jumps(cols["wft_angle"])
                 if jumps:
@@ -1290,7 +1291,14 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
                 fx, fz = rotate_to_hub(cols["wft_fx_w"], cols["wft_fz_w"], cols["wft_angle"])
                 fx[bad] = np.nan
                 fz[bad] = np.nan
-                ripple = rotation_ripple(fx, fz, cols["wft_angle"], t_w)
+                ripple = rotation_ripple(fx, fz, cols["wft_angle"], t_w, my=my)
+                if ripple is not None:  # no steady model has a part locked to the wheel angle: taken out
+                    fx = remove_ripple(fx, cols["wft_angle"], ripple["coef"]["fx"])
+                    fz = remove_ripple(fz, cols["wft_angle"], ripple["coef"]["fz"])
+                    if "my" in ripple["coef"]:
+                        my = remove_ripple(my, cols["wft_angle"], ripple["coef"]["my"])
+                    ripple["removed"] = [f"{ch}_{o + 1}x" for ch, c in ripple["coef"].items() for o in (0, 1)
+                                         if c[2 * o] or c[2 * o + 1]]
                 quality["wft_ripple"] = ripple
                 wft_angle = (t_w, np.where(bad, np.nan, cols["wft_angle"]))
                 w_mean = float(np.nanmean(fz)) if np.isfinite(fz).any() else float("nan")
@@ -1301,15 +1309,16 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
                                if order == 2 else
                                "an offset in a rotating channel (the transducer not zeroed), or a wheel or tyre out "
                                "of round")
+                        gone = any(r.endswith(f"_{order}x") for r in ripple["removed"])
                         warns.append(f"WFT: the hub forces carry {amp:.0f} N ({100 * amp / w_mean:.1f} % of the mean "
-                                     f"load) {'twice' if order == 2 else 'once'} per wheel revolution: {why}; check "
-                                     "the transducer's calibration")
+                                     f"load) {'twice' if order == 2 else 'once'} per wheel revolution: {why}; "
+                                     + ("taken out of the forces before filtering (fitted on the wheel angle); "
+                                        if gone else "") + "check the transducer's calibration")
                 fx_f = filter_to_grid(t_w, fx, ws.period_s, t_grid, cutoff)
                 load = filter_to_grid(t_w, fz, ws.period_s, t_grid, cutoff)
             else:
                 warns.append("WFT force or angle frames missing: load_n and drawbar_pull_n not computed (NaN)")
-            if "wft_my" in cols:
-                my = np.where(bad, np.nan, cols["wft_my"])
+            if my is not None:
                 my_f = filter_to_grid(t_w, my, ws.period_s, t_grid, cutoff)
             else:
                 warns.append("WFT moment frames missing: torque_nm not computed (NaN)")

@@ -21,8 +21,10 @@ import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
+from scipy import stats
 
-__all__ = ["unwrap_counter", "rotate_to_hub", "angle_jumps", "WftSamples", "assemble_wft_samples", "GapReport"]
+__all__ = ["unwrap_counter", "rotate_to_hub", "angle_jumps", "WftSamples", "assemble_wft_samples", "GapReport",
+           "rotation_ripple", "remove_ripple"]
 
 #: A wheel-angle jump within one sample at least this large [rad] cannot be the wheel's motion (see
 #: :func:`angle_jumps`): 0.5 deg more or less than the neighbouring samples' turn in 2 ms is an
@@ -30,6 +32,18 @@ __all__ = ["unwrap_counter", "rotate_to_hub", "angle_jumps", "WftSamples", "asse
 ANGLE_JUMP_MIN_RAD = float(np.radians(0.5))
 #: ... and at least this many robust standard deviations of the per-sample turn's scatter.
 ANGLE_JUMP_SIGMA = 10.0
+#: The wheel-angle-locked ripple (:func:`rotation_ripple`) is fitted where the wheel turns at least
+#: this fast [rev/s] (a revolution then lasts 3.3 s at most, short against a run) ...
+RIPPLE_MIN_REV_S = 0.3
+#: ... and only over at least this many revolutions at that speed.
+RIPPLE_MIN_REVOLUTIONS = 10.0
+#: Its uncertainty is the scatter of the same fit on blocks of this many revolutions (at most
+#: ``RIPPLE_MAX_BLOCKS`` blocks, at least 4); an order (cos and sin together) is taken out of the
+#: forces only when it stands out of that scatter at this level (F test, 2 and blocks - 1 degrees of
+#: freedom): a ripple found in the trend's leftovers is not subtracted.
+RIPPLE_BLOCK_REVOLUTIONS = 5.0
+RIPPLE_MAX_BLOCKS = 20
+RIPPLE_ALPHA = 0.001
 
 
 def unwrap_counter(timestamp_ns: np.ndarray, counter: np.ndarray, *, modulo: int = 256,
@@ -179,49 +193,94 @@ def angle_jumps(angle_rad: np.ndarray, *, half_window: int = 10, max_gap: int = 
 
 
 def rotation_ripple(fx: np.ndarray, fz: np.ndarray, angle_rad: np.ndarray, t_s: np.ndarray, *,
-                    min_rev_s: float = 1.0, window_s: float = 1.0) -> dict | None:
-    """The hub forces' components locked to the wheel's angle, once and twice per revolution.
+                    my: np.ndarray | None = None, min_rev_s: float = RIPPLE_MIN_REV_S,
+                    min_revolutions: float = RIPPLE_MIN_REVOLUTIONS) -> dict | None:
+    """The hub forces' (and hub moment's) components locked to the wheel's angle, once and twice
+    per revolution.
 
     A transducer that turns with the wheel and reads its two in-plane bridges correctly gives hub
     forces with no part that follows the wheel angle (hardware.md, "Frames and signs"); a gain
     mismatch g between ``Fx_w`` and ``Fz_w`` leaves about ``g W / 2`` twice per revolution, an
     offset o in one of them ``o`` once per revolution (so does an out-of-round tyre, usually far
-    less). Samples where the wheel turns at least ``min_rev_s`` [rev/s] are used, each force less
-    its centred ``window_s`` moving mean (at least one revolution: the ripple averages out of it),
-    and fitted by least squares with ``cos a, sin a, cos 2a, sin 2a``.
+    less), and bridge crosstalk into ``My`` a part of the moment that follows the angle too. No
+    steady wheel-soil model has such a part. Each channel less its centred moving mean over one
+    revolution (a harmonic of the wheel angle averages out of it; the window follows the wheel's
+    speed) is fitted by least squares with ``cos a, sin a, cos 2a, sin 2a`` on the samples where
+    the wheel turns at ``min_rev_s`` [rev/s] or faster (order analysis: harmonic regression on
+    the angle of rotation).
 
-    ``fx``, ``fz`` (N,) hub forces [N] (NaN: lost), ``angle_rad`` (N,) the wheel angle of the same
-    samples, ``t_s`` (N,) their times [s], uniformly sampled. Returns ``{"fx_1x_n", "fx_2x_n",
-    "fz_1x_n", "fz_2x_n", "samples"}`` (amplitudes [N]) or None with fewer than 5 s of turning
-    samples. Source: harmonic (Fourier) regression on the wheel angle.
+    ``fx``, ``fz`` (N,) hub forces [N], ``my`` (N,) or None the hub moment [N m] (NaN: lost),
+    ``angle_rad`` (N,) the wheel angle of the same samples, ``t_s`` (N,) their times [s],
+    uniformly sampled. Returns ``{"fx_1x_n", "fx_2x_n", "fz_1x_n", "fz_2x_n"[, "my_1x_nm",
+    "my_2x_nm"], "samples", "revolutions", "coef"}`` (amplitudes; ``coef`` channel -> the four
+    coefficients to take out with :func:`remove_ripple`, an order set to 0 where it does not stand
+    out of the scatter between blocks of revolutions, ``RIPPLE_ALPHA``) or None with fewer than
+    ``min_revolutions`` revolutions turned at that speed. Raises nothing.
     """
     ok = np.isfinite(fx) & np.isfinite(fz) & np.isfinite(angle_rad) & np.isfinite(t_s)
     if ok.sum() < 100:
         return None
     dt = float(np.median(np.diff(t_s[ok])))
-    rate = np.full(t_s.shape, np.nan)
-    rate[ok] = np.gradient(np.unwrap(angle_rad[ok]), t_s[ok]) / (2 * np.pi)
-    k = max(int(round(window_s / dt)), 1)
-    kernel = np.ones(k) / k
-
-    def detrend(y):
-        filled = np.where(ok, y, 0.0)
-        weight = np.convolve(ok.astype(float), kernel, "same")
-        with np.errstate(invalid="ignore", divide="ignore"):
-            return y - np.convolve(filled, kernel, "same") / weight
-
-    use = ok & (np.abs(rate) >= min_rev_s)
-    use[: k // 2] = use[len(use) - k // 2:] = False  # the moving mean is one-sided there
-    if use.sum() * dt < 5.0:
+    turn = np.interp(t_s, t_s[ok], np.unwrap(angle_rad[ok]) / (2 * np.pi))  # revolutions turned
+    step = np.diff(turn, prepend=turn[0])
+    # each sample weighs the angle it turns through: a mean over a revolution is then the mean over the
+    # angle, from which every harmonic of the angle drops out however the speed varies within it
+    wgt = np.where(ok, np.clip(step, 0.0, None), 0.0)
+    rate = np.convolve(step, np.ones(max(int(round(1.0 / dt)), 1)), "same")  # revolutions per second
+    mono = np.maximum.accumulate(turn)
+    lo = np.searchsorted(mono, mono - 0.5, side="left")
+    hi = np.searchsorted(mono, mono + 0.5, side="right")
+    use = ok & (rate >= min_rev_s) & (mono - 0.5 >= mono[0]) & (mono + 0.5 <= mono[-1]) & (wgt > 0)
+    revs = float(wgt[use].sum())
+    if revs < min_revolutions:
         return None
+    lo, hi = lo[use], hi[use]
+    cw = np.concatenate([[0.0], np.cumsum(wgt)])
     a = angle_rad[use]
     X = np.column_stack([np.cos(a), np.sin(a), np.cos(2 * a), np.sin(2 * a)])
-    out = {"samples": int(use.sum())}
-    for name, y in (("fx", fx), ("fz", fz)):
-        c = np.linalg.lstsq(X, detrend(y)[use], rcond=None)[0]
-        out[f"{name}_1x_n"] = float(np.hypot(c[0], c[1]))
-        out[f"{name}_2x_n"] = float(np.hypot(c[2], c[3]))
-    return out
+    sw = np.sqrt(wgt[use])
+    out = {"samples": int(use.sum()), "revolutions": revs, "coef": {}}
+    chans = [("fx", fx, "n"), ("fz", fz, "n")] + ([("my", my, "nm")] if my is not None else [])
+    for name, y, unit in chans:
+        good = np.isfinite(y)
+        wy = np.where(good, wgt, 0.0)
+        csum = np.concatenate([[0.0], np.cumsum(wy * np.where(good, y, 0.0))])
+        cg = np.concatenate([[0.0], np.cumsum(wy)])
+        with np.errstate(invalid="ignore", divide="ignore"):
+            mean = (csum[hi] - csum[lo]) / (cg[hi] - cg[lo])
+        r = y[use] - mean
+        fin = np.isfinite(r) & ((cg[hi] - cg[lo]) >= 0.8 * (cw[hi] - cw[lo]))  # the revolution mostly seen
+        if fin.sum() < 100:
+            continue
+        Xw, rw = X[fin] * sw[fin, None], r[fin] * sw[fin]
+        c = np.linalg.lstsq(Xw, rw, rcond=None)[0]
+        # the same fit on blocks of equal revolutions: their scatter is the estimate's uncertainty,
+        # what the trend leaves in a revolution included (a residual-based error would miss it)
+        cum = np.cumsum(wgt[use][fin])
+        nb = int(min(RIPPLE_MAX_BLOCKS, cum[-1] // RIPPLE_BLOCK_REVOLUTIONS))
+        keep = np.zeros(4, dtype=bool)
+        if nb >= 4:
+            blk = np.minimum((cum / cum[-1] * nb).astype(np.int64), nb - 1)
+            cb = np.array([np.linalg.lstsq(Xw[blk == b], rw[blk == b], rcond=None)[0] for b in range(nb)])
+            se = cb.std(axis=0, ddof=1) / np.sqrt(nb)
+            crit = 2.0 * stats.f.ppf(1.0 - RIPPLE_ALPHA, 2, nb - 1)
+            for o in (0, 2):  # each order: the cos and sin parts together
+                with np.errstate(divide="ignore", invalid="ignore"):
+                    keep[o:o + 2] = np.sum((c[o:o + 2] / se[o:o + 2]) ** 2) > crit
+        out["coef"][name] = [float(v) if k else 0.0 for v, k in zip(c, keep)]
+        out[f"{name}_1x_{unit}"] = float(np.hypot(c[0], c[1]))
+        out[f"{name}_2x_{unit}"] = float(np.hypot(c[2], c[3]))
+    return out if "fx" in out["coef"] and "fz" in out["coef"] else None
+
+
+def remove_ripple(y: np.ndarray, angle_rad: np.ndarray, coef) -> np.ndarray:
+    """``y`` less its part locked to the wheel angle: ``y - (c0 cos a + c1 sin a + c2 cos 2a +
+    c3 sin 2a)`` with ``coef`` the four coefficients :func:`rotation_ripple` fitted (same unit as
+    ``y``). ``y``, ``angle_rad`` (N,); a NaN angle leaves the sample as it is. Returns (N,).
+    """
+    a = np.nan_to_num(angle_rad)
+    h = coef[0] * np.cos(a) + coef[1] * np.sin(a) + coef[2] * np.cos(2 * a) + coef[3] * np.sin(2 * a)
+    return y - np.where(np.isfinite(angle_rad), h, 0.0)
 
 
 @dataclass
