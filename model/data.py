@@ -43,6 +43,8 @@ __all__ = [
     "synthetic_data",
     "CHANNELS",
     "dataclasses_replace",
+    "format_lines",
+    "TABLE_NEEDS",
 ]
 
 #: Measured channels a model is fitted against, in order: data column -> WheelForces field.
@@ -258,6 +260,30 @@ MAX_TABLE_ROWS = 20000
 MAX_DP_OVER_W = 2.0
 
 
+#: The columns every table needs (SI units; slip a fraction, Eq. 6).
+TABLE_NEEDS: tuple[str, ...] = ("slip", "load_n", "drawbar_pull_n")
+
+
+def format_lines(lines, limit: int = 10) -> str:
+    """File line numbers for a message: ``"line 20"``, ``"lines 20, 21, 35"``, or the first ``limit``
+    of them and ``"and N more"``.  ``lines``: ints (1-based line numbers), in the order to show."""
+    lines = [int(x) for x in lines]
+    more = f" and {len(lines) - limit} more" if len(lines) > limit else ""
+    return f"line{'s' if len(lines) > 1 else ''} {', '.join(map(str, lines[:limit]))}{more}"
+
+
+def _where(df, rows) -> str | None:
+    """The file lines of the rows ``rows`` (positions in ``df``) when the table loader gave them
+    (columns ``_line`` and ``_file``, :func:`wheelsoil.pipeline.load_inputs`): ``"a.csv lines 4, 9"``
+    (``"a.csv lines 4, 9; b.csv line 3"`` over several files); None without them."""
+    if "_line" not in df.columns:
+        return None
+    rows = np.asarray(rows, int)
+    lines = df["_line"].to_numpy()[rows]
+    files = df["_file"].astype(str).to_numpy()[rows] if "_file" in df.columns else np.full(rows.size, "")
+    return "; ".join(f"{f} {format_lines(lines[files == f])}".strip() for f in dict.fromkeys(files))
+
+
 def prepare_data(df, *, slip_min: float = 0.1, source: str = "data", n_blocks: int | None = None,
                  wheel_radius_m: float | None = None) -> FitData:
     """Select and check the samples a driving model is fitted to.
@@ -279,15 +305,19 @@ def prepare_data(df, *, slip_min: float = 0.1, source: str = "data", n_blocks: i
     least 5 per run).
     The samples are then aggregated into :class:`Cells` (:func:`make_cells`).
     ``wheel_radius_m`` [m], when given, bounds the measured sinkage: a wheel cannot sink by
-    more than its diameter.
+    more than its diameter.  A table's used rows whose |Dp| exceeds ``MAX_DP_OVER_W`` times
+    their load are excluded with a note (no soil gives it; when most rows do, the load's unit is
+    refused below).  With the columns ``_line``/``_file`` the table loader adds
+    (:func:`wheelsoil.pipeline.load_inputs`), messages name the file lines of the rows, else
+    their 0-based positions; rows with ``_copy`` True (exact copies) are not used.
 
     Raises
     ------
     ValueError
         (naming ``source``) for a missing column, an empty table, no rows left
         after the selection, only one distinct slip value (no slip
-        dependence can be fitted), slip in per cent (most finite slips above 1.5:
-        slip is the fraction of Eq. 6) or a sinkage deeper than the wheel's
+        dependence can be fitted), slip in per cent (most finite slips above 1.5, or in a
+        table, no ``t_s``, any: slip is the fraction of Eq. 6, at most 1) or a sinkage deeper than the wheel's
         diameter (millimetres in the ``sinkage_m`` column), or a table (no ``t_s``) of more than
         ``MAX_TABLE_ROWS`` used rows (each row is a test point the models are fitted to one by one),
         a median |Dp| / W above ``MAX_DP_OVER_W`` (a load in kN), or a table whose torque is negative
@@ -299,7 +329,7 @@ def prepare_data(df, *, slip_min: float = 0.1, source: str = "data", n_blocks: i
         raise ValueError(f"{source}: expected a pandas DataFrame, got {type(df).__name__}")
     missing = [c for c in ("slip", "load_n", "drawbar_pull_n") if c not in df.columns]
     if missing:
-        has = [str(c) for c in df.columns if c != "run"]  # "run": the input's index, added by the caller
+        has = [str(c) for c in df.columns if c != "run" and not str(c).startswith("_")]  # added by the caller
         case = [f"{c!r} for {m!r}" for m in missing for c in has if c.strip().lower() == m]
         raise ValueError(
             f"{source}: missing column(s) {', '.join(missing)}; a table needs slip, load_n, "
@@ -324,13 +354,15 @@ def prepare_data(df, *, slip_min: float = 0.1, source: str = "data", n_blocks: i
         if (~valid).any():
             notes.append(f"{int((~valid).sum())} of {n_input} samples marked invalid by processing were excluded.")
         keep &= valid
+    if "_copy" in df.columns:  # exact copies of earlier rows of a table file, noted by load_inputs
+        keep &= ~df["_copy"].fillna(False).astype(bool).to_numpy()
     valid_load = keep & np.isfinite(w) & (w > 0)  # rows the static load is taken over (all slips)
     bad = ~(np.isfinite(s) & np.isfinite(w) & np.isfinite(dp))
     if (bad & keep).any():
         rows = np.flatnonzero(bad & keep)
         notes.append(
             f"{rows.size} row(s) with NaN or non-numeric slip/load_n/drawbar_pull_n excluded "
-            f"(first at row {int(rows[0])})."
+            f"({_where(df, rows) or f'first at row {int(rows[0])}'})."
         )
     keep &= ~bad
     if not keep.any():
@@ -338,13 +370,19 @@ def prepare_data(df, *, slip_min: float = 0.1, source: str = "data", n_blocks: i
             raise ValueError(f"{source}: every row is marked invalid (column valid)")
         first = {c: str(df[c].iloc[0]) for c in ("slip", "load_n", "drawbar_pull_n")}
         shown = ", ".join(f"{c} = {v!r}" for c, v in first.items())
-        raise ValueError(f"{source}: no row has finite slip, load_n and drawbar_pull_n (row 0: {shown}); "
+        raise ValueError(f"{source}: no row has finite slip, load_n and drawbar_pull_n ({_where(df, [0]) or 'row 0'}: "
+                         f"{shown}); "
                          "give plain numbers with a decimal point, without units or per cent signs")
-    n_pct = int(np.count_nonzero(s[keep] > 1.5))
-    if n_pct > keep.sum() / 2:  # a driven wheel's slip (Eq. 6) is at most 1
+    pct = np.flatnonzero(keep & (s > 1.5))
+    n_pct = pct.size
+    # a driven wheel's slip (Eq. 6) is at most 1: a table (no t_s) with any slip above 1.5 is in per cent (its skid
+    # rows, negative, may be as many as the driving ones); a time series' transients may exceed it in a few samples
+    if n_pct > keep.sum() / 2 or (n_pct and "t_s" not in df.columns):
+        at = _where(df, pct)
         raise ValueError(f"{source}: the slip column looks like per cent ({n_pct} of {int(keep.sum())} values above "
-                         f"1.5, median {np.median(s[keep]):.3g}); slip is the fraction 1 - V / (omega r) of Eq. 6: "
-                         "divide it by 100")
+                         f"1.5, median {np.median(s[keep]):.3g}, largest {np.max(s[keep]):.3g}"
+                         + (f"; {at}" if at else "") + "); slip is the fraction 1 - V / (omega r) of Eq. 6, "
+                         "never above 1: divide it by 100")
     with np.errstate(invalid="ignore"):
         skid = keep & (s < -_ZERO_SLIP)
         zero = keep & (np.abs(s) <= _ZERO_SLIP)
@@ -362,6 +400,13 @@ def prepare_data(df, *, slip_min: float = 0.1, source: str = "data", n_blocks: i
     if noload.any():
         notes.append(f"{int(noload.sum())} row(s) with load_n <= 0 excluded.")
     keep &= (s > slip_min) & (s < 1.0) & (w > 0)
+    with np.errstate(invalid="ignore"):
+        over = keep & (np.abs(dp) > MAX_DP_OVER_W * w)
+    if "t_s" not in df.columns and over.any() and over.sum() <= keep.sum() / 2:  # most rows: the load's unit (below)
+        at = _where(df, np.flatnonzero(over)) or "rows " + ", ".join(map(str, np.flatnonzero(over)[:10]))
+        notes.append(f"{int(over.sum())} row(s) with |drawbar_pull_n| above {MAX_DP_OVER_W:g} times load_n excluded "
+                     f"({at}): no soil gives a wheel that drawbar pull (a typo or a value in another unit?).")
+        keep &= ~over
     if "cycle" in df.columns and keep.any():
         # a time series with accelerate cycles: the steady-state model is fitted to the accelerate
         # phases processing identified and to steady driving (phase ``drive``: the slip levels of a
@@ -398,7 +443,10 @@ def prepare_data(df, *, slip_min: float = 0.1, source: str = "data", n_blocks: i
             n_ok = int(np.isfinite(v).sum())
             if col == "sinkage_m" and wheel_radius_m and n_ok and np.nanmax(np.abs(v)) > 2.0 * wheel_radius_m:
                 i = int(np.nanargmax(np.abs(v)))
-                raise ValueError(f"{source}: sinkage_m reaches {v[i]:.4g} m (row {int(np.flatnonzero(keep)[i])}), "
+                with np.errstate(invalid="ignore"):
+                    deep = np.flatnonzero(keep)[np.abs(v) > 2.0 * wheel_radius_m]
+                raise ValueError(f"{source}: sinkage_m reaches {v[i]:.4g} m "
+                                 f"({_where(df, deep) or f'row {int(np.flatnonzero(keep)[i])}'}), "
                                  f"more than the wheel's diameter {2.0 * wheel_radius_m:.3g} m: the column must be "
                                  "in metres (millimetres divided by 1000?)")
             if n_ok >= max(3, n // 2):
@@ -411,7 +459,9 @@ def prepare_data(df, *, slip_min: float = 0.1, source: str = "data", n_blocks: i
         big = np.abs(v) > MAX_FORCE
         if big.any():  # 1 MN (N m) is a 100 t wheel load: a unit or transcription error, not a measurement
             i = int(np.flatnonzero(big)[0])
-            raise ValueError(f"{source}: {col} = {v[i]:.4g} at row {int(np.flatnonzero(keep)[i])} is not a plausible "
+            rows = np.flatnonzero(keep)[big]
+            at = f"on {_where(df, rows)}" if "_line" in df.columns else f"at row {int(rows[0])}"
+            raise ValueError(f"{source}: {col} = {v[i]:.4g} {at} is not a plausible "
                              f"wheel force or torque (|value| > {MAX_FORCE:.0e} in N or N m)")
     ratio = float(np.nanmedian(np.abs(channels["drawbar_pull_n"]) / np.abs(w[keep]))) if keep.any() else 0.0
     if ratio > MAX_DP_OVER_W:  # no wheel in soil pulls twice its load

@@ -70,6 +70,7 @@ __all__ = [
     "load_terrain",
     "load_terrain_file",
     "terrain_from_mapping",
+    "check_k_eq",
 ]
 
 #: Keys of a terrain entry in a TOML file, with their unit (for messages).
@@ -87,11 +88,18 @@ TERRAIN_KEYS: dict[str, str] = {
 #: larger value most likely is.  The built-in library (Wong's tables) reaches c = 69 kPa and
 #: K = 0.03 m; the limits are ~7x and ~17x beyond, so a soil is not refused for being firm,
 #: while c in Pa (any soil with c >= 0.5 kPa) and K in mm (any K >= 0.5 mm) are.  A friction
-#: angle in (0, 1) deg is the angle in radians (the library's smallest is 6 deg).
+#: angle in (0, 1) deg is the angle in radians (the library's smallest is 6 deg).  The library's
+#: |kc| reaches 102 and kphi 5880 (kN units); the limits are ~10x and ~7x beyond, so kc in N/m^(n+1)
+#: (any |kc| >= 1 kN/m^(n+1)) and kphi in N/m^(n+2) (any kphi >= 40, every library soil's) are refused.
 FIELD_UNIT_LIMITS: dict[str, tuple[float, str]] = {
     "c_kpa": (500.0, "cohesion in Pa instead of kPa"),
     "K_m": (0.5, "K in mm instead of m"),
+    "kc": (1000.0, "kc in N/m^(n+1) instead of kN/m^(n+1)"),
+    "kphi": (40000.0, "kphi in N/m^(n+2) instead of kN/m^(n+2)"),
 }
+#: Largest plausible k_eq = kc/b + kphi [kN/m^(n+2)] at the wheel's width: the library reaches 7000
+#: (lete sand on a 6 cm wheel); 7x beyond is a modulus in N (:func:`check_k_eq`).
+K_EQ_LIMIT_KN = 50000.0
 
 
 #: The soil values of a :class:`Terrain` (SI): what the constructor and ``with_values`` check.
@@ -422,10 +430,14 @@ def terrain_from_mapping(data: Mapping[str, Any], *, name: str, where: str) -> T
             raise ValueError(f"{where}: key {key} must be a number [{TERRAIN_KEYS[key]}], got {value!r}")
         values[key] = float(value)
     for key, (limit, mixup) in FIELD_UNIT_LIMITS.items():
-        if values[key] > limit:
+        if abs(values[key]) > limit:
             raise ValueError(f"{where}: {key} = {values[key]:g} [{TERRAIN_KEYS[key]}] is far beyond the built-in "
                              f"library's soils (limit {limit:g}): {mixup}? Terrain files are in field units: "
                              + ", ".join(f"{k} [{u}]" for k, u in TERRAIN_KEYS.items()))
+    if values["kphi"] < 0 or (values["kphi"] == 0 and values["kc"] <= 0):
+        raise ValueError(f"{where}: kphi = {values['kphi']:g}, kc = {values['kc']:g} [kN units]: the pressure-sinkage "
+                         "modulus kc/b + kphi (Eq. 2) must be > 0 at the wheel's width b, which needs kphi >= 0 "
+                         "(and kc > 0 when kphi = 0); check the signs of kc and kphi")
     if 0.0 < values["phi_deg"] < 1.0:
         raise ValueError(f"{where}: phi_deg = {values['phi_deg']:g} deg is the friction angle in radians? "
                          f"({math.degrees(values['phi_deg']):.1f} deg); terrain files give phi_deg in degrees")
@@ -528,6 +540,12 @@ def load_terrain_file(path: str | Path) -> dict[str, Terrain]:
             slug: terrain_from_mapping(entry, name=slug, where=f"{path} [terrains.{slug}]")
             for slug, entry in table.items()
         }
+    tables = [k for k, v in data.items() if isinstance(v, Mapping) and k != "uncertainty"]
+    if tables and not any(k in data for k in TERRAIN_KEYS):
+        raise ValueError(f"{path}: no terrain keys at the top level, but the table(s) "
+                         f"{', '.join(f'[{t}]' for t in tables)}; a terrain file holds one terrain's keys "
+                         f"({', '.join(TERRAIN_KEYS)}) at the top level, or a library of [terrains.<slug>] tables "
+                         f"(write [terrains.{tables[0]}])")
     return {path.stem: terrain_from_mapping(data, name=path.stem, where=str(path))}
 
 
@@ -551,7 +569,8 @@ def load_terrain(name_or_path: str | Path) -> Terrain:
     ``name_or_path``: a slug of ``TERRAINS``; a path to a single-terrain TOML
     file; a library-style file with exactly one entry; or ``path.toml#slug``.
     Raises ``ValueError`` for an unknown slug (listing the known ones) or bad
-    file content (naming the file and key), ``OSError`` for an unreadable file.
+    file content (naming the file and key), ``OSError`` for an unreadable file
+    (``FileNotFoundError`` listing the built-in slugs for a missing one).
     """
     if isinstance(name_or_path, Terrain):
         return name_or_path
@@ -564,6 +583,8 @@ def load_terrain(name_or_path: str | Path) -> Terrain:
         raise ValueError(
             f"unknown terrain {text!r}: not a built-in slug ({', '.join(TERRAINS)}) nor a .toml file"
         )
+    if not path.exists():
+        raise FileNotFoundError(f"--terrain: no such file {path} (built-in terrains: {', '.join(TERRAINS)})")
     terrains = load_terrain_file(path)
     if slug:
         if slug not in terrains:
@@ -574,6 +595,26 @@ def load_terrain(name_or_path: str | Path) -> Terrain:
             f"{path}: holds {len(terrains)} terrains ({', '.join(terrains)}); pick one with {path}#<slug>"
         )
     return next(iter(terrains.values()))
+
+
+def check_k_eq(terrain: Terrain, width_m: float, where: str) -> float:
+    """k_eq = kc/b + kphi [N/m^(n+2)] of ``terrain`` at the wheel width ``width_m`` [m] (Eq. 2), checked.
+
+    ``where`` names the terrain (its file) in messages.  Raises ``ValueError`` naming ``where`` and the
+    keys kc and kphi when k_eq <= 0 (a negative kc too large for this narrow a wheel: the smallest
+    width it allows is said) or above ``K_EQ_LIMIT_KN`` (moduli in N instead of kN).
+    """
+    k_eq = terrain.k_eq(width_m)
+    kc, kphi = terrain.kc / 1e3, terrain.kphi / 1e3
+    if not k_eq > 0:
+        b_min = f"; it needs b > {-kc / kphi:.3g} m" if kphi > 0 else ""
+        raise ValueError(f"{where}: kc/b + kphi = {kc:g}/{width_m:g} + {kphi:g} = {k_eq / 1e3:.4g} kN/m^(n+2) at the "
+                         f"wheel width b = {width_m:g} m must be > 0 (Eq. 2){b_min}: check kc and kphi")
+    if k_eq / 1e3 > K_EQ_LIMIT_KN:
+        raise ValueError(f"{where}: kc/b + kphi = {k_eq / 1e3:.4g} kN/m^(n+2) at the wheel width b = {width_m:g} m is "
+                         f"far beyond the built-in library's soils (limit {K_EQ_LIMIT_KN:g}): kc and kphi in N "
+                         "instead of kN? Terrain files give them in kN/m^(n+1), kN/m^(n+2)")
+    return k_eq
 
 
 def terrain_prior(terrain: Terrain, wheel: Wheel) -> dict[str, tuple[float, float]]:

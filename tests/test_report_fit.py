@@ -101,7 +101,7 @@ def test_cli_fit_on_two_tables_fits_jointly_with_per_run_metrics(tmp_path):
         ("slip,load_n\n0.3,1000\n0.5,1000\n", "missing column"),
         ("slip,load_n,drawbar_pull_n\n20,1000,5\n40,1000,6\n60,1000,7\n", "per cent"),
         ("slip,load_n,drawbar_pull_n,sinkage_m\n0.2,1000,5,20\n0.4,1000,6,30\n0.6,1000,7,40\n",
-         r"sinkage_m reaches 40 m \(row 2\), more than the wheel's diameter 0.94 m"),
+         r"sinkage_m reaches 40 m \(t\.csv lines 2, 3, 4\), more than the wheel's diameter 0.94 m"),
     ],
     ids=["no-bytes", "header-only", "one-slip", "nan", "missing-column", "slip-per-cent", "sinkage-mm"],
 )

@@ -12,6 +12,7 @@ report).
 from __future__ import annotations
 
 import argparse
+import re
 from pathlib import Path
 
 __all__ = ["run_fit", "load_inputs", "build_provenance", "register", "RECORDING_SUFFIXES"]
@@ -25,24 +26,50 @@ TABLE_COLUMNS = ("slip", "load_n", "drawbar_pull_n", "torque_nm", "sinkage_m", "
 
 
 def _read_table(path: Path):
+    """Read a table file: ``(df, lines, notes)``.  ``df`` (column names stripped); ``lines``: the file
+    line number (1-based) of each of its rows, from the lines the reader skipped (leading ``#`` comment
+    lines, noted in ``notes``, and blank lines); ``notes``: what was skipped.  Raises ValueError naming
+    the file for an empty or unreadable table, or a line before the header that is not a ``#`` comment
+    (a title: the header must be the first line)."""
     import pandas as pd
+
+    from wheelsoil.model.data import TABLE_NEEDS
 
     try:
         with open(path, encoding="utf-8-sig", errors="replace") as f:
-            head = f.readline()
-        sep = next((c for c in ("\t", ";") if c in head and "," not in head), ",")  # a tab or semicolon table
-        df = pd.read_csv(path, sep=sep)
+            text = f.read().splitlines()
+    except OSError as exc:
+        raise ValueError(f"{path}: not readable: {exc}") from None
+    n_comment = next((k for k, line in enumerate(text) if not line.lstrip().startswith("#")), len(text))
+    head = text[n_comment] if n_comment < len(text) else ""
+    sep = next((c for c in ("\t", ";") if c in head and "," not in head), ",")  # a tab or semicolon table
+    names = [c.strip().lower() for c in head.split(sep)]
+    if not any(c in names for c in TABLE_NEEDS + ("t_s",)):  # a title above the header?
+        at = next((k for k, line in enumerate(text[n_comment + 1:n_comment + 20], n_comment + 1)
+                   if sum(c in [x.strip().lower() for x in re.split(r"[,;\t]", line)] for c in TABLE_NEEDS) >= 2),
+                  None)
+        if at is not None:
+            raise ValueError(f"{path}: line {at + 1} holds the header ({text[at].strip()[:80]}), line "
+                             f"{n_comment + 1} is {head.strip()[:60]!r}: the header must be the first line; "
+                             "delete the lines above it or start them with '#'")
+    try:
+        df = pd.read_csv(path, sep=sep, skiprows=n_comment)
     except pd.errors.EmptyDataError:
         raise ValueError(f"{path}: the table is empty (no header, no rows)") from None
     except (pd.errors.ParserError, UnicodeDecodeError) as exc:
         raise ValueError(f"{path}: not a readable CSV table: {exc}") from None
     df.columns = [str(c).strip() for c in df.columns]
-    return df
+    lines = [k + 1 for k in range(n_comment + 1, len(text)) if text[k].strip()]
+    if len(lines) != len(df):  # quoted line breaks: the reader's rows are not the file's lines
+        lines = list(range(n_comment + 2, n_comment + 2 + len(df)))
+    notes = ([f"{path.name}: {n_comment} comment line(s) starting with '#' before the header skipped"]
+             if n_comment else [])
+    return df, lines, notes
 
 
 def load_inputs(inputs, *, progress: bool = False, rate_hz: float = 100.0, cutoff_hz: float | None = None,
                 wheel_radius_m: float | None = None, inertia: bool = True, wheel_mass_kg: float | None = None,
-                wheel_inertia_kgm2: float | None = None):
+                wheel_inertia_kgm2: float | None = None, wheel_width_m: float | None = None):
     """Read every input into one DataFrame for fitting.
 
     Returns ``(df, info)``: ``df`` has the fit columns plus ``run`` (input
@@ -63,15 +90,23 @@ def load_inputs(inputs, *, progress: bool = False, rate_hz: float = 100.0, cutof
     disagree, a table's ``wheel_radius_m`` column, or a table's slip of unknown
     radius) are loud notes. ``processing`` lists per recording what processing
     did (``wheel_radius_m``/``_source``, ``inertia``, ``excluded``, ``quality``
-    of ``ProcessResult``) for the report.
+    of ``ProcessResult``) for the report.  ``wheel_width_m`` [m]: the width given on the command line
+    (a table stating another is a loud note).  Tables that state different wheels (columns or sidecars)
+    are an error unless the command line gives the wheel: one fit has one wheel.
+
+    A table's rows keep their file line numbers (column ``_line``, with ``_file``), so every message
+    names the line; each table is checked as :func:`_check_table` says (exact copies of rows are
+    marked ``_copy`` and not fitted; a constant optional channel is dropped with a loud note).
 
     Raises ValueError (naming the file) for a missing file, an unknown suffix,
-    an unreadable table, or a recording processing cannot read.
+    an unreadable table, a table failing :func:`_check_table`, tables stating different wheels,
+    or a recording processing cannot read.
     """
     import pandas as pd
 
     frames, kinds, sync, notes, processing, results, tables = [], [], [], [], [], [], []
     radius = width = table_source = None
+    stated: dict = {}  # the first table stating a radius / a width: _check_one_wheel
     for i, raw in enumerate(inputs):
         path = Path(raw)
         if not path.exists():
@@ -108,7 +143,8 @@ def load_inputs(inputs, *, progress: bool = False, rate_hz: float = 100.0, cutof
                              f"(its vehicle configuration), the first recording with {radius:g} m; the fit uses "
                              f"{radius:g} m for all; give --wheel-radius to use one radius for slip and fit")
         elif suffix in TABLE_SUFFIXES:
-            df = _read_table(path)
+            df, lines, read_notes = _read_table(path)
+            notes.extend(read_notes)
             kinds.append("table")
             results.append(None)
             tables.append(df)
@@ -122,6 +158,10 @@ def load_inputs(inputs, *, progress: bool = False, rate_hz: float = 100.0, cutof
             tr, tw, tsrc = _table_wheel(path, df)
             tr = [check_wheel_radius(v, f"{path.name}: wheel_radius_m ({tsrc})") for v in tr]
             tw = [check_wheel_width(v, f"{path.name}: wheel_width_m ({tsrc})") for v in tw]
+            side = _sidecar_note(path, tr, tw, tsrc)
+            if side:
+                notes.append(side)
+            _check_one_wheel(path, tr, tw, tsrc, stated, wheel_radius_m, wheel_width_m)
             if len(tr) > 1 or (len(tr) == 1 and wheel_radius_m is not None
                                and abs(float(tr[0]) - wheel_radius_m) > 1e-6 * wheel_radius_m):
                 notes.append(f"WHEEL RADIUS CONFLICT: {path.name} states wheel_radius_m = "
@@ -130,17 +170,22 @@ def load_inputs(inputs, *, progress: bool = False, rate_hz: float = 100.0, cutof
                              "table's slip was computed with its own radius (Eq. 6)")
             elif len(tr) == 1 and radius is None:
                 radius = float(tr[0])
-            elif wheel_radius_m is not None:
+            elif wheel_radius_m is not None and not tr:
                 notes.append(f"{path.name}: the table's slip was computed outside wheelsoil with a radius it "
                              f"does not state; the fit uses r = {wheel_radius_m:g} m: it must be the radius "
                              "that slip (Eq. 6) was computed with")
-            if len(tw) > 1:
+            if len(tw) > 1 or (len(tw) == 1 and wheel_width_m is not None
+                               and abs(float(tw[0]) - wheel_width_m) > 1e-6 * wheel_width_m):
                 notes.append(f"WHEEL WIDTH CONFLICT: {path.name} states wheel_width_m = "
-                             f"{', '.join(f'{float(x):g}' for x in tw)} m ({tsrc}); the fit uses one width")
+                             f"{', '.join(f'{float(x):g}' for x in tw)} m ({tsrc}); the fit uses "
+                             f"{wheel_width_m if wheel_width_m is not None else float(tw[0]):g} m")
             if len(tw) and width is None:
                 width = float(tw[0])
             if (len(tr) or len(tw)) and table_source is None:
                 table_source = f"{path.name}: {tsrc}"
+            r_torque = next(float(v) for v in (wheel_radius_m, *tr, 0.47) if v is not None)
+            df, checked = _check_table(path, df, lines, r_torque)
+            notes.extend(checked)
             sync.append({"input": str(path), "gnss_latency_s": None})
         else:
             raise ValueError(
@@ -238,6 +283,112 @@ def _table_wheel(path: Path, df) -> tuple[list, list, str]:
             raise ValueError(f"{side}: wheel {key} = {v!r} is not a positive number of metres")
         out.append([float(v)] if v is not None else [])
     return out[0], out[1], f"its sidecar {side.name}"
+
+
+def _sidecar_note(path: Path, radii: list, widths: list, source: str) -> str | None:
+    """A loud note when the table's sidecar ``<table>.json`` exists but does not state the radius or the
+    width in the layout read (``{"wheel": {"radius_m": R, "width_m": B}}``), naming the keys it has
+    (e.g. ``radius_m`` at its top level, ``wheel.diameter_m``); None when nothing is missing, the
+    table's columns state the wheel, or there is no sidecar.  ``radii``/``widths``: what
+    :func:`_table_wheel` read (m)."""
+    import json
+
+    side = path.with_suffix(".json")
+    if (radii and widths) or "columns" in source or not side.is_file():
+        return None
+    meta = json.loads(side.read_text(encoding="utf-8"))  # _table_wheel read it
+    keys = ([f"{k}.{sub}" if isinstance(v, dict) else k for k, v in meta.items()
+             for sub in (v if isinstance(v, dict) else [None])] if isinstance(meta, dict) else [])
+    missing = [k for k, got in (("wheel.radius_m", radii), ("wheel.width_m", widths)) if not got]
+    return (f"{path.name}: WHEEL SIDECAR INCOMPLETE: {side.name} was found but has no {' and no '.join(missing)} "
+            f"(its keys: {', '.join(keys[:15]) + (' ...' if len(keys) > 15 else '') or 'none'}); the layout read is "
+            '{"wheel": {"radius_m": R, "width_m": B}} in metres (a radius, not a diameter)')
+
+
+def _check_one_wheel(path: Path, radii: list, widths: list, source: str, stated: dict,
+                     radius_given: float | None, width_given: float | None) -> None:
+    """Refuse a table whose stated wheel (``radii``/``widths`` [m] from ``source``) differs from the one
+    an earlier table of the same fit stated (``stated``: kind -> (file, value, source), updated here),
+    unless the command line gives that size (``radius_given``/``width_given``: then each table's
+    conflict is a note).  Raises ValueError naming both files and both wheels."""
+    for kind, vals, given in (("radius", radii, radius_given), ("width", widths, width_given)):
+        if len(vals) != 1 or given is not None:
+            continue
+        first = stated.setdefault(kind, (path, float(vals[0]), source, radii, widths))
+        if abs(first[1] - float(vals[0])) > 1e-6 * first[1]:
+            def wheel(r, b):
+                return (f"r = {', '.join(f'{float(x):g}' for x in r) or '?'} m, "
+                        f"b = {', '.join(f'{float(x):g}' for x in b) or '?'} m")
+            raise ValueError(f"{first[0]} and {path}: the tables state different wheels, {wheel(first[3], first[4])} "
+                             f"({first[2]}) and {wheel(radii, widths)} ({source}); one fit has one wheel (the "
+                             "models' forces and sinkage scale with it): fit them separately, one wheel per fit "
+                             "(or give --wheel-radius and --wheel-width if it is one wheel)")
+
+
+#: Below this fraction of the table's median load (of r times it for the torque), every drawbar pull
+#: (torque) of a table is not a wheel's in soil but one in kN (kN m): a 0.3 Dp/W becomes 0.0003.
+MIN_CHANNEL_OVER_LOAD = 0.005
+
+
+def _check_table(path: Path, df, lines: list, radius_m: float):
+    """Checks of one table's measured channels before it is fitted; returns ``(df, notes)``.
+
+    ``df``: the table as read (N rows); ``lines``: the file line of each row (N,); ``radius_m`` [m]:
+    the wheel's radius (the torque's scale).  The returned ``df`` has the columns ``_line`` (the
+    file line), ``_file`` (the file name) and ``_copy`` (True: an exact copy of an earlier row, not
+    fitted, said in a note) added; a ``torque_nm`` or ``sinkage_m`` of one value on every line (not
+    measured) is dropped with a loud note (``COLUMN DROPPED``).
+
+    Raises ValueError naming the file and the column for a ``drawbar_pull_n`` of one value on every
+    line, a ``sinkage_m`` negative on most lines (sinkage is positive below the surface), or a
+    ``drawbar_pull_n`` (``torque_nm``) below ``MIN_CHANNEL_OVER_LOAD`` of the median load (times
+    ``radius_m``) on every line (kN, kN m given for N, N m).
+    """
+    import numpy as np
+    import pandas as pd
+
+    from wheelsoil.model.data import format_lines
+
+    notes: list[str] = []
+    lines = np.asarray(lines, int)
+    num = {c: pd.to_numeric(df[c], errors="coerce").to_numpy(float)
+           for c in ("load_n", "drawbar_pull_n", "torque_nm", "sinkage_m") if c in df.columns}
+    for col in ("drawbar_pull_n", "torque_nm", "sinkage_m"):
+        v = num.get(col, np.zeros(0))
+        v = v[np.isfinite(v)]
+        if v.size >= 3 and np.all(v == v[0]):
+            if col == "drawbar_pull_n":
+                raise ValueError(f"{path}: drawbar_pull_n is {v[0]:g} on every line: not a measurement; the models "
+                                 "are fitted to the drawbar pull, give the measured values")
+            notes.append(f"{path.name}: COLUMN DROPPED: {col} is {v[0]:g} on every line: not measured? leave the "
+                         "column out; the fit does without it")
+            df = df.drop(columns=col)
+            del num[col]
+    if "sinkage_m" in num:
+        z = num["sinkage_m"]
+        with np.errstate(invalid="ignore"):
+            neg = np.flatnonzero(z < 0)
+        if neg.size > np.isfinite(z).sum() / 2:
+            raise ValueError(f"{path}: sinkage_m is negative on {neg.size} of {int(np.isfinite(z).sum())} lines "
+                             f"({format_lines(lines[neg])}): sinkage is the depth below the undisturbed surface, "
+                             "positive downwards; flip the column's sign")
+    w = num.get("load_n", np.zeros(0))
+    w = w[np.isfinite(w) & (w > 0)]
+    for col, scale, unit in (("drawbar_pull_n", 1.0, "kN"), ("torque_nm", radius_m, "kN m")):
+        v = np.abs(num.get(col, np.zeros(0)))
+        v = v[np.isfinite(v)]
+        if w.size and v.size >= 3 and np.all(v < MIN_CHANNEL_OVER_LOAD * scale * np.median(w)):
+            bound = (f"{MIN_CHANNEL_OVER_LOAD:.1%} of "
+                     + ("" if col == "drawbar_pull_n" else f"r = {radius_m:g} m times "))
+            raise ValueError(f"{path}: {col} is below {bound}the median load ({np.median(w):.4g} N) on every line "
+                             f"(largest |value| {v.max():.4g}): in {unit}? the column must be in "
+                             f"{'N' if unit == 'kN' else 'N m'} (multiply by 1000)")
+    copy = df.duplicated().to_numpy()
+    if copy.any():
+        notes.append(f"{path.name}: {int(copy.sum())} row(s) are exact copies of earlier rows "
+                     f"({format_lines(lines[copy])}) and are not used: each test point counts once (a table pasted twice?)")
+    df = df.assign(_line=lines, _file=path.name, _copy=copy)
+    return df, notes
 
 
 def _attachment_name(warning: str, path: Path) -> str:
@@ -699,12 +850,15 @@ def run_fit(
                                       wheel_mass=wheel_mass, wheel_inertia=wheel_inertia)
     df, info = load_inputs(inputs, progress=progress, rate_hz=rate_hz, cutoff_hz=cutoff_hz,
                            wheel_radius_m=wheel_radius, inertia=inertia, wheel_mass_kg=wheel_mass,
-                           wheel_inertia_kgm2=wheel_inertia)
+                           wheel_inertia_kgm2=wheel_inertia, wheel_width_m=wheel_width)
     recording = "recording" in info["kinds"]
     stated = "vehicle configuration" if recording else info["table_wheel_source"]
     r = next(v for v in (wheel_radius, info["wheel_radius_m"], DEFAULT_WHEEL.radius) if v is not None)
     b = next(v for v in (wheel_width, info["wheel_width_m"], DEFAULT_WHEEL.width) if v is not None)
     wheel = Wheel(float(r), float(b))
+    from wheelsoil.model.terrain import check_k_eq
+
+    check_k_eq(ter, wheel.width, terrain if isinstance(terrain, str) else f"terrain {ter.name!r}")
     wheel_source = ("radius: " + ("command line" if wheel_radius is not None else
                                   stated if info["wheel_radius_m"] is not None else "model default")
                     + ", width: " + ("command line" if wheel_width is not None else
@@ -783,6 +937,9 @@ def _parse_models(text: str):
 
 
 def _handler(args) -> int:
+    if args.models is not None and not _parse_models(args.models):
+        raise ValueError(f"--models is empty ({args.models!r}): give a comma list of hypotheses, or leave the "
+                         "option out to try every one")
     rep = run_fit(
         args.inputs,
         args.terrain,
@@ -790,7 +947,7 @@ def _handler(args) -> int:
         wheel_radius=args.wheel_radius,
         wheel_width=args.wheel_width,
         slip_min=args.slip_min,
-        models=_parse_models(args.models) if args.models else None,
+        models=_parse_models(args.models) if args.models is not None else None,
         fit_terrain=args.fit_terrain,
         sinkage=args.sinkage,
         rate_hz=args.rate,
