@@ -76,9 +76,11 @@ def _predict(args: argparse.Namespace) -> int:
     import numpy as np
 
     from wheelsoil.model import Wheel, get_model, load_terrain
+    from wheelsoil.model.terrain import check_k_eq
 
     terrain = load_terrain(args.terrain)
     wheel = Wheel(args.wheel_radius, args.wheel_width)
+    check_k_eq(terrain, wheel.width, f"--terrain {args.terrain}")
     model = get_model(args.model)
     load = np.asarray(_floats(args.load, "--load"))
     slip = np.asarray(_floats(args.slip, "--slip"))

@@ -56,7 +56,7 @@ def test_tables_stating_different_wheels_are_not_fitted_jointly(tmp_path):
     assert (info["wheel_radius_m"], info["wheel_width_m"]) == (0.0625, 0.06)
 
 
-def test_a_terrain_whose_pressure_sinkage_modulus_is_not_positive_is_refused_naming_the_file(tmp_path):
+def test_a_terrain_whose_pressure_sinkage_modulus_is_not_positive_is_refused_naming_the_file(tmp_path, capsys):
     """A negative kphi ran to 'samples used: 0' with nan; a negative kc is allowed while kc/b + kphi > 0."""
     from wheelsoil.model import Wheel, load_terrain
     from wheelsoil.model.terrain import check_k_eq
@@ -77,6 +77,10 @@ def test_a_terrain_whose_pressure_sinkage_modulus_is_not_positive_is_refused_nam
     with pytest.raises(ValueError, match=r"kc_neg\.toml: kc/b \+ kphi"):
         run_fit([tab], str(kc_neg), tmp_path / "out", wheel_radius=0.1, wheel_width=0.06)
     assert Wheel(0.1, 0.06)  # the wheel itself is fine
+    from wheelsoil.cli import main  # predict names the file too
+
+    assert main(["predict", "--terrain", str(kc_neg), "--wheel-width", "0.06", "--load", "5000", "--slip", "0.2"]) == 2
+    assert "kc_neg.toml: kc/b + kphi" in capsys.readouterr().err
 
 
 def test_moduli_in_newtons_are_refused_and_every_shipped_terrain_loads(tmp_path):
