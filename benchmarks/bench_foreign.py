@@ -1,6 +1,6 @@
 """The diagnosis on runs of nine independent generators (``benchmarks/foreign/`` to ``foreign9/``).
 
-    python benchmarks/bench_foreign.py [--generator foreign|foreign2 [--stress|--round2]|foreign3|...|foreign8 [--round2]|foreign9]
+    python benchmarks/bench_foreign.py [--generator foreign|foreign2 [--stress|--round2]|foreign3|...|foreign9 [--round2]]
                                        [--only a1,v15] [--keep DIR]
 
 Each generator was written from the hardware contract, the DBC files and the paper alone, by a
@@ -44,7 +44,7 @@ seeds 1001-1028; ``--round2`` 1031-1058): single-wheel soil-bin rig *time series
 pass after pass, sinkage measured), fitted the same way; ``foreign8`` (``round1.json``, seeds 1101-1130;
 ``--round2`` 1131-1160): vehicle CAN logs (candump, ASC, BLF) of a tow test against a brake trailer, its own
 soils and a 0.52 x 0.36 m wheel, fitted directly from the log with the arguments its truth file gives;
-``foreign9`` (``round1.json``, seeds 1201-1230): vehicle CAN logs of field runs pulling a dynamometer vehicle
+``foreign9`` (``round1.json``, seeds 1201-1230; ``--round2`` 1231-1260, written by the project): vehicle CAN logs of field runs pulling a dynamometer vehicle
 whose operator sets the slip, a 0.455 x 0.33 m wheel, a transducer rotating with it (1/rev and 2/rev
 crosstalk), a soil varying along the track, GNSS outages, lost frames and spikes, fitted the same way.
 Prints one row per case (verdict, latency found against the truth, its method and reliability) and the
@@ -339,7 +339,7 @@ def main() -> None:
                          "candump format fitted directly; foreign4: 30 runs of its own soil and wheel; foreign5: 30 runs of a "
                          "loamy sand, a load car towed behind, damaged logs; foreign6: 30 single-wheel testbed tables; "
                          "foreign7: 28 single-wheel rig time series; foreign8: 30 vehicle CAN logs of a tow test; "
-                         "foreign9: 30 vehicle CAN logs of field runs against a dynamometer vehicle, one round)")
+                         "foreign9: 30 vehicle CAN logs of field runs against a dynamometer vehicle per round)")
     ap.add_argument("--stress", action="store_true",
                     help="with --generator foreign2: 24 runs of eight of its cases as short runs (4 cycles), with 3x "
                          "the sensor noise and with 3x the soil variability, instead of its 36 cases")
@@ -350,12 +350,13 @@ def main() -> None:
                          "30 runs on seeds 731-760 (foreign4/round2.json); with foreign5: 30 runs on seeds 831-860 "
                          "(foreign5/round2.json); with foreign6: 30 tables on seeds 931-960 (foreign6/round2.json); with "
                          "foreign7: 28 rig time series on seeds 1031-1058 (foreign7/round2.json); with foreign8: 30 "
-                         "logs on seeds 1131-1160 (foreign8/round2.json)")
+                         "logs on seeds 1131-1160 (foreign8/round2.json); with foreign9: 30 logs on seeds 1231-1260 "
+                         "(foreign9/round2.json, written by the project)")
     ap.add_argument("--only", default="", help="comma list of case names (default: all)")
     ap.add_argument("--keep", type=Path, default=None, help="keep logs, recordings and reports here")
     args = ap.parse_args()
-    if args.stress and args.generator != "foreign2" or args.round2 and args.generator in ("foreign", "foreign9"):
-        ap.error("--stress needs --generator foreign2, --round2 one of foreign2 to foreign8")
+    if args.stress and args.generator != "foreign2" or args.round2 and args.generator == "foreign":
+        ap.error("--stress needs --generator foreign2, --round2 one of foreign2 to foreign9")
     if args.stress and args.round2:
         ap.error("choose one of --stress and --round2")
     only = set(filter(None, args.only.split(",")))

@@ -342,13 +342,15 @@ def test_every_run_of_the_ninth_generators_rounds_is_one_of_its_cases():
         assert {gen.CASES[r["case"]] for r in rnd} == {"in", "out"}
 
 
-def test_every_run_of_the_tenth_generators_round_is_one_of_its_cases():
-    """foreign9 writes vehicle CAN logs of field runs against a dynamometer vehicle: every run of its round is one
-    of its cases, both families in it, each with the verdicts its family allows."""
-    rnd = round_runs("foreign9", 1)
+def test_every_run_of_the_tenth_generators_rounds_is_one_of_its_cases():
+    """foreign9 writes vehicle CAN logs of field runs against a dynamometer vehicle: every run of its two rounds
+    is one of its cases, both families in each round, round 2 on other seeds than round 1."""
+    r1, r2 = round_runs("foreign9", 1), round_runs("foreign9", 2)
+    assert r1 and r2 and not {r["seed"] for r in r1} & {r["seed"] for r in r2}
     gen = _load(GEN9, "foreign9_gen")
-    assert rnd and {r["case"] for r in rnd} <= set(gen.CASES)
-    assert {r["case"] in gen.IN_FAMILY for r in rnd} == {True, False}
+    assert {r["case"] for r in r1 + r2} <= set(gen.CASES)
+    for rnd in (r1, r2):
+        assert {r["case"] in gen.IN_FAMILY for r in rnd} == {True, False}
 
 
 def test_a_latency_the_data_cannot_pin_down_is_not_claimed_reliable_and_names_no_cause(tmp_path):
