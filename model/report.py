@@ -1120,14 +1120,16 @@ def _glance(d: dict) -> str:
     for c, v in (d.get("channels") or {}).items():
         if not isinstance(v, dict) or not v.get("measured"):
             continue
-        best = v.get("best_cv_rmse")
+        best = v.get("best_cv_rmse")  # the error of the model compared on this channel: the named one, else
+        shown = v.get("compared_model") or v.get("model")  # the channel's own (diagnosis, per-channel verdicts)
         rows.append([CHANNEL_TITLES.get(c, c), _chan_fmt(v.get("wong_cv_rmse"), c),
-                     (f"{_chan_fmt(best, c)} ({_title(_canon(v.get('model')))})" if best is not None else "n/a"),
+                     (f"{_chan_fmt(best, c)} ({_title(_canon(shown))})" if best is not None and shown
+                      else "n/a (no model supported on this channel)"),
                      str(v.get("effect") or "n/a")])
     out = ""
     if rows:
-        out += _table(["channel", "Wong's error on new data (CV R0)", "the best supported model's",
-                       "this channel's verdict"], rows)
+        out += _table(["channel", "Wong's error on new data (CV R0)", "the compared model's (named, else the "
+                       "channel's best supported)", "this channel's verdict"], rows)
     probs = sorted(((k, p) for k, p in (d.get("effect_probabilities") or {}).items() if p is not None and p >= 1e-3),
                    key=lambda kp: -kp[1])
     if probs:
@@ -1395,7 +1397,11 @@ def _coefficients_section(rep) -> list:
             continue
         cells = []
         for p, e in ps.items():
-            cells.append(f"{_e(p)} = {_e(fmt_param(p, e.get('value'), e.get('se')))}" + _flag_marks(e.get("flags") or []))
+            v, se = e.get("value"), e.get("se")
+            vague = v is not None and se is not None and np.isfinite(se) and abs(se) > abs(v) > 0
+            cells.append(f"{_e(p)} = {_e(fmt_param(p, v, se))}" + (" <i>(SE &gt; |value|: not told from 0)</i>"
+                                                                   if vague else "")
+                         + _flag_marks(e.get("flags") or []))
         fitted_t = m.get("terrain_fitted") or []
         fixed = ", ".join(m.get("terrain_held_fixed") or []) or "-"
         cn = m.get("condition_number")

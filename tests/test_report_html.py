@@ -263,3 +263,30 @@ def test_a_damaged_input_is_said_at_the_top(table_report, tmp_path):
     text = (tmp_path / "report.html").read_text()
     check_html(text)
     assert text.index("Damaged input.") < text.index("class='verdict'") and html.escape(msg, quote=True) in text
+
+
+def test_the_glance_names_the_model_each_channels_error_belongs_to():
+    """A channel's error on new data is the compared model's (the named one, else the channel's own): it was
+    labelled with the channel's own model, so a named Lyasko's error read "(none)" on a channel whose own
+    verdict is none, and a catch-all's error carried a rival's name."""
+    from wheelsoil.model.report import _glance, _title
+
+    d = {"channels": {
+        "drawbar_pull_n": {"measured": True, "wong_cv_rmse": 1.16, "best_cv_rmse": 0.573, "model": None,
+                           "compared_model": "lyasko", "effect": "none"},
+        "torque_nm": {"measured": True, "wong_cv_rmse": 30.0, "best_cv_rmse": None, "model": None, "effect": "none"}}}
+    text = html.unescape(_glance(d))
+    assert f"0.573 N ({_title('lyasko')})" in text and "(none)" not in text
+    assert "n/a (no model supported on this channel)" in text
+
+
+def test_a_coefficient_whose_standard_error_exceeds_it_is_marked():
+    """K = 2.83 +- 110 mm was shown as a fitted value with its flags column "ok": a value its own standard
+    error cannot tell from zero is marked so."""
+    from wheelsoil.model.report import _coefficients_section
+
+    rep = {"models": {"terrain_K": {"status": "ok", "parameters": {
+        "K": {"value": 0.00283, "se": 0.110, "flags": []}, "c": {"value": 900.0, "se": 50.0, "flags": []}}}},
+        "flags": [], "diagnosis": {}}
+    text = html.unescape("".join(_coefficients_section(rep)))
+    assert text.count("not told from 0") == 1 and "K = " in text
