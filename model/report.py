@@ -41,7 +41,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .diagnosis import CHANNEL_TITLES, LAB_Z, SLIP_SINKAGE_MODELS, TITLES, data_estimates, prior_z
+from .diagnosis import CHANNEL_TITLES, LAB_Z, SLIP_SINKAGE_MODELS, TITLES, WHY_UNEXPLAINED, data_estimates, prior_z
 from .diagnosis import json_ready as _clean
 
 __all__ = ["write_report", "report_dict", "fmt", "fmt_param", "param_unit", "SCHEMA", "ALL_MODELS",
@@ -1117,6 +1117,7 @@ def _glance(d: dict) -> str:
     best supported model with the channel's own verdict, the effects' probabilities, and why the
     confidence is what it is; every number from ``d`` (``report.json``'s ``diagnosis``)."""
     rows = []
+    out = _not_named(d)
     for c, v in (d.get("channels") or {}).items():
         if not isinstance(v, dict) or not v.get("measured"):
             continue
@@ -1126,7 +1127,6 @@ def _glance(d: dict) -> str:
                      (f"{_chan_fmt(best, c)} ({_title(_canon(shown))})" if best is not None and shown
                       else "n/a (no model supported on this channel)"),
                      str(v.get("effect") or "n/a")])
-    out = ""
     if rows:
         out += _table(["channel", "Wong's error on new data (CV R0)", "the compared model's (named, else the "
                        "channel's best supported)", "this channel's verdict"], rows)
@@ -1142,6 +1142,26 @@ def _glance(d: dict) -> str:
         out += (f"<p>Confidence {_e(d.get('confidence'))}:</p><ul>"
                 + "".join(f"<li>{_e(x)}</li>" for x in why) + "</ul>")
     return out
+
+
+def _not_named(d: dict) -> str:
+    """When no cause is named (``none``, ``unexplained``) but an effect is the most probable: one line (HTML)
+    saying which, with its probability, and why the rule does not name it (``d["why"]``, a code of
+    :data:`~wheelsoil.model.diagnosis.WHY_UNEXPLAINED`; for ``none``: no structure of relevant size in
+    Wong's residuals), so the probabilities under the headline do not read as a contradiction of it."""
+    eff = d.get("effect")
+    probs = {k: p for k, p in (d.get("effect_probabilities") or {}).items()
+             if p is not None and k not in ("none", "unexplained")}
+    if eff not in ("none", "unexplained") or not probs:
+        return ""
+    top = max(probs, key=probs.get)
+    if probs[top] < 0.5:
+        return ""
+    why = (WHY_UNEXPLAINED.get(d.get("why"), d.get("why")) if eff == "unexplained" else
+           "Wong's residuals show no systematic error of relevant size (the structure tests, thresholds below): "
+           "the rule names a cause only for an error it can see")
+    return (f"<p><b>Not named:</b> the most probable effect is {_e(top)} (probability "
+            f"{_e(num(probs[top], 2))}), but {_e(why or 'the rule did not name it')}.</p>")
 
 
 def _table(headers, rows, raw: bool = False) -> str:

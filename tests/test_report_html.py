@@ -290,3 +290,20 @@ def test_a_coefficient_whose_standard_error_exceeds_it_is_marked():
         "flags": [], "diagnosis": {}}
     text = html.unescape("".join(_coefficients_section(rep)))
     assert text.count("not told from 0") == 1 and "K = " in text
+
+
+def test_a_probable_effect_that_is_not_named_says_why_under_the_headline():
+    """"Effect: none" over "terrain_mismatch 1.0" read as a contradiction: the glance says which effect is the
+    most probable and why the rule does not name it; a named effect, or none probable, adds nothing."""
+    from wheelsoil.model.diagnosis import WHY_UNEXPLAINED
+    from wheelsoil.model.report import _glance
+
+    none = html.unescape(_glance({"effect": "none", "effect_probabilities": {"none": 1e-59, "terrain_mismatch": 1.0}}))
+    assert "Not named:</b> the most probable effect is terrain_mismatch (probability 1.0)" in none
+    assert "no systematic error of relevant size" in none
+    unx = html.unescape(_glance({"effect": "unexplained", "why": "equally_well",
+                                 "effect_probabilities": {"stress_distribution": 0.9, "slip_sinkage": 0.1}}))
+    assert "stress_distribution (probability 0.9)" in unx and WHY_UNEXPLAINED["equally_well"] in unx
+    for d in ({"effect": "slip_sinkage", "effect_probabilities": {"slip_sinkage": 1.0}},
+              {"effect": "none", "effect_probabilities": {"none": 0.7, "terrain_mismatch": 0.3}}):
+        assert "Not named" not in _glance(d)
