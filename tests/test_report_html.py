@@ -303,7 +303,7 @@ def test_a_probable_effect_that_is_not_named_says_why_under_the_headline():
     assert "no systematic error of relevant size" in none
     unx = html.unescape(_glance({"effect": "unexplained", "why": "equally_well",
                                  "effect_probabilities": {"stress_distribution": 0.9, "slip_sinkage": 0.1}}))
-    assert "stress_distribution (probability 0.9)" in unx and WHY_UNEXPLAINED["equally_well"] in unx
+    assert "stress_distribution (probability 0.90)" in unx and WHY_UNEXPLAINED["equally_well"] in unx
     for d in ({"effect": "slip_sinkage", "effect_probabilities": {"slip_sinkage": 1.0}},
               {"effect": "none", "effect_probabilities": {"none": 0.7, "terrain_mismatch": 0.3}}):
         assert "Not named" not in _glance(d)
