@@ -630,6 +630,45 @@ def _quiet_logger(name: str):
         log.setLevel(level)
 
 
+#: The time at the start of an ASC event line (seconds, as the line writes them).
+_ASC_LINE_TIME = re.compile(r"\s*(\d+)(?:\.(\d*))?\s")
+
+
+def _asc_line_ns(line: str) -> int | None:
+    """The leading time of an ASC event line in integer nanoseconds (exact: no float sums), None: no time."""
+    m = _ASC_LINE_TIME.match(line)
+    if m is None:
+        return None
+    frac = (m.group(2) or "")[:9]
+    return int(m.group(1)) * 10**9 + int(frac.ljust(9, "0") or 0)
+
+
+class _AscDeltas:
+    """Running time of an ASC file whose header says ``base hex  timestamps relative``.
+
+    In Vector's ASC format "relative" means that each event line's time is the
+    time since the previous event line (any event: frames on every channel,
+    error frames, ``Start of measurement``, status lines), "absolute" (what
+    python-can's ASCWriter writes) the time since the start of the measurement.
+    python-can 4.6's ASCReader reads the header into ``timestamps_format`` but
+    returns each line's delta as the time. The sum runs in integer ns over
+    the lines' own text, so 10^5 deltas add no rounding error.
+    """
+
+    def __init__(self):
+        self.active = False
+        self.total_ns = 0
+
+    def add(self, texts: list[str]) -> int:
+        """Add the times of the event lines ``texts`` (the lines handed out since the last frame, this
+        frame's own line last; lines without a leading time add nothing). Returns the running time [ns]."""
+        for line in texts:
+            ns = _asc_line_ns(line)
+            if ns is not None:
+                self.total_ns += ns
+        return self.total_ns
+
+
 class LogSource:
     """python-can messages of one log file, checked, with their place in the file.
 
@@ -714,9 +753,12 @@ class LogSource:
 
     def _iter_text(self):
         path, cls, suffix = self.path, self.cls, self.suffix
+        # python-can's relative_timestamp is another thing than the ASC header's "timestamps relative":
+        # False adds the trigger block's date to each line's time (see _AscDeltas for the header's mode)
         kwargs = {"relative_timestamp": False} if suffix == ".asc" else {}
         self._check_end()
         check = _asc_reason if suffix == ".asc" else _trc_reason
+        deltas = _AscDeltas() if suffix == ".asc" else None
         with open(path, "r", encoding="utf-8", errors="replace", newline=None) as f, \
                 _quiet_logger(f"can.io.{suffix[1:]}"):  # its per-line messages are reported here, with numbers
             lines = _Lines(f, track=_trc_frameish if suffix == ".trc" else _asc_frameish)
@@ -730,6 +772,14 @@ class LogSource:
                         since = lines.since
                         if len(since) > 1:
                             self._dropped(lines, pos - len(since) + 1, since[:-1])
+                        if deltas is not None and reader.timestamps_format == "relative":
+                            if not deltas.active:
+                                deltas.active = True
+                                self.notes.append(
+                                    f"{path}: note: the header says 'timestamps relative': each line's time is the "
+                                    "time since the previous event (Vector ASC); accumulated into times since the "
+                                    "start of the trigger block")
+                            msg.timestamp = reader.start_time + deltas.add(since) * 1e-9
                         since.clear()
                         why = check(msg, lines.last, reader)
                         if why is not None:
@@ -745,6 +795,8 @@ class LogSource:
                     bad = lines.lineno
                     since = lines.since
                     self._dropped(lines, bad - len(since) + 1, since[:-1])
+                    if deltas is not None and deltas.active:
+                        deltas.add(since)  # an unreadable event line still takes its time
                     since.clear()
                     if bad == last_fail:  # no progress: give up rather than loop
                         self.notes.append(f"{path}:{bad}: cannot continue after this line: {exc}")
@@ -878,6 +930,71 @@ def iter_log_messages(path, problems: list[str]):
     problems += [f"{src.where(p)}: rejected: {r}" for p, r in sorted(src.rejected)] + src.notes
 
 
+# --------------------------------------------------------------------------- what a file looks like
+_LOOKS_CANDUMP_L = re.compile(r"\s*\((\d+)(?:\.\d*)?\)\s+\S+\s+[0-9A-Fa-f]{3,8}#")
+_LOOKS_CANDUMP_TA = re.compile(r"\s*\(\d+(?:\.\d*)?\)\s+\S+\s+[0-9A-Fa-f]{3,8}\s+\[\d+\]")
+_LOOKS_CANDUMP_PLAIN = re.compile(r"\s*[A-Za-z]\w*\s+[0-9A-Fa-f]{3,8}\s+\[\d+\]")
+_LOOKS_ASC = re.compile(r"\s*(?:date\s|base\s+(?:hex|dec)\b|begin\s+triggerblock\b|"
+                        r"\d+\.\d+\s+\d+\s+[0-9A-Fa-f]+x?\s+(?:Rx|Tx)\b)", re.IGNORECASE)
+_LOOKS_TRC = re.compile(r"\s*;\s*\$FILEVERSION\b|\s*\d+\)\s+\d+\.\d+\s+(?:Rx|Tx|DT)\b")
+_FORMAT_NAMES = {".log": "a candump log", ".asc": "an ASC file", ".trc": "a TRC file"}
+
+
+def format_hint(path, *, lines: int = 40) -> str | None:
+    """What a text log whose lines were all rejected looks like, and what is expected instead.
+
+    Reads at most the first 64 KiB (``lines`` non-blank lines) of ``path``. Recognises a candump
+    ``-L`` log (``(seconds) can0 123#DATA``; times in milliseconds or microseconds named), candump's
+    ``-ta`` output (``(seconds)  can0  123   [8]  DE AD ...``) and its default output (no time), an
+    ASC and a TRC file. Returns a sentence: a file whose content is another format than its suffix
+    says is told to be renamed; None when nothing is recognised or the suffix is ``.blf`` (binary).
+
+    Raises: nothing (an unreadable file gives None).
+    """
+    path = Path(path)
+    suffix = path.suffix.lower()
+    if suffix == ".blf":
+        return None
+    try:
+        with open(path, "rb") as f:
+            head = f.read(65536).decode("utf-8", errors="replace")
+    except OSError:
+        return None
+    text = [ln for ln in head.splitlines()[:-1] or head.splitlines() if ln.strip()][:lines]
+    if not text:
+        return None
+
+    def share(pattern) -> float:
+        return sum(1 for ln in text if pattern.match(ln)) / len(text)
+
+    def rename(to: str) -> str:
+        return f"It looks like {_FORMAT_NAMES[to]}: rename it to {path.stem}{to}"
+
+    expected = "wheelsoil reads candump -L lines '(1700000000.123456) can0 123#DEADBEEF' (candump -l or -L)"
+    if share(_LOOKS_CANDUMP_L) >= 0.5:
+        secs = [int(m.group(1)) for m in map(_LOOKS_CANDUMP_L.match, text) if m]
+        big = sorted(secs)[len(secs) // 2]
+        if suffix != ".log":
+            return rename(".log")
+        for unit, scale in (("microseconds", 1e6), ("milliseconds", 1e3)):
+            if big > 1e10 and 1e8 <= big / scale < 1e10:
+                return (f"Its timestamps look like {unit} since 1970 ({big} is {big / scale:.0f} s): candump -L "
+                        f"writes seconds with a decimal point, '(1700000000.123456)'; convert the times to "
+                        "seconds (divide by " + ("1000000" if scale == 1e6 else "1000") + ")")
+        return None
+    if share(_LOOKS_CANDUMP_TA) >= 0.5:
+        return ("It looks like candump's -ta output (data as spaced bytes after '[DLC]'), not a candump -L log; "
+                + expected + "; re-log with 'candump -L' or convert each line")
+    if share(_LOOKS_CANDUMP_PLAIN) >= 0.5:
+        return ("It looks like candump's default screen output, which has no timestamps: it cannot be imported; "
+                + expected)
+    if share(_LOOKS_ASC) >= 0.3:
+        return rename(".asc") if suffix != ".asc" else None
+    if share(_LOOKS_TRC) >= 0.3:
+        return rename(".trc") if suffix != ".trc" else None
+    return None
+
+
 # --------------------------------------------------------------------------- import
 def _pending_flush(w_get, bus, msgs, poss, text, rejected):
     """Check and write one bus's pending messages; rejected ones go to ``rejected`` as (pos, reason)."""
@@ -930,8 +1047,8 @@ def import_log(inputs, output, *, channel_map: Mapping[str, str] | None = None, 
         ``wheelsoil.import`` metadata as a dict).
 
     Raises:
-        ValueError: unknown format; output is an input; an input without a
-            single valid frame (empty, garbage, unreadable; names the file and
+        ValueError: unknown format; output is an input; an input given twice
+            (same path or same SHA-256); an input without a single valid frame (empty, garbage, unreadable; names the file and
             the first rejected lines) - nothing is written then.
         FileExistsError: ``output`` exists and ``overwrite`` is False.
         OSError: unreadable input / unwritable output.
@@ -952,6 +1069,12 @@ def import_log(inputs, output, *, channel_map: Mapping[str, str] | None = None, 
     cmap = dict(channel_map or {})
     config = load_vehicle_config() if config is None else config
     sources = [{"path": os.path.abspath(p), "sha256": file_sha256(p), "size_bytes": p.stat().st_size} for p in inputs]
+    for i, (p, s) in enumerate(zip(inputs, sources)):
+        for q, t in zip(inputs[:i], sources[:i]):
+            if _same_file(p, q) or s["sha256"] == t["sha256"]:
+                how = "the same file" if _same_file(p, q) else f"the same bytes as {q} (sha256 {s['sha256'][:16]}...)"
+                raise ValueError(f"{p}: given twice ({how}): its frames would be imported twice; give each log "
+                                 f"once (nothing written to {out})")
     prov = make_provenance("imported", sources=sources)
     res = ConvertResult(out)
     names: dict[object, str] = {}
@@ -972,6 +1095,7 @@ def import_log(inputs, output, *, channel_map: Mapping[str, str] | None = None, 
 
     files_rec = []
     last_ns = None
+    channels_seen: set[str] = set()  # the inputs' channels, as python-can gives them and as bus names
     try:
         for p in inputs:
             src = LogSource(p)
@@ -1000,6 +1124,7 @@ def import_log(inputs, output, *, channel_map: Mapping[str, str] | None = None, 
                         dflt = default_bus_name(raw)
                         bus = cmap.get(str(ch), cmap.get(dflt, dflt))
                         names[(trc, ch)] = bus
+                        channels_seen.update((str(ch), dflt))
                     entry = by_channel[ch] = pending.setdefault(bus, (bus, [], []))
                 msgs = entry[1]
                 msgs.append(msg)
@@ -1024,9 +1149,10 @@ def import_log(inputs, output, *, channel_map: Mapping[str, str] | None = None, 
             if good == 0:
                 what = (f"{len(rejected)} {src.unit}(s) rejected, first: " + "; ".join(listed[:3])) if rejected \
                     else "empty"
+                hint = format_hint(p)
                 raise ValueError(f"{p}: no valid CAN frame in this {src.suffix} file ({what}"
                                  + (f"; {'; '.join(src.notes)}" if src.notes else "")
-                                 + f"); nothing written to {out}")
+                                 + f"); nothing written to {out}" + (f". {hint}" if hint else ""))
             probs = listed
             if len(rejected) > MAX_LISTED:
                 probs.append(f"{p}: {len(rejected)} invalid {src.unit}s rejected in all (first at "
@@ -1043,6 +1169,14 @@ def import_log(inputs, output, *, channel_map: Mapping[str, str] | None = None, 
                               "unit": src.unit,
                               "first_rejected": [{src.unit: pos, "reason": why} for pos, why in rejected[:MAX_LISTED]],
                               "truncated": src.truncated, "notes": src.notes})
+        unused = [k for k in cmap if k not in channels_seen]
+        if unused:
+            has = ", ".join(sorted({default_bus_name(c) for c in channels_seen}))
+            for k in unused:
+                msg = (f"--map {k}={cmap[k]}: {k} is no bus or channel of the input (it has {has}); "
+                       f"nothing was mapped to {cmap[k]}")
+                warnings.warn(msg, RuntimeWarning, stacklevel=2)
+                res.warnings.append(msg)
         w = writer()
         res.record = {"frames": sum(f["frames"] for f in files_rec), "rejected": res.skipped,
                       "truncated": bool(res.truncated), "files": files_rec}

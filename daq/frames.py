@@ -326,3 +326,75 @@ def _flags_of(msgs) -> np.ndarray:
     if not all(rx):
         fl[~np.array(rx, bool)] |= FLAG_TX
     return fl
+
+
+class DuplicateFrames:
+    """Drops exact copies of frames: the same bus, timestamp, identifier, flags, DLC and data.
+
+    A frame logged twice (a logger reading one interface twice, a bridge that
+    echoes, two recordings merged) is one frame on the bus; kept twice it reads
+    as frames arriving at half the cycle time and as repeated counter values.
+    Call the instance on each batch in file order; it returns the batch without
+    the copies of an earlier frame (the first one is kept) and counts them per
+    bus in ``dropped``. Copies are found within a batch and against the last
+    :attr:`CARRY` frames of the bus's previous batch (copies logged next to
+    each other, as a doubled log has them, across a batch boundary too).
+    Batches without two frames at the same timestamp cost one sort.
+    """
+
+    #: Frames of a bus's previous batch a copy in the next batch is looked for in.
+    CARRY = 64
+
+    def __init__(self):
+        self.dropped: dict[str, int] = {}
+        self._tail: dict[str, FrameBatch] = {}
+
+    @property
+    def total(self) -> int:
+        """Copies dropped over all buses."""
+        return int(sum(self.dropped.values()))
+
+    def __call__(self, b: FrameBatch) -> FrameBatch:
+        """``b`` without exact copies of earlier frames (``b`` itself when it has none)."""
+        n = len(b)
+        if n == 0:
+            return b
+        tail = self._tail.get(b.bus)
+        both = b if tail is None or len(tail) == 0 else FrameBatch.concat([tail, b], b.bus)
+        k = len(both) - n
+        self._tail[b.bus] = b.select(slice(max(n - self.CARRY, 0), n))
+        dup = _duplicate_mask(both)
+        if dup is None or not dup[k:].any():
+            return b
+        dup = dup[k:]
+        self.dropped[b.bus] = self.dropped.get(b.bus, 0) + int(dup.sum())
+        return b.select(~dup)
+
+
+def _duplicate_mask(b: FrameBatch) -> np.ndarray | None:
+    """bool (N,): frame i is an exact copy of an earlier frame of ``b`` (None: no two frames share a timestamp)."""
+    ts = b.timestamp_ns
+    order = np.argsort(ts, kind="stable")
+    same = ts[order[1:]] == ts[order[:-1]]
+    if not same.any():
+        return None
+    cand = np.zeros(len(b), bool)
+    cand[order[1:][same]] = True
+    cand[order[:-1][same]] = True
+    idx = np.flatnonzero(cand)
+    key = np.concatenate([ts[idx].astype("<i8").view(np.uint8).reshape(-1, 8),
+                          b.arbitration_id[idx].astype("<u4").view(np.uint8).reshape(-1, 4),
+                          b.flags[idx, None], b.dlc[idx, None], b.data[idx]], axis=1)
+    key = np.ascontiguousarray(key).view(np.dtype((np.void, key.shape[1]))).ravel()
+    _, first = np.unique(key, return_index=True)
+    dup = cand
+    dup[idx[first]] = False
+    return dup
+
+
+def duplicate_frames_warning(path, dropped: dict) -> str:
+    """The warning for the copies :class:`DuplicateFrames` dropped (``dropped``: bus -> count)."""
+    n = int(sum(dropped.values()))
+    per = ", ".join(f"{bus}: {k}" for bus, k in sorted(dropped.items()) if k)
+    return (f"{path}: frames logged twice: {n} dropped ({per}; exact copies of a frame: same bus, id, flags, "
+            "data and timestamp), the first of each kept")

@@ -7,6 +7,7 @@ import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from .frames import DuplicateFrames, duplicate_frames_warning
 from .provenance import PROVENANCE_RECORD, provenance_from_metadata
 from .recording import ReadReport, _iter_records
 from .stats import FrameStats, StatsAccumulator, TimeBaseAccumulator
@@ -35,6 +36,9 @@ class RecordingInfo:
             <wheelsoil.daq.stats.TimeBaseAccumulator.result>`): true first/last
             time, outlier timestamps (count, examples), backward steps per bus.
         footer: the MCAP footer was read (the writer closed the file).
+        duplicates: bus -> exact copies of frames (same id, flags, data and timestamp: logged twice)
+            dropped before counting (:class:`~wheelsoil.daq.frames.DuplicateFrames`); ``stats`` does
+            not count them.
     """
 
     path: Path
@@ -51,6 +55,7 @@ class RecordingInfo:
     damage: list = field(default_factory=list)
     time: dict = field(default_factory=dict)
     footer: bool = False
+    duplicates: dict = field(default_factory=dict)
 
     @property
     def buses(self) -> list[str]:
@@ -130,6 +135,7 @@ class RecordingInfo:
                 "dlc_mismatch": ids(s.dlc_mismatch.get(bus, {}), bus),
                 "rx_dropped": self.rx_dropped().get(bus),
             } for bus in self.buses},
+            "duplicate_frames": dict(self.duplicates),
             "lost_frames": s.lost_frames, "counter_duplicates": s.counter_duplicates,
             "lost_frames_estimated": s.lost_frames_estimated, "long_gaps": s.long_gaps,
             "logger_status": self.status,
@@ -272,18 +278,23 @@ def read_recording_info(path, *, config=None) -> RecordingInfo:
     source = "given"
     acc = StatsAccumulator(config) if config is not None else None
     tb = TimeBaseAccumulator()
+    copies = DuplicateFrames()  # counted as processing counts them: dropped
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
         for b in _iter_records(path, state, recover=True, with_status=True):
             if acc is None:  # attachments precede the frames in our files
                 config, source = _recording_config(path, state)
                 acc = StatsAccumulator(config)
+            b = copies(b)
             acc.update(b)
             tb.update(b)
         if acc is None:
             config, source = _recording_config(path, state)
             acc = StatsAccumulator(config)
     time_base = tb.result()
+    if copies.total:
+        state.warnings.append(duplicate_frames_warning(path, copies.dropped)
+                              + "; not counted in the frames and losses below")
     n_out = time_base["outliers"]["frames"]
     if n_out:
         ex = ", ".join(f"{e['bus']} frame {e['frame']} at {_fmt_ns(e['t_ns'])}"
@@ -301,7 +312,7 @@ def read_recording_info(path, *, config=None) -> RecordingInfo:
         metadata=state.metadata, attachments=sorted(state.attachments),
         channels=[dict(v, id=k) for k, v in sorted(state.channels.items())], stats=acc.stats,
         status=state.statuses[-1] if state.statuses else None, config_source=source,
-        damage=list(state.damage), time=time_base, footer=state.footer)
+        damage=list(state.damage), time=time_base, footer=state.footer, duplicates=dict(copies.dropped))
 
 
 def _fmt_ns(t: int) -> str:

@@ -964,8 +964,12 @@ def _process_log(path: Path, *, config, rate_hz, cutoff_hz, progress, wheel_radi
         with _w.catch_warnings():
             _w.simplefilter("ignore", RuntimeWarning)  # listed in conv.warnings
             conv = import_log(path, mcap, config=cfg)
-        res = process_recording(mcap, config=cfg, rate_hz=rate_hz, cutoff_hz=cutoff_hz, progress=progress,
-                                wheel_radius_m=wheel_radius_m, inertia=inertia, **wheel)
+        try:
+            res = process_recording(mcap, config=cfg, rate_hz=rate_hz, cutoff_hz=cutoff_hz, progress=progress,
+                                    wheel_radius_m=wheel_radius_m, inertia=inertia, **wheel)
+        except ValueError as exc:  # name the log, not the temporary recording
+            raise ValueError(str(exc).replace(str(mcap), str(path))) from None
+    res.warnings[:] = [w.replace(str(mcap), str(path)) for w in res.warnings]
     res.warnings[:0] = [f"{path}: imported {sum(conv.frames.values())} frames "
                         f"({', '.join(f'{b}: {n}' for b, n in conv.frames.items())})"] + list(conv.warnings)
     return res
@@ -1010,6 +1014,7 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
     speed, no WFT, lost frames) are reported in ``warnings`` instead.
     """
     from wheelsoil.daq import iter_frame_batches
+    from wheelsoil.daq.frames import DuplicateFrames, duplicate_frames_warning
 
     path = Path(path)
     if not 0 < rate_hz <= MAX_RATE_HZ:
@@ -1080,6 +1085,7 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
     span = [None, None]
     n_frames = [0]
     buses_seen: dict[str, int] = {}
+    ids_seen: dict[str, set] = {}  # bus -> identifiers (| 1 << 31 for 29-bit ones) with frames
 
     # the reader's damage report (byte offset, frames lost, time span), where the daq
     # reader offers one (wheelsoil.daq.recording.ReadReport)
@@ -1091,6 +1097,8 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
     except ImportError:
         pass
 
+    copies = DuplicateFrames()  # a frame logged twice is one frame: counted, dropped
+
     def batches():
         it = iter_frame_batches(path) if read_report is None else iter_frame_batches(path, report=read_report)
         bar = None
@@ -1099,12 +1107,15 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
             bar = tqdm(unit=" frames", unit_scale=True, desc=f"decode {path.name}")
         try:
             for b in it:
+                b = copies(b)
                 if len(b):
                     lo, hi = int(b.timestamp_ns.min()), int(b.timestamp_ns.max())
                     span[0] = lo if span[0] is None else min(span[0], lo)
                     span[1] = hi if span[1] is None else max(span[1], hi)
                     n_frames[0] += len(b)
                     buses_seen[b.bus] = buses_seen.get(b.bus, 0) + len(b)
+                    ids_seen.setdefault(b.bus, set()).update(
+                        np.unique(b.arbitration_id.astype(np.int64) | (b.is_extended.astype(np.int64) << 31)).tolist())
                     if bar is not None:
                         bar.update(len(b))
                 yield screen(b)
@@ -1121,10 +1132,16 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
     warns += [str(c.message) for c in caught
               if issubclass(c.category, RuntimeWarning)
               and (str(path) in str(c.message) or path.name in str(c.message))]
+    if copies.total:
+        warns.append(duplicate_frames_warning(path, copies.dropped))
     if span[0] is None:
         raise ValueError(f"{path}: the recording holds no CAN frames" + _foreign_channels(read_report)
                          + "".join(f"; {w}" for w in warns))
     warns += screen.warnings(found={m.name for m in dec.values() if len(m)})
+    mixed_up = bus_mix_up(cfg, select, {m.name for m in dec.values() if len(m)}, ids_seen, path,
+                          _imported_from(read_report))
+    if mixed_up:
+        warns.append(mixed_up)
 
     def get(key_or_ref, measured: bool = False) -> tuple[np.ndarray, np.ndarray] | None:
         """(timestamps, SI values) of a configured signal; ``measured``: values at the DBC's range
@@ -1149,7 +1166,8 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
         looked = ", ".join(sorted({f"{sig[k].message} on {sig[k].bus}" for k in refs}))
         seen = ", ".join(f"{b}: {n}" for b, n in buses_seen.items())
         raise ValueError(f"{path}: none of the configured messages found in {n_frames[0]} frames ({seen}) "
-                         f"(looked for {looked}); wrong vehicle configuration or bus names?"
+                         f"(looked for {looked}); "
+                         + (mixed_up or "wrong vehicle configuration or bus names?")
                          + "".join(f"; {w}" for w in screen.warnings(found=set())))
 
     # ---- 1b. time base: outlier timestamps set aside, joined parts sorted ------------------
@@ -1718,6 +1736,50 @@ class _FrameScreen:
                            f"{dbc}-bit (a logger that marks every id extended?): not decoded; re-log with the "
                            "DBC's identifier format or give a DBC with the logged one")
         return out
+
+
+def _imported_from(report) -> list[str]:
+    """The log files an imported recording was made from (its provenance record), [] if unknown."""
+    from wheelsoil.daq.provenance import PROVENANCE_RECORD, provenance_from_metadata
+
+    try:
+        prov = provenance_from_metadata((getattr(report, "metadata", None) or {}).get(PROVENANCE_RECORD)) or {}
+    except Exception:  # noqa: BLE001 - only a hint depends on it
+        return []
+    if prov.get("kind") != "imported":
+        return []
+    return [str(s["path"]) for s in prov.get("sources") or [] if isinstance(s, dict) and s.get("path")]
+
+
+def bus_mix_up(cfg, select, found: set, ids_seen: dict, path, sources=()) -> str | None:
+    """The text saying which bus the configured messages of a bus are on, when they are on another one.
+
+    For each configured bus none of whose messages processing reads (``select``: message name ->
+    signals) decoded a frame (``found``: names that did), the other bus of the recording with the most
+    of those messages' identifiers (``ids_seen``: bus -> set of ids with frames, ``| 1 << 31`` for
+    29-bit ids) is named, with the ``wheelsoil import ... --map SRC=BUS`` to use (swapped can0/can1,
+    ``vcan0``/``slcan0`` names) on ``sources`` (the logs the recording ``path`` was imported from; none
+    known: ``LOG``, with how to export one). None when no such bus is found.
+    """
+    moves, parts = {}, []
+    for bus in cfg.buses:
+        msgs = [m for m in cfg.database(bus).messages if m.name in select]
+        if not msgs or any(m.name in found for m in msgs):
+            continue
+        want = {int(m.frame_id) | (int(bool(m.is_extended_frame)) << 31) for m in msgs}
+        hits = sorted(((len(want & ids), src) for src, ids in ids_seen.items() if src != bus), reverse=True)
+        if hits and hits[0][0]:
+            k, src = hits[0]
+            moves[src] = bus
+            parts.append(f"the messages configured on {bus} ({', '.join(sorted(m.name for m in msgs))}) are "
+                         f"not on {bus} but on {src} ({k} of their {len(want)} ids)")
+    if not moves:
+        return None
+    maps = " ".join(f"--map {src}={bus}" for src, bus in moves.items())
+    how = f"wheelsoil import {' '.join(sources) or 'LOG'} -o NEW.mcap {maps}"
+    if not sources:
+        how += f" (LOG: the log the recording was made from, or 'wheelsoil export {path} -o LOG.log' first)"
+    return f"BUS NAMES MIXED UP: {'; '.join(parts)}: import the log with the bus names of the configuration: {how}"
 
 
 def _foreign_channels(report) -> str:

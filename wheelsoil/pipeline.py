@@ -886,8 +886,9 @@ def run_fit(
     except LabTerrainBuriesWheel as exc:  # a verdict (Wong errs, unexplained), not an error of the input
         return _failure_report(out, inputs, ter, wheel, slip_min, str(exc), provenance=prov, effect="unexplained")
     except ValueError as exc:
-        _failure_report(out, inputs, ter, wheel, slip_min, str(exc), provenance=prov)
-        raise ValueError(f"{exc} (a report saying so was written to {out / 'report.html'})") from None
+        error = str(exc) + _why_no_valid_row(inputs, info["results"])
+        _failure_report(out, inputs, ter, wheel, slip_min, error, provenance=prov)
+        raise ValueError(f"{error} (a report saying so was written to {out / 'report.html'})") from None
     _cap_for_time_base(diag, info)
     prov["settings"]["sinkage_law"] = dict(diag.sinkage_law)
     prov["settings"]["hypotheses_tried"] = list(getattr(diag, "tried", None) or diag.fits)
@@ -896,12 +897,24 @@ def run_fit(
     notes = list(info["notes"])
     assumed = [w for w, given, stated in (("radius", wheel_radius, info["wheel_radius_m"]),
                                           ("width", wheel_width, info["wheel_width_m"])) if given is None and stated is None]
+    from wheelsoil.processing.pipeline import LOG_SUFFIXES
+
     if assumed and not recording:
         notes.append(f"WHEEL GEOMETRY ASSUMED: no {' or '.join(assumed)} given (command line, the table's "
                      f"wheel_radius_m/wheel_width_m columns or a sidecar {Path(inputs[0]).stem}.json); the fit uses "
                      f"the vehicle's default wheel r = {wheel.radius} m, b = {wheel.width} m (hardware.md). "
                      "Data from another wheel need --wheel-radius and --wheel-width: the model's forces and "
                      "sinkage scale with both, and slip (Eq. 6) was computed with the radius.")
+    elif recording and (wheel_radius is None or wheel_width is None) and any(
+            Path(p).suffix.lower() in LOG_SUFFIXES for p in inputs):  # CAN logs: no attached configuration
+        logs = [Path(p).name for p in inputs if Path(p).suffix.lower() in LOG_SUFFIXES]
+        missing = [w for w, given in (("radius", wheel_radius), ("width", wheel_width)) if given is None]
+        notes.append(f"WHEEL GEOMETRY ASSUMED: {', '.join(logs)}: a CAN log carries no vehicle configuration and "
+                     f"no {' or '.join(missing)} was given; the fit uses the shipped vehicle configuration's wheel "
+                     f"r = {wheel.radius} m, b = {wheel.width} m (dbc/vehicle.toml). Data from another wheel need "
+                     "--wheel-radius and --wheel-width (or 'wheelsoil import LOG --vehicle TOML' and a fit of the "
+                     "recording): the model's forces and sinkage scale with both, and slip (Eq. 6) is computed "
+                     "with the radius.")
     elif wheel_radius is None or wheel_width is None:
         notes.append(f"wheel radius {wheel.radius} m, width {wheel.width} m from "
                      + ("the vehicle configuration" if recording else info["table_wheel_source"])
@@ -916,6 +929,31 @@ def run_fit(
         details.append(d)
     return write_report(diag, out, terrain=ter, wheel=wheel, inputs=inputs, time_sync=ts,
                         extra_notes=notes, progress=progress, provenance=prov, input_details=details)
+
+
+#: Processing warnings of an input without a valid sample repeated in fit's error.
+WHY_INVALID_LISTED = 4
+_IMPORTED_NOTE = re.compile(r"^\S.*: imported \d+ frames \(")
+
+
+def _why_no_valid_row(inputs, results) -> str:
+    """What processing said about each recording input none of whose samples is valid (column ``valid``),
+    as text to append to the fit's error: ``"; processing NAME said: W1; W2 (and N more: wheelsoil
+    process NAME)"``, the first :data:`WHY_INVALID_LISTED` warnings (the "imported N frames" line of a
+    log left out); "" when every recording has a valid sample. ``results``: per input the
+    :class:`~wheelsoil.processing.ProcessResult`, None for a table."""
+    out = []
+    for path, res in zip(inputs, results):
+        if res is None or "valid" not in res.signals or bool(res.signals["valid"].any()):
+            continue
+        name = Path(path).name
+        ws = [w for w in res.warnings if not _IMPORTED_NOTE.match(w)]
+        if not ws:
+            continue
+        more = len(ws) - WHY_INVALID_LISTED
+        out.append(f"; processing {name} said: " + "; ".join(ws[:WHY_INVALID_LISTED])
+                   + (f" (and {more} more: wheelsoil process {path})" if more > 0 else ""))
+    return "".join(out)
 
 
 def _cap_for_time_base(diag, info) -> None:

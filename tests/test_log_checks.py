@@ -1,0 +1,254 @@
+"""Odd CAN logs given to import / info / process / fit: relative ASC times, frames logged twice,
+an input given twice, why a fit has no valid row, the assumed wheel of a log, bus names, format hints."""
+
+import json
+import re
+import warnings
+
+import can
+import numpy as np
+import pytest
+from daq_helpers import cli, random_messages
+
+from wheelsoil.daq import read_frames, read_recording_info
+from wheelsoil.daq.convert import import_log
+
+
+def _import(src, out, **kw):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        return import_log(src, out, **kw)
+
+
+# --------------------------------------------------------------------------- 1. ASC "timestamps relative"
+def _asc_absolute(path, msgs):
+    with can.ASCWriter(str(path)) as w:
+        for m in msgs:
+            w.on_message_received(m)
+
+
+def _asc_to_relative(src, dst, event_after: int = 5):
+    """Rewrite an absolute ASC file (python-can's ASCWriter) with each event's time since the previous
+    event (Vector's 'timestamps relative'), with a status event line inserted after frame ``event_after``."""
+    out, prev, n = [], 0.0, 0
+    time_re = re.compile(r"^(\s*)(\d+\.\d+)(\s.*)$", re.S)
+    for line in open(src):
+        if line.startswith("base hex"):
+            out.append("base hex  timestamps relative\n")
+            continue
+        m = time_re.match(line)
+        if m is None:
+            out.append(line)
+            continue
+        t = float(m.group(2))
+        if n == event_after:  # an event that is no frame, half-way to the next frame, takes part of the delta
+            half = round((t - prev) / 2, 6)
+            out.append(f"{m.group(1)}{half:.6f} 1 Statistic: D 0 R 0 XD 0 XR 0 E 0 O 0 B 0.00%\n")
+            prev += half
+        out.append(f"{m.group(1)}{t - prev:.6f}{m.group(3)}")
+        prev, n = t, n + 1
+    dst.write_text("".join(out))
+
+
+def test_asc_with_relative_timestamps_imports_the_same_frame_times_as_absolute(tmp_path):
+    msgs = random_messages(300, seed=3, channel=0, remote=False) \
+        + random_messages(200, seed=4, channel=1, remote=False, t0=1_700_000_000.0004)
+    msgs.sort(key=lambda m: m.timestamp)
+    a, r = tmp_path / "abs.asc", tmp_path / "rel.asc"
+    _asc_absolute(a, msgs)
+    _asc_to_relative(a, r)
+    assert "timestamps relative" in r.read_text()
+    ra, rr = _import(a, tmp_path / "a.mcap"), _import(r, tmp_path / "r.mcap")
+    assert ra.frames == rr.frames == {"can0": 300, "can1": 200}
+    fa, fr = read_frames(tmp_path / "a.mcap"), read_frames(tmp_path / "r.mcap")
+    for bus in ("can0", "can1"):
+        np.testing.assert_array_equal(fa[bus].arbitration_id, fr[bus].arbitration_id)
+        np.testing.assert_array_equal(fa[bus].data, fr[bus].data)
+        # the same times to the microsecond (the run spans ~0.5 s, not the last delta's ~1 ms)
+        assert np.abs(fa[bus].timestamp_ns - fr[bus].timestamp_ns).max() <= 1000
+    span = (fr["can0"].timestamp_ns[-1] - fr["can0"].timestamp_ns[0]) * 1e-9
+    assert span > 0.25
+    # said, in the warnings and the import record
+    assert any("timestamps relative" in w for w in rr.warnings)
+    files = json.loads(read_recording_info(tmp_path / "r.mcap").metadata["wheelsoil.import"]["files"])
+    assert any("timestamps relative" in n for n in files[0]["notes"])
+    assert not any("timestamps relative" in w for w in ra.warnings)
+
+
+# --------------------------------------------------------------------------- 2. frames logged twice
+@pytest.fixture(scope="module")
+def sim_log(tmp_path_factory):
+    """A small simulated run (processing_sim) exported as a candump log."""
+    import sys
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    from processing_sim import truth_profile, write_recording
+
+    from wheelsoil.daq.convert import export_recording
+
+    d = tmp_path_factory.mktemp("sim")
+    info = write_recording(d / "run.mcap", truth_profile(2))
+    export_recording(info["path"], d / "run.log")
+    return d / "run.log"
+
+
+def test_frames_logged_twice_are_dropped_counted_and_named(sim_log, tmp_path):
+    from wheelsoil.daq.cli import format_info
+    from wheelsoil.processing import process_recording
+
+    lines = sim_log.read_text().splitlines(keepends=True)
+    doubled = tmp_path / "doubled.log"
+    doubled.write_text("".join(x for line in lines for x in (line, line)))
+    rec = tmp_path / "doubled.mcap"
+    _import(doubled, rec)
+    info = read_recording_info(rec)
+    assert sum(info.duplicates.values()) == len(lines)
+    assert sum(info.stats.frames.values()) == len(lines)  # counted once
+    assert info.stats.total("counter_duplicates") == 0
+    assert any(f"frames logged twice: {len(lines)} dropped" in w for w in info.warnings)
+    assert f"frames logged twice: {len(lines)} dropped" in format_info(info)
+    assert info.to_dict()["duplicate_frames"] == info.duplicates
+
+    once, twice = process_recording(sim_log), process_recording(doubled)
+    assert any(f"frames logged twice: {len(lines)} dropped" in w for w in twice.warnings)
+    assert not any("logged twice" in w for w in once.warnings)
+    assert not any("nominal cycle time is wrong" in w for w in twice.warnings)
+    assert once.signals.equals(twice.signals)
+    assert once.gnss_latency_s is not None and once.gnss_latency_s == twice.gnss_latency_s
+
+
+def test_duplicate_filter_keeps_frames_that_differ_and_copies_across_batches():
+    from wheelsoil.daq.frames import DuplicateFrames, FrameBatch
+
+    ts = np.array([10, 10, 10, 20, 20], np.int64)
+    ids = np.array([0x120, 0x121, 0x120, 0x120, 0x120], np.uint32)
+    data = np.zeros((5, 8), np.uint8)
+    data[4, 0] = 1  # same id and time, other data: a different frame
+    flt = DuplicateFrames()
+    out = flt(FrameBatch.from_columns("can0", ts, ids, np.zeros(5), np.full(5, 8), data))
+    assert out.timestamp_ns.tolist() == [10, 10, 20, 20] and flt.dropped == {"can0": 1}
+    # the copy of the last frame at the start of the next batch; another bus is not compared
+    nxt = FrameBatch.from_columns("can0", [20, 30], [0x120, 0x120], [0, 0], [8, 8], data[[4, 0]])
+    assert flt(nxt).timestamp_ns.tolist() == [30] and flt.dropped == {"can0": 2}
+    other = FrameBatch.from_columns("can1", [20], [0x120], [0], [8], data[[4]])
+    assert len(flt(other)) == 1 and flt.total == 2
+
+
+def test_an_input_given_twice_is_refused_naming_it(tmp_path):
+    msgs = random_messages(50, seed=1, channel="can0")
+    src = tmp_path / "a.log"
+    with can.CanutilsLogWriter(str(src)) as w:
+        for m in msgs:
+            w.on_message_received(m)
+    copy = tmp_path / "copy.log"
+    copy.write_bytes(src.read_bytes())
+    for second, what in ((tmp_path / "." / "a.log", "the same file"), (copy, "the same bytes")):
+        with pytest.raises(ValueError, match=r"given twice \(" + what):
+            _import([src, second], tmp_path / "x.mcap")
+        assert not (tmp_path / "x.mcap").exists()
+    assert cli("import", src, src, "-o", tmp_path / "y.mcap") != 0
+    assert not (tmp_path / "y.mcap").exists()
+
+
+# --------------------------------------------------------------------------- 3. why a fit has no valid row
+def test_fit_without_a_valid_row_repeats_what_processing_said(tmp_path):
+    import sys
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    from processing_sim import truth_profile, write_recording
+
+    from wheelsoil.pipeline import run_fit
+
+    rec = write_recording(tmp_path / "no_gnss.mcap", truth_profile(1), no_gnss=True)["path"]
+    with pytest.raises(ValueError) as err:
+        run_fit([rec], "clay", tmp_path / "rep", models=["lyasko"])
+    text = str(err.value)
+    assert "every row is marked invalid" in text
+    assert "processing no_gnss.mcap said: no GNSS velocity" in text
+    report = (tmp_path / "rep" / "report.html").read_text()
+    assert "no GNSS velocity" in report
+
+
+# --------------------------------------------------------------------------- 4. the wheel of a CAN log
+def test_fit_of_a_can_log_says_loudly_that_the_wheel_is_assumed(sim_log, tmp_path, capsys):
+    assert cli("fit", sim_log, "--terrain", "clay", "-o", tmp_path / "a", "--models", "lyasko", "-q") == 0
+    err = capsys.readouterr().err
+    assert "WHEEL GEOMETRY ASSUMED" in err and sim_log.name in err
+    notes = json.loads((tmp_path / "a" / "report.json").read_text())["notes"]
+    assert any(n.startswith("WHEEL GEOMETRY ASSUMED") for n in notes)
+    # the wheel given on the command line: nothing assumed
+    assert cli("fit", sim_log, "--terrain", "clay", "-o", tmp_path / "b", "--models", "lyasko", "-q",
+               "--wheel-radius", "0.47", "--wheel-width", "0.32") == 0
+    assert "WHEEL GEOMETRY ASSUMED" not in capsys.readouterr().err
+
+
+# --------------------------------------------------------------------------- 5. bus names
+def test_messages_on_other_bus_names_are_found_and_the_map_given(sim_log, tmp_path):
+    from wheelsoil.processing import process_recording
+
+    text = sim_log.read_text()
+    vcan = tmp_path / "vcan.log"
+    vcan.write_text(text.replace(") can0 ", ") vcan0 ").replace(") can1 ", ") vcan1 "))
+    with pytest.raises(ValueError) as err:
+        process_recording(vcan)
+    msg = str(err.value)
+    assert "not on can0 but on vcan0" in msg and "not on can1 but on vcan1" in msg
+    assert f"wheelsoil import {vcan} -o NEW.mcap --map vcan0=can0 --map vcan1=can1" in msg
+    # swapped: the imported recording names the log it came from
+    swapped = tmp_path / "swapped.log"
+    swapped.write_text(text.replace(") can0 ", ") canX ").replace(") can1 ", ") can0 ").replace(") canX ", ") can1 "))
+    rec = tmp_path / "swapped.mcap"
+    _import(swapped, rec)
+    with pytest.raises(ValueError, match=r"--map can1=can0 --map can0=can1"):
+        process_recording(rec)
+    # the map it gives works
+    fixed = tmp_path / "fixed.mcap"
+    _import(swapped, fixed, channel_map={"can1": "can0", "can0": "can1"})
+    assert process_recording(fixed).signals["valid"].any()
+
+
+def test_import_map_of_a_channel_the_input_does_not_have_is_a_warning(tmp_path):
+    src = tmp_path / "a.log"
+    with can.CanutilsLogWriter(str(src)) as w:
+        for m in random_messages(20, seed=2, channel="can1"):
+            w.on_message_received(m)
+    with pytest.warns(RuntimeWarning, match=r"--map X=can0: X is no bus or channel of the input \(it has can1\)"):
+        res = import_log(src, tmp_path / "a.mcap", channel_map={"X": "can0", "can1": "can1"})
+    assert res.frames == {"can1": 20}
+    assert not any("can1=can1" in w for w in res.warnings)
+
+
+# --------------------------------------------------------------------------- 6. what a refused file looks like
+LINES = [(1700000000.000100 + i * 1e-3, 0x120 + i % 3, "0102030405060708") for i in range(30)]
+
+
+@pytest.mark.parametrize("name, text, hint", [
+    ("ta.log", "".join(f"({t:.6f})  can0  {i:03X}   [8]  {' '.join(d[k:k + 2] for k in range(0, 16, 2))}\n"
+                       for t, i, d in LINES), "looks like candump's -ta output"),
+    ("plain.log", "".join(f"  can0  {i:03X}   [8]  01 02 03 04 05 06 07 08\n" for _, i, _ in LINES),
+     "has no timestamps"),
+    ("ms.log", "".join(f"({t * 1e3:.3f}) can0 {i:03X}#{d}\n" for t, i, d in LINES), "look like milliseconds"),
+    ("us.log", "".join(f"({round(t * 1e6)}) can0 {i:03X}#{d}\n" for t, i, d in LINES), "look like microseconds"),
+    ("cd.asc", "".join(f"({t:.6f}) can0 {i:03X}#{d}\n" for t, i, d in LINES),
+     "looks like a candump log: rename it to cd.log"),
+])
+def test_a_refused_text_log_says_what_it_looks_like(tmp_path, name, text, hint):
+    src = tmp_path / name
+    src.write_text(text)
+    with pytest.raises(ValueError, match="no valid CAN frame") as err:
+        _import(src, tmp_path / "x.mcap")
+    assert hint in str(err.value)
+    assert not (tmp_path / "x.mcap").exists()
+
+
+def test_an_asc_file_named_log_is_told_to_be_renamed(tmp_path):
+    asc = tmp_path / "a.asc"
+    _asc_absolute(asc, random_messages(30, seed=5, channel=0, remote=False))
+    wrong = tmp_path / "a.log"
+    wrong.write_text(asc.read_text())
+    with pytest.raises(ValueError, match=r"looks like an ASC file: rename it to a\.asc"):
+        _import(wrong, tmp_path / "x.mcap")
+    # a good file gets no hint, and a right suffix imports
+    assert _import(asc, tmp_path / "y.mcap").total == 30
