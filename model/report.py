@@ -97,12 +97,17 @@ FIG_ALWAYS = ("wong", *SLIP_SINKAGE_MODELS)
 
 def _figure_names(diag, names: list) -> list:
     """The models of ``names`` (:func:`_fit_names`) drawn in ``dp_vs_slip.png``, in that order:
-    :data:`FIG_ALWAYS`, the chosen model, the listed alternatives and every other fit with
-    posterior probability at least :data:`FIG_MIN_PROBABILITY` (the rest are in the models
-    table; one panel each for 34 hypotheses would be unreadable)."""
+    :data:`FIG_ALWAYS`, the chosen model, the listed alternatives, the fit with the lowest
+    out-of-sample drawbar-pull error (CV R0) and every other fit with posterior probability at
+    least :data:`FIG_MIN_PROBABILITY` (the rest are in the models table; one panel each for 34
+    hypotheses would be unreadable)."""
+    fits = getattr(diag, "fits", {}) or {}
     probs = {_canon(k): v for k, v in (getattr(diag, "probabilities", {}) or {}).items()}
-    keep = set(FIG_ALWAYS) | {_canon(k) for k in [getattr(diag, "model", None), *(getattr(diag, "alternatives", []) or [])]
-                              if k}
+    cv = {k: ((getattr(f, "cv", None) or {}).get("cv_R0") or {}).get("drawbar_pull_n") for k, f in fits.items()}
+    cv = {k: v for k, v in cv.items() if v is not None and np.isfinite(v)}
+    best_cv = [min(cv, key=cv.get)] if cv else []
+    keep = set(FIG_ALWAYS) | {_canon(k) for k in [getattr(diag, "model", None), *(getattr(diag, "alternatives", []) or []),
+                                                 *best_cv] if k}
     return [k for k in names if k in keep or probs.get(k, 0.0) >= FIG_MIN_PROBABILITY]
 
 

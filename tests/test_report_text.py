@@ -194,3 +194,9 @@ def test_dp_vs_slip_draws_the_paper_forms_the_verdict_and_probable_models_only()
     assert {"drift_c", "zero_drift", "terrain_c", "wong_reece"} <= set(names)  # chosen, alternative, probable
     assert "terrain_mismatch" not in names and "balance" not in names  # improbable, not listed
     assert names[0] == "wong"
+    # the model that predicts the drawbar pull best on new data is drawn however improbable (a five-value
+    # re-fit halving Wong's out-of-sample error was hidden behind six probable drifts no better than Wong)
+    fits = {k: SimpleNamespace(cv={"cv_R0": {"drawbar_pull_n": 150.0 if k == "terrain" else 330.0}}) for k in fits}
+    names = _figure_names(SimpleNamespace(fits=fits, probabilities=probs, model="drift_c", alternatives=[]),
+                          _fit_names(diag))
+    assert "terrain_mismatch" in names and "balance" not in names
