@@ -316,8 +316,8 @@ def prepare_data(df, *, slip_min: float = 0.1, source: str = "data", n_blocks: i
     ValueError
         (naming ``source``) for a missing column, an empty table, no rows left
         after the selection, only one distinct slip value (no slip
-        dependence can be fitted), slip in per cent (most finite slips above 1.5, or in a
-        table, no ``t_s``, any: slip is the fraction of Eq. 6, at most 1) or a sinkage deeper than the wheel's
+        dependence can be fitted), slip in per cent (most finite slips above 1.5, in a table, no
+        ``t_s``, in size: slip is the fraction of Eq. 6, at most 1) or a sinkage deeper than the wheel's
         diameter (millimetres in the ``sinkage_m`` column), or a table (no ``t_s``) of more than
         ``MAX_TABLE_ROWS`` used rows (each row is a test point the models are fitted to one by one),
         a median |Dp| / W above ``MAX_DP_OVER_W`` (a load in kN), or a table whose torque is negative
@@ -373,11 +373,12 @@ def prepare_data(df, *, slip_min: float = 0.1, source: str = "data", n_blocks: i
         raise ValueError(f"{source}: no row has finite slip, load_n and drawbar_pull_n ({_where(df, [0]) or 'row 0'}: "
                          f"{shown}); "
                          "give plain numbers with a decimal point, without units or per cent signs")
-    pct = np.flatnonzero(keep & (s > 1.5))
+    # a driven wheel's slip (Eq. 6) is at most 1: a column most of whose values lie beyond 1.5 is in per cent; a
+    # table's skid rows count by their size (-100 in per cent), so they do not hide it; a few rows beyond (a typo, a
+    # time series' transient) are excluded below with the slips of 1 and more
+    pct = np.flatnonzero(keep & ((np.abs(s) if "t_s" not in df.columns else s) > 1.5))
     n_pct = pct.size
-    # a driven wheel's slip (Eq. 6) is at most 1: a table (no t_s) with any slip above 1.5 is in per cent (its skid
-    # rows, negative, may be as many as the driving ones); a time series' transients may exceed it in a few samples
-    if n_pct > keep.sum() / 2 or (n_pct and "t_s" not in df.columns):
+    if n_pct > keep.sum() / 2:
         at = _where(df, pct)
         raise ValueError(f"{source}: the slip column looks like per cent ({n_pct} of {int(keep.sum())} values above "
                          f"1.5, median {np.median(s[keep]):.3g}, largest {np.max(s[keep]):.3g}"
@@ -396,7 +397,8 @@ def prepare_data(df, *, slip_min: float = 0.1, source: str = "data", n_blocks: i
     if low.any():
         notes.append(f"{int(low.sum())} row(s) with 0 < s <= slip_min = {slip_min:g} excluded (small Dp is dominated by measurement uncertainty, paper §3).")
     if high.any():
-        notes.append(f"{int(high.sum())} row(s) with s >= 1 excluded (slip must be < 1).")
+        notes.append(f"{int(high.sum())} row(s) with s >= 1 excluded (slip must be < 1"
+                     + (f"; {_where(df, np.flatnonzero(high))}" if "_line" in df.columns else "") + ").")
     if noload.any():
         notes.append(f"{int(noload.sum())} row(s) with load_n <= 0 excluded.")
     keep &= (s > slip_min) & (s < 1.0) & (w > 0)

@@ -110,7 +110,7 @@ def test_slip_in_per_cent_is_found_with_skid_rows_naming_the_lines(tmp_path):
     p = tmp_path / "cmu_pct.csv"
     src.assign(slip=100.0 * src["slip"]).to_csv(p, index=False)
     df, _ = load_inputs([p])
-    lines = 2 + np.flatnonzero(100.0 * src["slip"].to_numpy() > 1.5)
+    lines = 2 + np.flatnonzero(np.abs(100.0 * src["slip"].to_numpy()) > 1.5)
     with pytest.raises(ValueError, match=rf"cmu_pct\.csv: the slip column looks like per cent.*lines "
                                          rf"{', '.join(map(str, lines[:10]))} and {lines.size - 10} more"
                                          r".*divide it by 100"):
@@ -118,6 +118,15 @@ def test_slip_in_per_cent_is_found_with_skid_rows_naming_the_lines(tmp_path):
     # the table as shipped is read as before
     df, info = load_inputs([CMU_TABLES[0]])
     assert prepare_data(df, source=CMU_TABLES[0]).n == 12
+    # one typo (a slip of 35 in a table of fractions) is no per-cent column: that row is left out, its line named
+    typo = src.copy()
+    row = int(np.flatnonzero(src["slip"].to_numpy() > 0.2)[0])
+    typo.loc[row, "slip"] = 35.0
+    t = tmp_path / "typo.csv"
+    typo.to_csv(t, index=False)
+    df, _ = load_inputs([t])
+    fd = prepare_data(df, source=str(t))
+    assert fd.n == 11 and any(f"typo.csv line {row + 2}" in n and "s >= 1" in n for n in fd.notes)
 
 
 def test_channels_that_cannot_be_measurements(tmp_path):
