@@ -36,6 +36,7 @@ import base64
 import html
 import json
 import math
+import re
 import textwrap
 from pathlib import Path
 
@@ -60,6 +61,9 @@ REQUIRED_KEYS = ("schema", "input", "provenance", "terrain", "wheel", "samples_u
 TERRAIN_KEYS = ("k_eq", "n", "c", "phi", "K")
 MAX_POINTS = 4000  #: samples drawn per scatter panel (every k-th; file size, readability)
 CORRELATION_LIMIT = 0.95  #: |correlation| of two fitted parameters above this is flagged
+#: A loud note (``WHEEL RADIUS CONFLICT: ...``, ``f.asc: GNSS LATENCY UNRELIABLE: ...``): shown under the
+#: verdict in report.html and printed on the terminal, not only in the notes at the end.
+LOUD_NOTE = re.compile(r"^(\S+: )?[A-Z]{4,}( [A-Z]{2,})+:")
 CONDITION_LIMIT = 100.0  #: condition number of the scaled Jacobian above this is flagged (derived flags)
 _PALETTE = ("#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b", "#e377c2", "#17becf", "#bcbd22")
 COLORS = {"wong": "#444444", "vasilev": "#1f77b4", "lyasko": "#d62728", "ding": "#2ca02c",
@@ -1499,6 +1503,10 @@ def _html(rep: dict, figs: list, overviews: list) -> str:
         f"{'best candidate' if eff == 'unexplained' else 'model'}: "
         f"{_e(_title(_canon(d.get('model'))))} &nbsp;·&nbsp; confidence: {_e(d.get('confidence'))}</div>"
         + _glance(d) + f"<p class='full'><b>In full.</b> {_e(d.get('summary', ''))}</p></div>")
+    loud = [x for x in rep.get("notes") or [] if LOUD_NOTE.match(str(x))]
+    if loud:  # what puts the verdict in doubt, before the evidence for it
+        parts.append("<div class='warn'><p><b>Read first</b> (also in the notes at the end):</p><ul>"
+                     + "".join(f"<li>{_e(x)}</li>" for x in loud) + "</ul></div>")
     if rep.get("not_done"):
         parts.append("<h2>What could not be done</h2><div class='warn'><ul>"
                      + "".join(f"<li>{_e(x)}</li>" for x in rep["not_done"]) + "</ul></div>")

@@ -245,3 +245,20 @@ def test_a_title_line_a_missing_terrain_file_and_a_terrain_in_the_wrong_layout(t
     with pytest.raises(ValueError, match=r"wrongtable\.toml: no terrain keys at the top level, but the table\(s\) "
                                          r"\[clay\].*\[terrains\.<slug>\].*\(write \[terrains\.clay\]\)"):
         load_terrain(w)
+
+
+def test_loud_notes_are_shown_under_the_verdict(tmp_path):
+    """A wheel assumed or a radius in conflict sat at the bottom of report.html among the notes: each loud note
+    is also shown under the verdict, before the evidence."""
+    from wheelsoil.model.report import LOUD_NOTE
+    from wheelsoil.pipeline import run_fit
+
+    tab = tmp_path / "t.csv"
+    _table().to_csv(tab, index=False)
+    rep = run_fit([tab], "clay", tmp_path / "out", models=["wong", "vasilev"], progress=False)
+    loud = [n for n in rep["notes"] if LOUD_NOTE.match(n)]
+    assert any("WHEEL GEOMETRY ASSUMED" in n for n in loud)
+    page = (tmp_path / "out" / "report.html").read_text()
+    first = page.index("Read first")
+    assert first < page.index("What the verdict rests on")
+    assert page.count("WHEEL GEOMETRY ASSUMED") >= 2  # under the verdict and among the notes

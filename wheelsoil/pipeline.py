@@ -1001,11 +1001,12 @@ def _handler(args) -> int:
     def n(v, unit=" N"):
         return "n/a" if v is None else f"{v:.3g}{unit}"
 
-    import re
     import sys
 
+    from wheelsoil.model.report import LOUD_NOTE
+
     for note in rep.get("notes") or []:  # the loud ones (WHEEL RADIUS CONFLICT: ...) reach the terminal too
-        if re.match(r"^(\S+: )?[A-Z]{4,}( [A-Z]{2,})+:", note):
+        if LOUD_NOTE.match(note):
             print(f"warning: {note}", file=sys.stderr)
     print(f"effect: {d['effect']}   model: {d['model']}   confidence: {d['confidence']}")
     print(f"Dp R0 (in sample): {n(g['R0_n_before'])} -> {n(g['R0_n_after'])};  "
