@@ -727,7 +727,9 @@ def _time_gaps(name: str, ts_ns: np.ndarray, nominal_s: float | None = None, nom
     between them is not counted as loss). Returns ``(report, period_s)``:
     ``report`` dict(lost: int | None (unknown), gaps, longest_gap_s, received,
     method) with ``lost`` counted against the nominal cycle
-    (:func:`.timebase.cycle_loss`); gaps are spacings over 2.5 periods;
+    (:func:`.timebase.cycle_loss`; against the message's own period when it runs
+    ``SLOWER_RATE_FACTOR`` or more times slower, hardly ever at the nominal interval: another
+    rate, not lost frames); gaps are spacings over 2.5 periods;
     ``period_s`` the nominal period, else a robust estimate
     (:func:`.timebase.robust_period`).
     """
@@ -736,13 +738,21 @@ def _time_gaps(name: str, ts_ns: np.ndarray, nominal_s: float | None = None, nom
         return {"lost": None, "gaps": 0, "longest_gap_s": 0.0, "received": n,
                 "method": "too few frames: loss unknown"}, float("nan")
     est = robust_period(ts_ns)
+    dt = np.diff(ts_ns) * 1e-9
+    slower = None
+    if nominal_s and est >= SLOWER_RATE_FACTOR * nominal_s and np.mean(np.abs(dt / nominal_s - 1.0) < 0.2) < 0.05:
+        # hardly one interval at the nominal cycle: the sender runs at another rate (a receiver set to 10 Hz
+        # where the DBC says 20), not one losing every other frame: its frames are counted against its own period
+        slower, nominal_s = nominal_s, est
     period = float(nominal_s) if nominal_s else est
     lost, note = cycle_loss(ts_ns, nominal_s, breaks=parts)
-    dt = np.diff(ts_ns) * 1e-9
     if parts and len(parts) > 1:  # the time between joined parts is no gap of the message
         dt[[a - 1 for a, _ in parts[1:]]] = 0.0
     big = dt > 2.5 * period if period > 0 else np.zeros(dt.shape, bool)
-    if nominal_s and lost is not None:
+    if slower and lost is not None:
+        method = (f"sent every {est * 1e3:.1f} ms, not at the nominal cycle time {slower * 1e3:g} ms ({nominal_src}): "
+                  "frames counted against the period it keeps")
+    elif nominal_s and lost is not None:
         method = f"frames counted against the nominal cycle time {nominal_s * 1e3:g} ms ({nominal_src})"
     elif nominal_s:
         method = note
@@ -753,6 +763,10 @@ def _time_gaps(name: str, ts_ns: np.ndarray, nominal_s: float | None = None, nom
             "longest_gap_s": float(dt[big].max()) if big.any() else 0.0,
             "received": n, "method": method}, period
 
+
+#: A message without a counter whose frames come this many times slower than its nominal cycle, hardly
+#: ever at the nominal interval, runs at another rate (:func:`_time_gaps`), it does not lose frames.
+SLOWER_RATE_FACTOR = 1.5
 
 #: Excluded spans listed one by one per kind; more are summarised in one entry.
 MAX_EXCLUDED_LISTED = 50

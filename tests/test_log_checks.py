@@ -252,3 +252,19 @@ def test_an_asc_file_named_log_is_told_to_be_renamed(tmp_path):
         _import(wrong, tmp_path / "x.mcap")
     # a good file gets no hint, and a right suffix imports
     assert _import(asc, tmp_path / "y.mcap").total == 30
+
+
+def test_a_message_sent_at_another_rate_is_not_counted_as_losing_frames():
+    """A GNSS receiver set to 10 Hz where the configuration says 20 Hz was reported as '1199 lost in 0 gaps':
+    a message hardly ever at its nominal interval runs at its own rate; one losing frames at random does not."""
+    from wheelsoil.processing.pipeline import _time_gaps
+
+    rng = np.random.default_rng(3)
+    slow = (np.arange(1200) * 0.1e9 + rng.normal(0, 1e5, 1200)).astype(np.int64)
+    rep, period = _time_gaps("RT_SB_GPS_Speed", np.sort(slow), 0.05, "DBC")
+    assert rep["lost"] == 0 and "sent every 100.0 ms" in rep["method"] and period == pytest.approx(0.1, rel=0.01)
+    full = np.arange(2400) * 0.05e9
+    lossy = full[rng.random(2400) >= 0.5].astype(np.int64)  # half of the frames lost at random
+    rep, period = _time_gaps("RT_SB_GPS_Speed", lossy, 0.05, "DBC")
+    assert rep["lost"] == round((lossy[-1] - lossy[0]) / 0.05e9) + 1 - lossy.size  # over its own span
+    assert "nominal cycle time 50 ms" in rep["method"] and period == 0.05
