@@ -785,20 +785,47 @@ def _runs(mask: np.ndarray) -> list:
 _PHASE_COLORS = {"accel": ("#2ca02c", "shaded: accelerate phase"), "drive": ("#bcbd22", "shaded: steady driving"),
                  "brake": ("#d62728", "shaded: brake phase"),
                  "standstill": ("#7f7f7f", "shaded: standstill")}
+#: characters per line of a reason in the overview's exclusion strip (longer ones wrap)
+_STRIP_WRAP = 140
+#: the overview's exclusion strip, in its own y units: a label line, a bar (and the gap under it)
+_STRIP_LINE, _STRIP_BAR = 0.5, 0.9
+_STRIP_IN = 0.36  #: inches of figure height per strip y unit (a label line of 8 pt fits in _STRIP_LINE)
+
+
+def _strip_layout(keys) -> tuple:
+    """The exclusion strip's rows: ``(lines, label_top, bar_centre)`` per reason (y grows downwards) and
+    the strip's height in its y units. Each reason is written in full over its bar, wrapped, so a long one
+    takes lines, not the plots' width."""
+    rows, y = [], 0.0
+    for k in keys:
+        lines = textwrap.wrap(str(k), _STRIP_WRAP, break_long_words=True) or [str(k)]
+        top = y
+        y += _STRIP_LINE * len(lines)
+        rows.append((lines, top, y + 0.4 * _STRIP_BAR))
+        y += _STRIP_BAR
+    return rows, max(y, 1.0)
 
 
 def overview_figure(signals, wheel_radius_m: float, slip_min: float, excluded_spans, path: Path, title: str,
                     plt, used=None) -> dict:
     """The run at a glance: V and r*omega, slip, W, Dp, T against time, phases shaded, and a strip of
     the spans excluded from the fit with their reasons.  Writes ``path``; returns
-    ``{"used": n, "samples": N, "excluded": {reason: n}}``."""
+    ``{"used": n, "samples": N, "excluded": {reason: n}}``.
+
+    The plots take the figure's width whatever the reasons: each reason is written over its bar in the
+    strip (wrapped when long), not beside it, and what the shading means is said in a legend under the
+    plots."""
     from matplotlib.patches import Patch
 
     t = signals["t_s"].to_numpy(float)
     used, reasons = exclusion_masks(signals, slip_min, excluded_spans, used)
     phase = signals["phase"].astype(str).to_numpy() if "phase" in signals else np.full(t.size, "")
-    fig, axes = plt.subplots(6, 1, figsize=(12, 15), sharex=True, layout="constrained",
-                             gridspec_kw={"height_ratios": [1, 1, 1, 1, 1, 0.25 + 0.14 * max(len(reasons), 1)]})
+    keys = list(reasons)
+    rows, strip_units = _strip_layout(keys)
+    panel_in = 2.3
+    strip_in = 0.5 + _STRIP_IN * strip_units
+    fig, axes = plt.subplots(6, 1, figsize=(12, 5 * panel_in + strip_in + 2.6), sharex=True, layout="constrained",
+                             gridspec_kw={"height_ratios": [1, 1, 1, 1, 1, strip_in / panel_in]})
 
     def shade(ax):
         for ph, (col, _) in _PHASE_COLORS.items():
@@ -830,25 +857,31 @@ def overview_figure(signals, wheel_radius_m: float, slip_min: float, excluded_sp
         if not np.isfinite(y).any():
             ax.text(0.5, 0.5, "not measured", transform=ax.transAxes, ha="center", va="center", color="#888")
     handles = [Patch(color=col, alpha=0.25, label=lab) for ph, (col, lab) in _PHASE_COLORS.items() if (phase == ph).any()]
-    for i, ax in enumerate(axes[:5]):
+    for ax in axes[:5]:
         shade(ax)
         ax.grid(alpha=0.3)
         h, lab = ax.get_legend_handles_labels()
-        if i == 0:  # the phase shading, once, with the first panel's lines
-            h, lab = h + handles, lab + [x.get_label() for x in handles]
         _legend(ax, handles=h, labels=lab, markerscale=4.0, fontsize=8, loc="lower left", bbox_to_anchor=(0.0, 1.0),
-                ncol=5, frameon=False, borderaxespad=0.1)
-    # exclusion strip
+                ncol=max(min(len(h), 4), 1), frameon=False, borderaxespad=0.1)
+    if handles:  # the phase shading of every panel, said once under the plots (a legend of the figure)
+        leg = fig.legend(handles=handles, labels=[x.get_label() for x in handles], loc="outside lower center",
+                         ncol=len(handles), fontsize=8, frameon=False, title="background of the five panels above",
+                         title_fontsize=8)
+        for h in getattr(leg, "legend_handles", []):
+            h.set_alpha(0.25)
+    # exclusion strip: each reason in full over its bar
     ax = axes[5]
-    keys = list(reasons)
     dt = float(np.median(np.diff(t))) if t.size > 1 else 1.0
-    for i, k in enumerate(keys):
+    ytr = ax.get_yaxis_transform()  # x in axes, y in data
+    for i, (k, (lines, top, mid)) in enumerate(zip(keys, rows)):
         segs = [(t[a], max(t[b - 1] - t[a] + dt, dt)) for a, b in _runs(reasons[k])]
-        ax.broken_barh(segs, (i - 0.4, 0.8), color=_PALETTE[i % len(_PALETTE)], label=k)
-    ax.set_yticks(range(len(keys)))
-    ax.set_yticklabels(keys, fontsize=8)
-    ax.set_ylim(-0.7, max(len(keys), 1) - 0.3)
-    ax.invert_yaxis()
+        col = _PALETTE[i % len(_PALETTE)]
+        ax.broken_barh(segs, (mid - 0.35 * _STRIP_BAR, 0.7 * _STRIP_BAR), color=col, label=k)
+        ax.text(0.004, top + 0.05, "\n".join(lines), transform=ytr, ha="left", va="top", fontsize=8,
+                color="#222222", linespacing=1.1, clip_on=True,
+                bbox={"facecolor": "white", "alpha": 0.75, "edgecolor": "none", "pad": 0.5})
+    ax.set_yticks([])
+    ax.set_ylim(strip_units + 0.05, -0.05)  # the first reason on top
     ax.set_title("excluded from the fit (a sample may have several reasons)", fontsize=9, loc="left")
     if not keys:
         ax.text(0.5, 0.5, "nothing excluded", transform=ax.transAxes, ha="center", va="center")
@@ -1255,10 +1288,208 @@ def _plain(v, sig: int = 3) -> str:
     return json.dumps(v, sort_keys=True) if isinstance(v, (dict, list)) else str(v)
 
 
+#: key suffix -> unit of a value in a data-quality dict (longest first; ``_s`` is shown in ms below 1 s)
+_KEY_UNITS = (("_kgm2", "kg m^2"), ("_radps", "rad/s"), ("_mps", "m/s"), ("_nm", "N m"), ("_ns", "ns"),
+              ("_hz", "Hz"), ("_kg", "kg"), ("_rad", "rad"), ("_deg", "deg"), ("_n", "N"), ("_m", "m"), ("_s", "s"))
+#: data-quality keys that are internal (shown through what they give: the WFT ripple's fitted coefficients
+#: are its amplitudes and what was taken out)
+_QUALITY_INTERNAL = {"coef"}
+_TEETH_MAX = 1000  #: a tone wheel with more "teeth" than this is a pitch of ~0: none was found
+
+
+def _key_unit(key: str) -> tuple[str, str]:
+    """``("max abs force", "N")`` of ``"max_abs_force_n"``: the key in words and the unit its suffix names."""
+    k = str(key)
+    for suf, unit in _KEY_UNITS:
+        if k.endswith(suf) and len(k) > len(suf):
+            return k[: -len(suf)].replace("_", " "), unit
+    return k.replace("_", " "), ""
+
+
+def _time_scale(values) -> tuple[float, str]:
+    """ms for times all below 1 s (latencies, lags), else s."""
+    vals = [abs(float(v)) for v in values if isinstance(v, (int, float, np.integer, np.floating))
+            and not isinstance(v, bool) and math.isfinite(float(v))]
+    return (1e3, "ms") if vals and max(vals) < 1.0 else (1.0, "s")
+
+
+def _qval(v, unit: str = "", se=None, sig: int = 3) -> str:
+    """One value of a data-quality dict in words: a count as an integer, a number with 3 significant figures
+    and its unit (``± se`` with 2), yes/no, lists and dicts as text (never ``{...}`` or ``[...]``)."""
+    if isinstance(v, bool):
+        return "yes" if v else "no"
+    if v is None:
+        return "n/a"
+    if isinstance(v, (int, np.integer, float, np.floating)):
+        k, u = _time_scale([v]) if unit == "s" else (1.0, unit)
+        txt = str(int(v)) if isinstance(v, (int, np.integer)) else num(float(v) * k, sig)
+        if se is not None and isinstance(se, (int, float, np.integer, np.floating)) and not isinstance(se, bool):
+            txt += f" ± {num(float(se) * k, 2)}"
+        return f"{txt} {u}" if u else txt
+    if isinstance(v, dict):
+        return "; ".join(_qflat(v)) or "none"
+    if isinstance(v, (list, tuple)):
+        if not v:
+            return "none"
+        if all(isinstance(x, (list, tuple)) and len(x) == 2 and not any(isinstance(y, (list, tuple, dict, str))
+                                                                      for y in x) for x in v):  # spans
+            k, u = _time_scale([y for x in v for y in x]) if unit == "s" else (1.0, unit)
+            end = (lambda y: num(float(y) * k) if isinstance(y, (int, float)) and not isinstance(y, bool)
+                   else _qval(y))
+            return ", ".join(f"{end(x[0])}-{end(x[1])}" for x in v) + (f" {u}" if u else "")
+        if all(isinstance(x, dict) for x in v):
+            return " | ".join(", ".join(_qflat(x)) or "none" for x in v)
+        if unit and len(v) == 2 and all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in v):  # a range
+            k, u = _time_scale(v) if unit == "s" else (1.0, unit)
+            return f"{num(v[0] * k)} to {num(v[1] * k)} {u}"
+        return ", ".join(_qval(x, unit) for x in v)
+    return str(v)
+
+
+def _qflat(d: dict, prefix: str = "") -> list:
+    """``["key: value", ...]`` of a (nested) data-quality dict: nested keys are prefixed with their parent's,
+    a unit suffix of a key becomes the value's unit, ``x`` and ``stderr_x`` (``estimate_x`` and ``stderr_x``)
+    one ``x ± se``; empty notes and internal values are left out; a tone wheel of ~0 pitch says so."""
+    out = []
+    for k, v in d.items():
+        ks = str(k)
+        if ks in _QUALITY_INTERNAL or (isinstance(v, str) and not v.strip()):
+            continue
+        if ks.startswith("stderr_"):
+            base = ks[len("stderr_"):]
+            if base in d or f"estimate_{base}" in d:
+                continue  # shown with its value
+        name, unit = _key_unit(ks)
+        if ks.startswith("estimate_"):
+            name = _key_unit(ks[len("estimate_"):])[0] if ks != "estimate_s" else "estimate"
+        label = f"{prefix}{name}"
+        if ks == "teeth":
+            ok = isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) and 0 < v <= _TEETH_MAX
+            out.append(f"{prefix}tone wheel: " + (f"about {v:.0f} teeth" if ok else "none found (pitch ~0)"))
+            continue
+        if isinstance(v, dict) and v:
+            out.extend(_qflat(v, f"{label} "))
+            continue
+        se_key = "stderr_" + (ks[len("estimate_"):] if ks.startswith("estimate_") else ks)
+        out.append(f"{label}: {_qval(v, unit, d.get(se_key))}")
+    return out
+
+
+def _ms_pm(est, se) -> str:
+    """``110.7 ± 3.1 ms`` of a latency [s] and its standard error."""
+    if not isinstance(est, (int, float)) or isinstance(est, bool) or not math.isfinite(est):
+        return "none"
+    txt = f"{est * 1e3:.1f}"
+    if isinstance(se, (int, float)) and not isinstance(se, bool) and math.isfinite(se):
+        txt += f" ± {se * 1e3:.1f}"
+    return txt + " ms"
+
+
+def _latency_rows(lat) -> list:
+    """processing's GNSS latency (``quality["latency"]``): the estimate, how and whether it is reliable, then
+    each candidate method."""
+    if not isinstance(lat, dict):
+        return [["processing: GNSS latency", _qval(lat)]]
+    how = [str(lat["method"])] if lat.get("method") else []
+    if "reliable" in lat:
+        why = "; ".join(str(r) for r in lat.get("reasons") or [])
+        how.append("reliable" if lat["reliable"] else "unreliable" + (f": {why}" if why else ""))
+    val = _ms_pm(lat.get("estimate_s"), lat.get("stderr_s")) + (f" ({'; '.join(how)})" if how else "")
+    rest = {k: v for k, v in lat.items()
+            if k not in ("estimate_s", "stderr_s", "method", "reliable", "reasons", "candidates")}
+    if rest:
+        val += "; " + "; ".join(_qflat(rest))
+    rows = [["processing: GNSS latency", val]]
+    cands = lat.get("candidates")
+    if isinstance(cands, dict) and cands:
+        parts = []
+        for name, c in cands.items():
+            if not isinstance(c, dict):
+                parts.append(f"{name}: {_qval(c)}")
+                continue
+            bits = []
+            if c.get("estimate_s") is not None:  # the parts of its standard error
+                bits.append(", ".join(f"{w} {_ms_pm(c[k], None)}" for k, w in (("stderr_stat_s", "statistical"),
+                                                                              ("systematic_s", "systematic"))
+                                      if c.get(k) is not None))
+            if c.get("n") is not None:
+                bits.append(f"n = {_qval(c['n'])}")
+            if "usable" in c:
+                bits.append("usable" if c["usable"] else "not usable")
+            if c.get("note"):
+                bits.append(str(c["note"]))
+            extra = {k: v for k, v in c.items() if k not in ("estimate_s", "stderr_s", "stderr_stat_s", "systematic_s",
+                                                             "n", "usable", "note", "method")}
+            bits = [b for b in bits + _qflat(extra) if b]
+            parts.append(f"{name}: {_ms_pm(c.get('estimate_s'), c.get('stderr_s'))} (" + "; ".join(bits) + ")"
+                         + (f", from {c['method']}" if c.get("method") else ""))
+        rows.append(["processing: GNSS latency candidates", " | ".join(parts)])
+    return rows
+
+
+def _ripple_text(r) -> str:
+    """The WFT ripple locked to the wheel angle: amplitude per channel and order, and which were taken out."""
+    if r is None:
+        return "not estimated (too few revolutions turned fast enough)"
+    if not isinstance(r, dict):
+        return _qval(r)
+    removed = r.get("removed")
+    parts, known = [], {"coef", "removed", "samples", "revolutions"}
+    for ch, suf, unit, lab in (("fx", "n", "N", "Fx"), ("fz", "n", "N", "Fz"), ("my", "nm", "N m", "My")):
+        items = []
+        for o in (1, 2):
+            key = f"{ch}_{o}x_{suf}"
+            known.add(key)
+            if r.get(key) is None:
+                continue
+            txt = f"{_ordinal(o)} order {num(r[key])} {unit}"
+            if removed is not None:
+                txt += " (taken out)" if f"{ch}_{o}x" in removed else " (left in)"
+            items.append(txt)
+        if items:
+            parts.append(f"{lab}: " + ", ".join(items))
+    seen = []
+    if r.get("revolutions") is not None:
+        seen.append(f"{num(r['revolutions'])} revolutions")
+    if r.get("samples") is not None:
+        seen.append(f"{_qval(r['samples'])} samples")
+    txt = "; ".join(parts) or "no amplitudes"
+    if seen:
+        txt += " (over " + ", ".join(seen) + ")"
+    if removed is not None and not removed:
+        txt += "; none taken out"
+    rest = {k: v for k, v in r.items() if k not in known}
+    return txt + ("; " + "; ".join(_qflat(rest)) if rest else "")
+
+
+def _lost_frames_text(pq: dict, lf: dict) -> str | None:
+    """processing's lost-frame summary; the counts per message only where they differ from the rows above."""
+    total, unknown, per = pq.get("lost_frames_known_total"), pq.get("lost_frames_unknown"), pq.get("lost_frames")
+    if total is None and unknown is None and per is None:
+        return None
+    bits = []
+    if total is not None:
+        bits.append(f"{_qval(total)} known in total")
+    if unknown:
+        bits.append("count unknown for " + _qval(unknown))
+    if isinstance(per, dict) and any((lf.get(m) or {}).get("lost") != n for m, n in per.items()):
+        bits.append("per message: " + "; ".join(_qflat(per)))
+    elif per is not None and not isinstance(per, dict):
+        bits.append(_qval(per))
+    return "; ".join(bits) or "none"
+
+
+#: processing's quality keys -> their row label in report.html (others: "processing: " and the key in words)
+_PROCESSING_LABELS = {"timestamps": "processing: timestamps", "wheel_speed_lag": "processing: wheel-speed lag",
+                      "wft_ripple": "processing: WFT ripple locked to the wheel angle",
+                      "damage": "processing: damaged chunks", "wft_angle_jumps": "processing: WFT angle jumps",
+                      "gnss_degraded_spans_s": "processing: GNSS degraded spans"}
+
+
 def _quality_rows(q: dict) -> list:
     rows = []
     if q.get("kind") == "table":
-        rows.append(["rows read", num(q.get("rows"), 6)])
+        rows.append(["rows read", _qval(q.get("rows"))])
         return rows
     rows.append(["duration", fmt(q.get("duration_s"), "time")])
     if q.get("wheel_radius_m") is not None:
@@ -1279,7 +1510,7 @@ def _quality_rows(q: dict) -> list:
     if not lf:
         rows.append(["lost frames", "none counted"])
     rej = q.get("rejected_frames")
-    rows.append(["rejected frames (import)", _plain(rej) if rej is not None else
+    rows.append(["rejected frames (import)", _qval(rej) if rej is not None else
                  ("none reported by the import" if q.get("imported") else "n/a (not imported)")])
     dmg = q.get("damaged_chunks") or []
     pdmg = (q.get("processing_quality") or {}).get("damage") or []
@@ -1296,7 +1527,7 @@ def _quality_rows(q: dict) -> list:
         rows.append(["kernel receive drops", ", ".join(f"{b}: {'unknown' if n is None else n}" for b, n in sorted(rx.items()))])
     g = q.get("gnss_fix") or {}
     if g:
-        rows.append(["GNSS fix", "; ".join(f"{k} = {_plain(v)}" for k, v in g.items())])
+        rows.append(["GNSS fix", "; ".join(_qflat(g)) if isinstance(g, dict) else _qval(g)])
     lat = q.get("gnss_latency_s")
     rows.append(["GNSS latency found and removed", "not estimated" if lat is None else
                  f"{fmt(lat, 'latency')} ± {fmt(q.get('gnss_latency_stderr_s'), 'latency', 2)} "
@@ -1304,11 +1535,23 @@ def _quality_rows(q: dict) -> list:
     ine = q.get("inertia") or {}
     if ine:
         rows.append(["inertia compensation", ("applied" if ine.get("applied") else "not applied") + "; "
-                     + ", ".join(f"{k} = {_plain(v)}" for k, v in ine.items() if k != "applied")])
+                     + "; ".join(_qflat({k: v for k, v in ine.items() if k != "applied"}))])
     else:
         rows.append(["inertia compensation", "not reported by processing (not applied)"])
-    for k, v in sorted((q.get("processing_quality") or {}).items()):
-        rows.append([f"processing: {k}", _plain(v)])
+    pq = q.get("processing_quality") or {}
+    lost = _lost_frames_text(pq, lf)
+    for k, v in sorted(pq.items()):
+        if k == "latency":
+            rows += _latency_rows(v)
+        elif k == "wft_ripple":
+            rows.append([_PROCESSING_LABELS[k], _ripple_text(v)])
+        elif k in ("lost_frames", "lost_frames_known_total", "lost_frames_unknown"):
+            if lost is not None:
+                rows.append(["processing: lost frames", lost])
+                lost = None
+        else:
+            name, unit = _key_unit(k)
+            rows.append([_PROCESSING_LABELS.get(k, f"processing: {name}"), _qval(v, unit)])
     spans = q.get("excluded_spans") or []
     if spans:
         rows.append(["spans excluded by processing", "; ".join(

@@ -307,3 +307,172 @@ def test_a_probable_effect_that_is_not_named_says_why_under_the_headline():
     for d in ({"effect": "slip_sinkage", "effect_probabilities": {"slip_sinkage": 1.0}},
               {"effect": "none", "effect_probabilities": {"none": 0.7, "terrain_mismatch": 0.3}}):
         assert "Not named" not in _glance(d)
+
+
+def test_overview_plots_take_the_figure_width_and_its_legends_stay_inside(tmp_path, monkeypatch):
+    """The exclusion strip's reasons were y tick labels: a long processing reason squeezed every plot into a
+    third of the figure's width, and the first panel's legend (with the phase shading) ran off its right edge
+    ("shad..."). Each reason is now written in full over its bar and the shading is said under the plots."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from wheelsoil.model import report
+
+    sig = _signals(3)
+    sig.loc[sig.index[400:600], "phase"] = "drive"
+    sig.loc[sig.index[600:700], "phase"] = "standstill"
+    long = "WFT: 235 samples lost (counter gap longer than 3 samples): left invalid, not interpolated"
+    longer = "a processing reason far longer than one line of the strip can hold, " * 4
+    saved = []
+
+    def keep(fig, path, plt_):
+        fig.canvas.draw()
+        saved.append(fig)
+        return path
+
+    monkeypatch.setattr(report, "_save", keep)
+    for spans in ([{"t0_s": 10.0, "t1_s": 12.0, "reason": long}],  # as in a real run (f9r1_12.asc)
+                  [{"t0_s": 10.0, "t1_s": 12.0, "reason": long}, {"t0_s": 20.0, "t1_s": 21.0, "reason": longer}]):
+        saved.clear()
+        stats = report.overview_figure(sig, DEFAULT_WHEEL.radius, 0.05, spans, tmp_path / "overview.png", "title",
+                                       plt)
+        (fig,) = saved
+        try:
+            fbox, r = fig.bbox, fig.canvas.get_renderer()
+            axes = fig.axes
+            assert len(axes) == 6
+            for ax in axes:
+                assert ax.get_position().width >= 0.6, ax.get_position()
+            assert fig.legends, "the phase shading is explained in a legend of the figure"
+            legends = [ax.get_legend() for ax in axes if ax.get_legend() is not None] + list(fig.legends)
+            for leg in legends:
+                e = leg.get_window_extent(r)
+                assert fbox.x0 - 1 <= e.x0 and e.x1 <= fbox.x1 + 1 and fbox.y0 - 1 <= e.y0 and e.y1 <= fbox.y1 + 1, e
+            written = list(axes[5].texts) + list(axes[5].get_yticklabels()) + [ax.title for ax in axes]
+            for t in written:  # the reasons (and titles) do not run off the figure
+                if t is not None and t.get_text().strip():
+                    e = t.get_window_extent(r)
+                    assert fbox.x0 - 1 <= e.x0 and e.x1 <= fbox.x1 + 1, (t.get_text(), e)
+            # every piece of information stays: each phase shown, each reason in full
+            shading = " ".join(t.get_text() for leg in fig.legends for t in leg.get_texts())
+            for ph in ("accelerate phase", "steady driving", "brake phase", "standstill"):
+                assert ph in shading
+            said = " ".join(" ".join(t.get_text().split()) for t in axes[5].texts)
+            for reason in stats["excluded"]:
+                assert " ".join(reason.split()) in said, reason
+            assert f"processing: {long}" in stats["excluded"]
+        finally:
+            plt.close(fig)
+
+
+def _leaves(x):
+    if isinstance(x, dict):
+        for v in x.values():
+            yield from _leaves(v)
+    elif isinstance(x, list):
+        for v in x:
+            yield from _leaves(v)
+    else:
+        yield x
+
+
+def test_data_quality_rows_are_readable_not_python_structures():
+    """The table printed "processing: latency {...}", the WFT ripple's coefficient lists, a tone wheel of
+    62831853071.8 teeth and "rows read 27.0000": every item is a row of words, counts as integers."""
+    from wheelsoil.model.report import _quality_rows
+
+    q = {  # report.json data_quality[0] of a real run (f9r1_12.asc), lost frames and warnings shortened
+        "input": "/tmp/f9r1_12.asc", "kind": "recording", "duration_s": 119.95, "rate_hz": 100.0, "cutoff_hz": 5.0,
+        "wheel_radius_m": 0.455, "wheel_radius_source": "given", "valid_share": 0.8998749478949563,
+        "lost_frames": {
+            "RT_SB_GPS_Speed": {"lost": 104, "gaps": 3, "longest_gap_s": 3.250713, "received": 2290,
+                                "method": "frames counted against the nominal cycle time 50 ms (vehicle "
+                                          "configuration [signals.gnss_speed] cycle_time_s)"},
+            "WFT_RL_Force": {"lost": 235, "gaps": 1, "longest_gap_s": 0.471983, "counter_jumps": 0,
+                             "received": 59740, "method": "counter, period 2.00 ms"}},
+        "imported": True, "rejected_frames": None, "import_record": None, "damaged_chunks": [], "complete": None,
+        "kernel_rx_dropped": None,
+        "gnss_fix": {"time_fixes_used": 2290, "time_fix_outliers": 0, "time_residual_rms_s": 0.0011846170757417753},
+        "gnss_latency_s": 0.10699051123702037, "gnss_latency_stderr_s": 0.04066273815393397,
+        "latency_reference": "slip-traction consistency of the measured wheel (T/(rW) a function of slip, no "
+                             "hysteresis) and GNSS dV/dt against the measured Fx (vehicle dynamics)",
+        "inertia": {"applied": True, "wheel_mass_kg": 68.0, "wheel_inertia_kgm2": 8.9,
+                    "max_abs_force_n": 59.02079164530653, "max_abs_torque_nm": 16.674689837224367,
+                    "method": "Dp = Fx + m_w dV/dt, T = My - I_w domega/dt", "source": "given"},
+        "excluded_spans": [{"t0_s": 112.13131274800001, "t1_s": 112.603309467,
+                            "reason": "WFT: 235 samples lost (counter gap longer than 3 samples): left invalid, "
+                                      "not interpolated"}],
+        "processing_quality": {
+            "timestamps": {"outlier_frames": 0, "outliers_by_message": {}, "joined_parts": 0, "non_monotonic": {},
+                           "clock_steps": [], "grid_rows": 11995, "span_s": 119.94744200000001},
+            "wft_ripple": {"samples": 53334, "revolutions": 50.384283744635546,
+                           "coef": {"fx": [-135.0179406044485, -319.17411850132, -72.97707764118508,
+                                           127.66694558221502],
+                                    "fz": [-265.51723880913516, 106.92505679177302, -30.268347458712775,
+                                           -175.45014756885882],
+                                    "my": [0.0, 0.0, 0.0, 0.0]},
+                           "fx_1x_n": 346.5573000329975, "fx_2x_n": 147.05272134625665,
+                           "fz_1x_n": 286.23831307976786, "fz_2x_n": 178.04192523059197,
+                           "my_1x_nm": 26.90617826695468, "my_2x_nm": 10.558847641590326,
+                           "removed": ["fx_1x", "fx_2x", "fz_1x", "fz_2x"]},
+            "wheel_speed_lag": {"estimate_s": 0.010901159669639659, "stderr_s": 0.00024131590860687903,
+                                "gain": 0.9996687188012723, "applied": True, "note": "",
+                                "per_tooth": {"lag_s": 0.010901159669639659, "stderr_lag_s": 0.002536101503173289,
+                                              "pitch_rad": 1e-10, "stderr_pitch_rad": 0.004513857116819448,
+                                              "teeth": 62831853071.79586, "applied": False,
+                                              "note": "pitch 1e-10 +- 0.0045 rad: not 3 standard errors above "
+                                                      "zero (the delay does not grow as the wheel slows)"},
+                                "fronts_shifted": True},
+            "latency": {"estimate_s": 0.10699051123702037, "stderr_s": 0.04066273815393397,
+                        "method": "traction+dynamics", "reliable": False,
+                        "reasons": ["standard error 40.7 ms > 15 ms"], "fronts_driven": True,
+                        "candidates": {
+                            "traction": {"estimate_s": 0.09657884716984269, "stderr_s": 0.041203843801820024,
+                                         "stderr_stat_s": 0.03837651292190032, "systematic_s": 0.015,
+                                         "usable": True, "note": "", "n": 2025,
+                                         "method": "slip-traction consistency of the measured wheel"},
+                            "wheel_reference": {"estimate_s": None, "stderr_s": None, "stderr_stat_s": None,
+                                                "systematic_s": 0.0, "usable": False,
+                                                "note": "fewer than 10 GNSS samples overlap a usable reference "
+                                                        "speed", "n": 0,
+                                                "method": "GNSS V aligned with a wheel-speed reference r*omega"}},
+                        "search_range_s": [-0.1, 0.5]},
+            "lost_frames": {"WFT_RL_Force": 235, "RT_SB_GPS_Speed": 104},
+            "lost_frames_known_total": 339, "lost_frames_unknown": []},
+        "warnings": ["GNSS LATENCY UNRELIABLE: applied 107.0 +- 40.7 ms (standard error 40.7 ms > 15 ms); "
+                     "ProcessResult.quality['latency']"],
+        "samples": 11995, "used_in_fit": 8928,
+    }
+    rows = _quality_rows(q)
+    free_text = sorted({x for x in _leaves(q) if isinstance(x, str)}, key=len, reverse=True)
+    ints = {x for x in _leaves(q) if isinstance(x, int) and not isinstance(x, bool) and x >= 10}
+    for label, value in rows:
+        text = f"{label} {value}"
+        for s in free_text:  # text quoted from processing may hold brackets ("[signals.gnss_speed]")
+            text = text.replace(s, "")
+        assert "{" not in text and "[" not in text and "}" not in text and "]" not in text, (label, value)
+        for n in ints:
+            assert not re.search(rf"(?<![\d.]){n}\.\d", value), (label, value)
+    d = dict(rows)
+    assert d["processing: GNSS latency"].startswith("107.0 ± 40.7 ms (traction+dynamics; unreliable: standard "
+                                                    "error 40.7 ms > 15 ms)")
+    assert "search range: -100 to 500 ms" in d["processing: GNSS latency"]
+    cands = d["processing: GNSS latency candidates"]
+    assert "traction: 96.6 ± 41.2 ms" in cands and "wheel_reference: none" in cands and "not usable" in cands
+    ripple = d["processing: WFT ripple locked to the wheel angle"]
+    assert "Fx: 1st order 347 N (taken out), 2nd order 147 N (taken out)" in ripple
+    assert "My: 1st order 26.9 N m (left in), 2nd order 10.6 N m (left in)" in ripple
+    assert "53334 samples" in ripple and "-135" not in ripple
+    lag = d["processing: wheel-speed lag"]
+    assert "estimate: 10.9 ± 0.24 ms" in lag and "tone wheel: none found" in lag and "62831853071" not in lag
+    assert "grid rows: 11995" in d["processing: timestamps"] and "span: 120 s" in d["processing: timestamps"]
+    assert d["processing: lost frames"] == "339 known in total"
+    assert d["GNSS fix"] == "time fixes used: 2290; time fix outliers: 0; time residual rms: 1.18 ms"
+    assert "wheel mass: 68.0 kg" in d["inertia compensation"]
+    assert d["samples used in the fit"] == "8928 of 11995"
+    assert dict(_quality_rows({"kind": "table", "rows": 27})) == {"rows read": "27"}
+    # the second report's per-tooth delay: a real tone wheel is named by its teeth
+    q["processing_quality"]["wheel_speed_lag"]["per_tooth"]["teeth"] = 47.25025511031723
+    assert "tone wheel: about 47 teeth" in dict(_quality_rows(q))["processing: wheel-speed lag"]
