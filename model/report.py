@@ -435,6 +435,7 @@ def _model_entry(name, f, data, wheel, dd_model: dict | None) -> dict:
                           "cluster-robust over cycle x slip cells" if data.kind == "timeseries"
                           else "s^2 (J^T J)^-1 (reduced chi-square)"),
         "bic": f.bic,
+        "log_evidence": (dd_model or {}).get("log_evidence"),
         "n_eff": f.n_eff,
         "k": f.k,
         "iterations": None if res is None else res.iterations,
@@ -482,6 +483,10 @@ METRIC_DEFINITIONS = {
     "bic": "Bayesian information criterion with the effective number of independent observations n_eff: "
            "n_eff ln(RSS/N) + k ln(n_eff); lower is better; a difference of 10 or more is 'very strong' "
            "evidence (Kass & Raftery 1995). Shown as the difference to Wong.",
+    "evidence": "2 ln(Z / Z_Wong): twice the natural log of the ratio of the model's evidence Z (the Laplace "
+                "approximation the probabilities are computed from: the fit on the cell means, weighed by their "
+                "design effect, with the lab priors) to Wong's; higher is better, 10 or more is 'very strong' "
+                "(Kass & Raftery 1995). With the hypotheses' prior weights it gives the probability.",
     "probability": "posterior probability of each hypothesis given the data (evidence of the fits with the "
                    "effective number of independent units, and the lab priors); they sum to 1 over the "
                    "hypotheses tried, so they compare the candidates with each other, not with causes not on "
@@ -538,7 +543,7 @@ def report_dict(diag, *, terrain, wheel, inputs, time_sync: dict | None = None,
                     why = msg
             models[name] = {"status": why, "params": None, "stderr": None, "parameters": None,
                             "metrics": {"M0_pct": None, "R0_n": None, "R2": None},
-                            "cv_R0_n": None, "bic": None, "flags": []}
+                            "cv_R0_n": None, "bic": None, "log_evidence": None, "flags": []}
             continue
         models[name] = _model_entry(name, f, data, wheel, dmodels.get(name, dmodels.get(_FIT_ALIAS.get(name))))
     flags = [fl for fl in dd.get("flags") or [] if isinstance(fl, dict)]
@@ -1565,20 +1570,20 @@ def _quality_rows(q: dict) -> list:
 def _metrics_section(rep) -> list:
     parts = ["<h2>How well each model predicts (paper Tabs. 2 and 4)</h2>"]
     w = rep["models"]["wong"]
-    wbic = w.get("bic")
+    wz = w.get("log_evidence")
     probs = (rep["diagnosis"].get("probabilities") or {})
     rows = []
     for k, m in rep["models"].items():
         mm = m["metrics"]
-        dbic = None if (m.get("bic") is None or wbic is None) else m["bic"] - wbic
+        dz = None if (m.get("log_evidence") is None or wz is None) else 2.0 * (m["log_evidence"] - wz)
         rows.append([_e(_title(k)), _e(fmt(mm.get("M0_pct"), "percent", unit=False)),
                      _e(fmt(mm.get("R0_n"), "force", unit=False)), _e(num(mm.get("R2"))),
                      _e(fmt(m.get("cv_R0_n"), "force", unit=False)), _e(num(m.get("cv_score"))),
-                     _e("n/a" if dbic is None else f"{dbic:+.0f}"),
+                     _e("n/a" if dz is None or not np.isfinite(dz) else f"{dz:+.0f}"),
                      _e(num(m.get("probability"), 2) if m.get("probability") is not None else "-"),
                      _e(m["status"]) + _flag_marks(sorted({f.get("kind") for f in m.get("flags") or []} - {None}))])
     parts.append(_table(["model", "M0 [%]", "R0 Dp [N]", "R² Dp [-]", "CV R0 Dp [N]", "CV score [-]",
-                         "BIC - BIC(Wong) [-]", "probability [-]", "status, flags"], rows, raw=True))
+                         "2 ln(Z/Z_Wong) [-]", "probability [-]", "status, flags"], rows, raw=True))
     extra = {k: v for k, v in probs.items() if _canon(k) not in rep["models"]}
     if extra:
         parts.append("<p>Probabilities of the other hypotheses tried: "
@@ -1602,7 +1607,7 @@ def _metrics_section(rep) -> list:
     md = rep["metric_definitions"]
     parts.append("<dl>" + "".join(f"<dt>{_e(t)}</dt><dd>{_e(md[k])}</dd>" for t, k in (
         ("M0", "M0_pct"), ("R0", "R0"), ("R²", "R2"), ("CV R0", "cv_R0"), ("CV score", "cv_score"),
-        ("BIC", "bic"), ("probability", "probability"))) + "</dl>")
+        ("2 ln(Z/Z_Wong)", "evidence"), ("probability", "probability"))) + "</dl>")
     # per channel
     chans = rep["channels"]
     parts.append("<h3>Per channel: in sample and out of sample</h3>")

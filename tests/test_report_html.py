@@ -145,11 +145,18 @@ def test_tables_show_coefficients_in_field_units_and_json_in_si(table_report):
 def test_metrics_are_defined_where_shown(table_report):
     rep, out, _ = table_report
     text = (out / "report.html").read_text()
-    for term in ("M0", "R0", "R²", "CV R0", "BIC", "probability"):
+    for term in ("M0", "R0", "R²", "CV R0", "2 ln(Z/Z_Wong)", "probability"):
         assert f"<dt>{term}</dt>" in text
     assert "paper section 1.3" in text
-    assert set(rep["metric_definitions"]) >= {"M0_pct", "R0", "R2", "cv_R0", "bic", "probability"}
+    assert set(rep["metric_definitions"]) >= {"M0_pct", "R0", "R2", "cv_R0", "bic", "evidence", "probability"}
     assert "not whether the prediction is the right size" in rep["metric_definitions"]["R2"]
+    # the evidence column is what the probabilities come from (the BIC column it replaced could rank Wong first
+    # while the probabilities gave it 0): among the slip-sinkage forms, one prior weight, the same order
+    forms = [k for k in ("vasilev", "lyasko", "ding") if rep["models"][k].get("log_evidence") is not None
+             and rep["models"][k].get("probability")]
+    assert len(forms) >= 2
+    assert sorted(forms, key=lambda k: rep["models"][k]["log_evidence"]) == \
+        sorted(forms, key=lambda k: rep["models"][k]["probability"])
 
 
 def test_per_channel_table_and_reason_when_worse_than_wong(table_report):

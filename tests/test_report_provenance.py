@@ -108,7 +108,7 @@ def test_every_readme_report_has_provenance_overview_flags_and_defined_metrics(r
                 par = rep["models"][_canon(fl["model"])]["parameters"][fl["parameter"]]
                 assert fl["kind"] in par["flags"]
         assert "<h3>Flags</h3>" in text
-        for term in ("M0", "R0", "R²", "CV R0", "BIC", "probability"):
+        for term in ("M0", "R0", "R²", "CV R0", "2 ln(Z/Z_Wong)", "probability"):
             assert f"<dt>{term}</dt>" in text
 
 
