@@ -327,7 +327,7 @@ def prepare_data(df, *, slip_min: float = 0.1, source: str = "data", n_blocks: i
 
     if not isinstance(df, pd.DataFrame):
         raise ValueError(f"{source}: expected a pandas DataFrame, got {type(df).__name__}")
-    missing = [c for c in ("slip", "load_n", "drawbar_pull_n") if c not in df.columns]
+    missing = [c for c in TABLE_NEEDS if c not in df.columns]
     if missing:
         has = [str(c) for c in df.columns if c != "run" and not str(c).startswith("_")]  # added by the caller
         case = [f"{c!r} for {m!r}" for m in missing for c in has if c.strip().lower() == m]
@@ -368,7 +368,7 @@ def prepare_data(df, *, slip_min: float = 0.1, source: str = "data", n_blocks: i
     if not keep.any():
         if "valid" in df.columns and not valid.any():
             raise ValueError(f"{source}: every row is marked invalid (column valid)")
-        first = {c: str(df[c].iloc[0]) for c in ("slip", "load_n", "drawbar_pull_n")}
+        first = {c: str(df[c].iloc[0]) for c in TABLE_NEEDS}
         shown = ", ".join(f"{c} = {v!r}" for c, v in first.items())
         raise ValueError(f"{source}: no row has finite slip, load_n and drawbar_pull_n ({_where(df, [0]) or 'row 0'}: "
                          f"{shown}); "
@@ -397,8 +397,8 @@ def prepare_data(df, *, slip_min: float = 0.1, source: str = "data", n_blocks: i
     if low.any():
         notes.append(f"{int(low.sum())} row(s) with 0 < s <= slip_min = {slip_min:g} excluded (small Dp is dominated by measurement uncertainty, paper §3).")
     if high.any():
-        notes.append(f"{int(high.sum())} row(s) with s >= 1 excluded (slip must be < 1"
-                     + (f"; {_where(df, np.flatnonzero(high))}" if "_line" in df.columns else "") + ").")
+        at = _where(df, np.flatnonzero(high))
+        notes.append(f"{int(high.sum())} row(s) with s >= 1 excluded (slip must be < 1" + (f"; {at}" if at else "") + ").")
     if noload.any():
         notes.append(f"{int(noload.sum())} row(s) with load_n <= 0 excluded.")
     keep &= (s > slip_min) & (s < 1.0) & (w > 0)

@@ -1099,7 +1099,7 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
     span = [None, None]
     n_frames = [0]
     buses_seen: dict[str, int] = {}
-    ids_seen: dict[str, set] = {}  # bus -> identifiers (| 1 << 31 for 29-bit ones) with frames
+    ids_seen: dict[str, set] = {}  # bus -> identifiers with frames (frame_key)
 
     # the reader's damage report (byte offset, frames lost, time span), where the daq
     # reader offers one (wheelsoil.daq.recording.ReadReport)
@@ -1129,7 +1129,7 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
                     n_frames[0] += len(b)
                     buses_seen[b.bus] = buses_seen.get(b.bus, 0) + len(b)
                     ids_seen.setdefault(b.bus, set()).update(
-                        np.unique(b.arbitration_id.astype(np.int64) | (b.is_extended.astype(np.int64) << 31)).tolist())
+                        np.unique(frame_key(b.arbitration_id, b.is_extended)).tolist())
                     if bar is not None:
                         bar.update(len(b))
                 yield screen(b)
@@ -1770,8 +1770,8 @@ def bus_mix_up(cfg, select, found: set, ids_seen: dict, path, sources=()) -> str
 
     For each configured bus none of whose messages processing reads (``select``: message name ->
     signals) decoded a frame (``found``: names that did), the other bus of the recording with the most
-    of those messages' identifiers (``ids_seen``: bus -> set of ids with frames, ``| 1 << 31`` for
-    29-bit ids) is named, with the ``wheelsoil import ... --map SRC=BUS`` to use (swapped can0/can1,
+    of those messages' identifiers (``ids_seen``: bus -> set of the :func:`.decode.frame_key` of ids with
+    frames) is named, with the ``wheelsoil import ... --map SRC=BUS`` to use (swapped can0/can1,
     ``vcan0``/``slcan0`` names) on ``sources`` (the logs the recording ``path`` was imported from; none
     known: ``LOG``, with how to export one). None when no such bus is found.
     """
@@ -1780,7 +1780,7 @@ def bus_mix_up(cfg, select, found: set, ids_seen: dict, path, sources=()) -> str
         msgs = [m for m in cfg.database(bus).messages if m.name in select]
         if not msgs or any(m.name in found for m in msgs):
             continue
-        want = {int(m.frame_id) | (int(bool(m.is_extended_frame)) << 31) for m in msgs}
+        want = {frame_key(m.frame_id, m.is_extended_frame) for m in msgs}
         hits = sorted(((len(want & ids), src) for src, ids in ids_seen.items() if src != bus), reverse=True)
         if hits and hits[0][0]:
             k, src = hits[0]

@@ -183,7 +183,9 @@ def load_inputs(inputs, *, progress: bool = False, rate_hz: float = 100.0, cutof
                 width = float(tw[0])
             if (len(tr) or len(tw)) and table_source is None:
                 table_source = f"{path.name}: {tsrc}"
-            r_torque = next(float(v) for v in (wheel_radius_m, *tr, 0.47) if v is not None)
+            from wheelsoil.model import DEFAULT_WHEEL
+
+            r_torque = next(float(v) for v in (wheel_radius_m, *tr, DEFAULT_WHEEL.radius) if v is not None)
             df, checked = _check_table(path, df, lines, r_torque)
             notes.extend(checked)
             sync.append({"input": str(path), "gnss_latency_s": None})
