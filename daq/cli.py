@@ -386,6 +386,10 @@ def format_info(info) -> str:
     s = info.stats
     out.append(f"  lost frames (counter gaps): {s.total('lost_frames')}"
                + (f" ({', '.join(f'{k} {v}' for k, v in sorted(s.lost_frames.items()))})" if s.lost_frames else ""))
+    if s.counter_stride:
+        out.append("  counter steps per frame: " + ", ".join(f"{k} {v}" for k, v in sorted(s.counter_stride.items()))
+                   + " (the transducer sends one sample in that many: a decimated output rate; lost frames are "
+                   "counted in frames of that rate)")
     if s.lost_frames_estimated:
         out.append(f"  frames missing by nominal cycle time (estimate): {s.total('lost_frames_estimated')} ("
                    + ", ".join(f"{k} {v}" for k, v in sorted(s.lost_frames_estimated.items())) + ")")

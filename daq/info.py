@@ -137,6 +137,7 @@ class RecordingInfo:
             } for bus in self.buses},
             "duplicate_frames": dict(self.duplicates),
             "lost_frames": s.lost_frames, "counter_duplicates": s.counter_duplicates,
+            "counter_stride": s.counter_stride,
             "lost_frames_estimated": s.lost_frames_estimated, "long_gaps": s.long_gaps,
             "logger_status": self.status,
         }

@@ -13,6 +13,44 @@ import numpy as np
 
 from .frames import FLAG_ERROR, FLAG_REMOTE, FrameBatch
 
+#: A counter that advances by the same step k > 1 in at least this share of its frames, every frame's
+#: counter the same modulo k, is a transducer that sends every k-th sample (a decimated output rate):
+#: see :func:`counter_stride`.  Random loss leaves no common residue, so it cannot pass for one.
+STRIDE_MIN_SHARE = 0.5
+STRIDE_MIN_SAME_RESIDUE = 0.99
+#: ... judged once, on the first batch of a message with at least this many counter steps (steps
+#: before it are counted as steps of one).
+STRIDE_MIN_FRAMES = 8
+
+
+def counter_stride(counter: np.ndarray, *, modulo: int = 256) -> int:
+    """The step by which a sample counter advances per frame sent: 1, or ``k`` for a transducer whose
+    output is decimated to every ``k``-th sample (a WFT configured to 250 Hz counts 0, 2, 4, ...).
+
+    ``counter`` (N,) counter values ``0..modulo-1`` in frame order.  ``k`` > 1 is returned when the
+    most common forward step is ``k`` in at least :data:`STRIDE_MIN_SHARE` of the steps and at least
+    :data:`STRIDE_MIN_SAME_RESIDUE` of the counters share one residue modulo ``k`` (frames lost at
+    random make steps of 2 common too, but never one residue).  Raises ``ValueError`` when such a
+    ``k`` does not divide ``modulo``: the counter then changes residue at every wrap and the sample
+    index cannot be unwrapped from it.  Source: the counter's meaning in ``dbc/wft.dbc``; hardware.md
+    (500 Hz nominal)."""
+    c = np.asarray(counter).astype(np.int64) % modulo
+    d = np.diff(c) % modulo
+    d = d[d > 0]
+    if d.size < 2:
+        return 1
+    values, counts = np.unique(d, return_counts=True)
+    k = int(values[np.argmax(counts)])
+    if k <= 1 or counts.max() < STRIDE_MIN_SHARE * d.size:
+        return 1
+    if modulo % k:
+        raise ValueError(f"the counter advances by {k} per frame, which does not divide its wrap at {modulo}: "
+                         "the sample index cannot be unwrapped (a transducer output rate that is not the nominal "
+                         "rate divided by a power of two?)")
+    if np.bincount(c % k, minlength=k).max() < STRIDE_MIN_SAME_RESIDUE * c.size:
+        return 1
+    return k
+
 
 @dataclass
 class FrameStats:
@@ -33,6 +71,9 @@ class FrameStats:
             (DBC ``GenMsgCycleTime``), for messages without a counter: sum over gaps
             dt > 1.5 cycles of round(dt / cycle) - 1 (an estimate: host receive times jitter).
         counter_duplicates: DBC message name -> frames repeating the previous counter value.
+        counter_stride: DBC message name -> the step ``k`` > 1 its counter advances by per frame
+            (:func:`counter_stride`: a transducer sending one sample in ``k``); ``lost_frames``
+            then counts frames of that output, and messages absent here step by 1.
         long_gaps: DBC message name -> intervals between its frames longer than
             :data:`LONG_GAP_NS` (a pause of the logger, or a step of the host clock), which
             ``lost_frames`` and ``lost_frames_estimated`` do not count: no frame a bus dropped
@@ -53,6 +94,7 @@ class FrameStats:
     names: dict = field(default_factory=dict)
     lost_frames_estimated: dict = field(default_factory=dict)
     long_gaps: dict = field(default_factory=dict)
+    counter_stride: dict = field(default_factory=dict)
 
     def total(self, what: str) -> int:
         """Sum over buses/messages of one counter (e.g. ``"lost_frames"``, ``"unknown_ids"``)."""
@@ -77,6 +119,7 @@ class StatsAccumulator:
         self._counters: dict[tuple[str, int], tuple[str, int, int]] = {}
         self._last_counter: dict[tuple[str, int], tuple[int, int]] = {}   # (counter, t_ns)
         self._period_ns: dict[tuple[str, int], float] = {}
+        self._stride: dict[tuple[str, int], int] = {}   # the counter's step per frame, once known
         self._cycles: dict[str, dict[int, tuple[str, float]]] = {}   # bus -> key -> (name, cycle ns)
         self._last_t: dict[tuple[str, int], int] = {}
         if config is not None:
@@ -145,8 +188,18 @@ class StatsAccumulator:
                 t = np.concatenate(([prev[1]], t))
             step = np.diff(c) % mod
             dt = np.diff(t).astype(np.float64)
-            # sample period: median receive interval of consecutive samples (step 1)
-            one = step == 1
+            g = self._stride.get((bus, k))
+            if g is None and step.size >= STRIDE_MIN_FRAMES:  # decided once, on the first frames
+                try:
+                    g = counter_stride(c, modulo=mod)
+                except ValueError:
+                    g = 1  # a step that does not divide the wrap: counted as is (processing says why)
+                self._stride[(bus, k)] = g
+                if g > 1:
+                    s.counter_stride[name] = g
+            g = g or 1
+            # sample period: median receive interval of consecutive samples (one step)
+            one = step == g
             per = self._period_ns.get((bus, k))
             if one.sum() >= 8:
                 est = float(np.median(dt[one]))
@@ -156,11 +209,11 @@ class StatsAccumulator:
             if per is not None and per > 0:
                 # a gap longer than the counter's range wraps: the whole number of wraps
                 # comes from the elapsed time (dt / period samples), the rest from the counter
-                wraps = np.round((dt / per - step) / mod)
-                k_steps = step + mod * np.maximum(wraps, 0)
+                wraps = np.round((dt / per - step / g) / (mod / g))
+                k_steps = np.round(step / g) + (mod // g) * np.maximum(wraps, 0)
             else:
-                k_steps = step
-            lost = np.where((step == 0) | self._long_gaps(name, dt), 0, k_steps - 1)
+                k_steps = np.round(step / g)
+            lost = np.where((step == 0) | self._long_gaps(name, dt), 0, np.maximum(k_steps - 1, 0)).astype(np.int64)
             s.lost_frames[name] = s.lost_frames.get(name, 0) + int(lost.sum())
             s.counter_duplicates[name] = s.counter_duplicates.get(name, 0) + int((step == 0).sum())
             s.lost_frames.setdefault(name, 0)

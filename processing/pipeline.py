@@ -1272,6 +1272,11 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
                                      "method": "counter unusable: loss unknown"}
         if ws is not None:
             wft_period = ws.period_s
+            if ws.stride > 1:
+                quality["wft_counter_stride"] = ws.stride
+                warns.append(f"WFT: the sample counter advances by {ws.stride} per frame: the transducer sends one sample "
+                             f"in {ws.stride} ({1 / ws.period_s:.0f} Hz, one frame each {ws.period_s * 1e3:.2f} "
+                             "ms; a decimated output rate); lost frames are counted in samples sent")
             for name, rep in ws.reports.items():
                 # the time between joined parts was not recorded: not lost frames
                 joints = set()
@@ -1287,7 +1292,8 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
                 lost_frames[name] = {"lost": rep.lost, "gaps": len(rep.gaps), "longest_gap_s": longest,
                                      "counter_jumps": rep.jumps,
                                      "received": int(streams[name][0].shape[0]),
-                                     "method": f"counter, period {ws.period_s * 1e3:.2f} ms"}
+                                     "method": f"counter, period {ws.period_s * 1e3:.2f} ms"
+                                               + (f", counter step {ws.stride}" if ws.stride > 1 else "")}
             cols = ws.columns
             bad = np.zeros(ws.index.shape[0], dtype=bool)
             for k, v in cols.items():

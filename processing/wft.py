@@ -23,6 +23,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import stats
 
+from wheelsoil.daq.stats import counter_stride
+
 __all__ = ["unwrap_counter", "rotate_to_hub", "angle_jumps", "WftSamples", "assemble_wft_samples", "GapReport",
            "rotation_ripple", "remove_ripple"]
 
@@ -303,7 +305,9 @@ class WftSamples:
     with a slowly varying offset fitted to the frames' host times (see
     :func:`_smooth_sample_times`; missing samples included); ``complete`` bool (M,) all three frames present;
     ``columns`` name -> float64 (M,) (NaN where the frame was lost);
-    ``period_s``; ``reports`` message name -> :class:`GapReport`.
+    ``period_s`` the period of the samples sent; ``reports`` message name -> :class:`GapReport`;
+    ``stride`` the transducer's samples per sample sent (:func:`counter_stride`: 2 for an output
+    decimated to every second sample; ``index`` then counts the samples sent).
     """
 
     index: np.ndarray
@@ -312,6 +316,7 @@ class WftSamples:
     columns: dict[str, np.ndarray]
     period_s: float
     reports: dict[str, GapReport]
+    stride: int = 1
 
 
 def _gap_report(ts: np.ndarray, idx: np.ndarray) -> GapReport:
@@ -334,12 +339,22 @@ def assemble_wft_samples(streams: dict[str, tuple[np.ndarray, np.ndarray, dict[s
     is shifted by the whole number of wraps that puts its frames on the
     reference frames nearest in time with the same counter value.
 
+    A counter that advances by ``k`` > 1 per frame (:func:`counter_stride` of the reference: a
+    decimated output) is divided by ``k`` in every message first, so that a lost frame is a step of
+    2 and the period that of the samples sent.
+
     Returns :class:`WftSamples` covering every index from the first to the
     last sample of any message. Raises ``ValueError`` if the reference
-    message has fewer than 2 frames.
+    message has fewer than 2 frames, or its counter's stride does not divide ``modulo``.
     """
     ts_ref, c_ref, _ = streams[reference]
     order = np.argsort(ts_ref, kind="stable")
+    stride = counter_stride(np.asarray(c_ref)[order], modulo=modulo)
+    if stride > 1:
+        streams = {k: (ts, np.asarray(c).astype(np.int64) % modulo // stride, cols)
+                   for k, (ts, c, cols) in streams.items()}
+        modulo //= stride
+        ts_ref, c_ref, _ = streams[reference]
     idx_ref, period, jumps_ref = unwrap_counter(ts_ref[order], c_ref[order], modulo=modulo)
     jumps = {reference: jumps_ref}
     t_ref = ts_ref[order]
@@ -390,7 +405,7 @@ def assemble_wft_samples(streams: dict[str, tuple[np.ndarray, np.ndarray, dict[s
     have = t_cnt > 0
     mean_t = t_sum[have] / t_cnt[have]
     timestamp_ns = t_ref[0] + np.round(_smooth_sample_times(index, have, mean_t, period)).astype(np.int64)
-    return WftSamples(index, timestamp_ns, present, columns, period, reports)
+    return WftSamples(index, timestamp_ns, present, columns, period, reports, stride)
 
 
 def _smooth_sample_times(index: np.ndarray, have: np.ndarray, mean_t_ns: np.ndarray, period_s: float,

@@ -268,3 +268,73 @@ def test_a_message_sent_at_another_rate_is_not_counted_as_losing_frames():
     rep, period = _time_gaps("RT_SB_GPS_Speed", lossy, 0.05, "DBC")
     assert rep["lost"] == round((lossy[-1] - lossy[0]) / 0.05e9) + 1 - lossy.size  # over its own span
     assert "nominal cycle time 50 ms" in rep["method"] and period == 0.05
+
+
+# --------------------------------------------------------------------------- 8. a decimated transducer output
+def _keep_wft_samples(log_text: str, keep) -> str:
+    """The candump log with only the WFT frames (force 0x120, moment 0x121, angle 0x122) whose
+    counter ``keep(counter)`` accepts; other frames unchanged."""
+    out = []
+    for line in log_text.splitlines(keepends=True):
+        cid, data = line.split()[2].split("#")
+        if cid in ("120", "121", "122"):
+            b = bytes.fromhex(data)
+            if not keep(b[2] if cid == "122" else b[6]):
+                continue
+        out.append(line)
+    return "".join(out)
+
+
+def test_a_wft_sending_every_second_sample_is_processed_and_its_losses_counted_at_its_rate(sim_log, tmp_path):
+    from wheelsoil.processing import process_recording
+
+    text = sim_log.read_text()
+    half = tmp_path / "half.log"
+    dec_text = _keep_wft_samples(text, lambda c: c % 2 == 0)
+    half.write_text(dec_text)
+    full, dec = process_recording(sim_log), process_recording(half)
+    assert dec.quality.get("wft_counter_stride") == 2 and "wft_counter_stride" not in full.quality
+    assert any("advances by 2 per frame" in w and "250 Hz" in w for w in dec.warnings)
+    assert not any("counters unusable" in w for w in dec.warnings)
+    for c in ("drawbar_pull_n", "torque_nm", "load_n"):  # the same filtered forces, to a small part of their spread
+        d = np.abs(dec.signals[c] - full.signals[c]).to_numpy()
+        assert np.nanpercentile(d, 99) < 0.05 * np.nanstd(full.signals[c]), c
+    assert all(dec.quality["lost_frames"][m] == 0 for m in ("WFT_RL_Force", "WFT_RL_Moment", "WFT_RL_Angle"))
+    # ten samples of that output lost (counters 100, 102, .. 118 of the second wrap): ten frames of each
+    # message, not twenty
+    kept, wrap, last, dropped = [], 0, None, 0
+    for line in dec_text.splitlines(keepends=True):
+        cid, data = line.split()[2].split("#")
+        if cid in ("120", "121", "122"):
+            c = bytes.fromhex(data)[2 if cid == "122" else 6]
+            if cid == "120":
+                wrap, last = wrap + (last is not None and c < last), c
+            if wrap == 1 and 100 <= c < 120:
+                dropped += 1
+                continue
+        kept.append(line)
+    assert dropped == 30
+    lossy = tmp_path / "lossy.log"
+    lossy.write_text("".join(kept))
+    res = process_recording(lossy)
+    assert [res.quality["lost_frames"][m] for m in ("WFT_RL_Force", "WFT_RL_Moment", "WFT_RL_Angle")] == [10, 10, 10]
+    rec = tmp_path / "half.mcap"
+    _import(half, rec)
+    info = read_recording_info(rec)
+    assert info.stats.counter_stride == {"WFT_RL_Force": 2, "WFT_RL_Moment": 2, "WFT_RL_Angle": 2}
+    assert info.stats.total("lost_frames") == 0
+
+
+def test_counter_stride_tells_a_decimated_output_from_lost_frames():
+    from wheelsoil.daq.stats import counter_stride
+
+    rng = np.random.default_rng(5)
+    full = np.arange(3000) % 256
+    assert counter_stride(full) == 1
+    assert counter_stride(np.arange(0, 6000, 2) % 256) == 2
+    assert counter_stride(np.arange(1, 12000, 4) % 256) == 4
+    # half the frames lost at random: steps of 2 are common, but the counters keep no one residue
+    assert counter_stride(full[np.sort(rng.choice(3000, 1500, replace=False))]) == 1
+    # a stride of 3 changes residue at every wrap of 256: refused, saying why
+    with pytest.raises(ValueError, match="does not divide its wrap"):
+        counter_stride(np.arange(0, 9000, 3) % 256)
