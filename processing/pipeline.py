@@ -59,7 +59,8 @@ from .filters import DEFAULT_CUTOFF_HZ, MAX_FILL_SAMPLES, filter_to_grid, segmen
 from .slip import PHASES, accel_cycles, classify_phases, slip_ratio
 from .timebase import (MAX_GRID_ROWS, cycle_loss, find_clock_steps, find_time_outliers, robust_period,
                        split_joined_parts)
-from .timesync import (TOOTH_LAG_MIN_Z, LatencyEstimate, ToothLag, estimate_latency, estimate_latency_traction,
+from .timesync import (CLOCK_DISTINCT_RATIO, CLOCK_GRID_S, CLOCK_MIN_CORR, CLOCK_PEAK_SEPARATION_S, TOOTH_LAG_MIN_Z,
+                       LatencyEstimate, ToothLag, estimate_clock_offset, estimate_latency, estimate_latency_traction,
                        estimate_tooth_lag, fit_gps_time_mapping)
 from .wft import angle_jumps, assemble_wft_samples, remove_ripple, rotate_to_hub, rotation_ripple
 
@@ -777,6 +778,124 @@ MAX_EXCLUDED_LISTED = 50
 CLOCK_STEP_TOL_S = 0.5
 
 
+def _align_bus_clocks(dec: dict, sig: dict, path: Path, warns: list[str]) -> tuple[dict, dict | None]:
+    """Put the wheel-speed module's bus on the transducer's bus's clock, when the two read the same
+    wheel at moments that differ by more than a module's delay.
+
+    The transducer's wheel angle (``wft_angle``) and the module's speed of the measured wheel
+    (``wheel_speed``) describe one wheel; on one host clock their histories line up within the
+    module's own delay (:data:`WSS_LAG_RANGE_S`, measured finely later).  A logger whose adapters stamp
+    frames each on its own clock (device time since power-up), or two loggers joined, puts the buses
+    seconds to hours apart: the forces are then paired with the slip of another moment, or with none.
+    The offset is the shift at which the two speed histories correlate best
+    (:func:`.timesync.estimate_clock_offset`, over every shift), refined on a 2 ms grid
+    (:func:`.timesync.estimate_latency`); when it is clear and outside the module's delay range, every
+    frame of the module's bus is moved back by it, loudly.  When the histories match at no shift near
+    zero and no clear offset is found, it is said, and nothing is moved.
+
+    ``dec`` message name -> :class:`DecodedMessage` (sorted times); ``sig`` the configured signals;
+    ``warns`` receives the messages.  Returns ``(dec, quality)``: ``quality`` None when the two are on
+    one bus or either is missing, else ``{"bus", "reference_bus", "estimate_s", "corr", "corr_other",
+    "corr_near_zero", "applied", "note"}``.  Never raises."""
+    a_ref, b_ref = sig["wft_angle"], sig["wheel_speed"]
+    ma, mb = dec.get(a_ref.message), dec.get(b_ref.message)
+    if ma is None or mb is None or len(ma) < 100 or len(mb) < 100 or ma.bus == mb.bus:
+        return dec, None
+    t0 = min(int(ma.timestamp_ns[0]), int(mb.timestamp_ns[0]))
+    ta = (ma.timestamp_ns - t0) * 1e-9
+    ang = ma.signals[a_ref.signal] * a_ref.scale_to_si
+    dt = np.diff(ta)
+    ok = (dt > 0) & (dt < 0.05)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        om_a = np.abs(np.where(ok, np.angle(np.exp(1j * np.diff(ang))) / np.where(ok, dt, 1.0), np.nan))
+    t_mid = 0.5 * (ta[1:] + ta[:-1])
+    tb = (mb.timestamp_ns - t0) * 1e-9
+    om_b = np.abs(mb.signals[b_ref.signal] * b_ref.scale_to_si)
+    where = f"{b_ref.message} on {mb.bus} against {a_ref.message} on {ma.bus}"
+    try:
+        est = estimate_clock_offset(t_mid, om_a, tb, om_b, near_s=WSS_LAG_RANGE_S)
+    except ValueError as exc:
+        return dec, {"bus": mb.bus, "reference_bus": ma.bus, "estimate_s": None, "applied": False, "note": str(exc)}
+    q = {"bus": mb.bus, "reference_bus": ma.bus, "estimate_s": est.offset_s, "corr": est.corr,
+         "corr_other": est.corr_other, "corr_near_zero": est.corr_zero, "applied": False, "note": est.note}
+    lo, hi = WSS_LAG_RANGE_S
+    near = lo - 2 * CLOCK_GRID_S <= est.offset_s <= hi + 2 * CLOCK_GRID_S
+    matches_near = np.isfinite(est.corr_zero) and (1 - est.corr ** 2) > CLOCK_DISTINCT_RATIO * (1 - est.corr_zero ** 2)
+    if est.clear and not near and not matches_near:
+        offset = est.offset_s
+        period = float(np.median(dt[ok])) if ok.any() else 0.002
+        try:  # refined as the module's delay is, around the coarse shift
+            ref = filter_to_grid(t_mid, np.nan_to_num(om_a), period, t_mid, LATENCY_REF_CUTOFF_HZ)
+            fine = estimate_latency(tb, om_b, t_mid, ref, usable_ref=np.isfinite(om_a),
+                                    min_latency_s=offset - 2 * CLOCK_GRID_S, max_latency_s=offset + 2 * CLOCK_GRID_S)
+            if not fine.note:
+                offset = fine.latency_s
+        except ValueError:
+            pass
+        shift = int(round(offset * 1e9))
+        dec = {k: (dataclasses.replace(m, timestamp_ns=m.timestamp_ns - shift) if m.bus == mb.bus else m)
+               for k, m in dec.items()}
+        q.update(estimate_s=offset, applied=True)
+        warns.append(f"CLOCK OFFSET BETWEEN BUSES: {path}: the frames of {mb.bus} are stamped {offset:+.3f} s from "
+                     f"those of {ma.bus} for the same moment: the measured wheel's speed ({where}) matches only at "
+                     f"that shift (correlation {est.corr:.4f}; at the module's own delay, {lo:g}..{hi:g} s, "
+                     + (f"{est.corr_zero:.2f}" if np.isfinite(est.corr_zero) else "none: the buses' frames do not "
+                        "overlap in time") + f"). Every {mb.bus} frame is moved back by it, so the forces and the slip "
+                     "belong to one moment; check the logger's clocks (adapters stamping each on its own clock?); "
+                     "ProcessResult.quality['bus_clocks']")
+    elif not near and not matches_near and not (np.isfinite(est.corr_zero) and est.corr_zero >= CLOCK_MIN_CORR):
+        warns.append(f"CLOCKS OF THE BUSES IN DOUBT: {path}: the measured wheel's speed ({where}) does not match at "
+                     f"the module's own delay ({lo:g}..{hi:g} s: correlation "
+                     + ("none, the two buses' frames do not overlap in time" if not np.isfinite(est.corr_zero)
+                        else f"{est.corr_zero:.2f}")
+                     + f"); the best shift, {est.offset_s:+.2f} s, is not clear ({est.note}): the buses' clocks may "
+                     "be offset, and the forces paired with the slip of another moment; nothing moved; "
+                     "ProcessResult.quality['bus_clocks']")
+    return dec, q
+
+
+def _gnss_far_shift(g_rel: np.ndarray, g_v: np.ndarray, refs: list, path: Path, g_msg: str,
+                    warns: list[str]) -> tuple[float, dict | None]:
+    """A first shift of the GNSS times when the GNSS velocity lies behind (or ahead of) the wheels' speed by
+    about as much as the latency search range (:data:`LATENCY_MIN_S` .. :data:`LATENCY_MAX_S`) reaches, or
+    more: a receiver on an adapter stamping on its own clock, or a very late one.  The fine estimators search
+    only that range, and would all stop at its edge; slip would pair each wheel speed with the vehicle speed
+    of another moment.
+
+    ``g_rel`` (N,) GNSS times [s], ``g_v`` (N,) its speed [m/s]; ``refs`` [(times (M,) [s], r*omega (M,)
+    [m/s])] the wheels' speeds (the front wheels', then the measured one's), the first one with a clear
+    answer used.  The coarse delay is the shift at which the two speed histories correlate best
+    (:func:`.timesync.estimate_clock_offset`, every shift, 50 ms grid).  When it is clear and lies outside
+    the range less two grid steps at its top, the GNSS times are shifted by it less the range's centre, so
+    that the fine search is centred on it and measures the rest; the total is the latency reported.  Beyond
+    the range, that is said loudly.  Returns ``(shift_s, quality or None)``, ``shift_s`` 0.0 when nothing is
+    to be moved, quality ``{"estimate_s", "corr", "corr_other", "shift_s", "applied", "note"}``.
+    Never raises."""
+    q = None
+    for t, v in refs:
+        try:
+            est = estimate_clock_offset(t, np.abs(v), g_rel, np.abs(g_v), near_s=(LATENCY_MIN_S, LATENCY_MAX_S))
+        except ValueError:
+            continue
+        q = {"estimate_s": est.offset_s, "corr": est.corr, "corr_other": est.corr_other, "shift_s": 0.0,
+             "applied": False, "note": est.note}
+        if not est.clear:
+            continue
+        if LATENCY_MIN_S <= est.offset_s <= LATENCY_MAX_S - 2 * CLOCK_GRID_S:
+            return 0.0, q
+        shift = est.offset_s - 0.5 * (LATENCY_MIN_S + LATENCY_MAX_S)
+        q.update(shift_s=shift, applied=True)
+        if not LATENCY_MIN_S <= est.offset_s <= LATENCY_MAX_S:
+            warns.append(f"GNSS BEYOND THE LATENCY SEARCH RANGE: {path}: the GNSS speed ({g_msg}) matches the "
+                         f"wheels' speed best {est.offset_s:+.2f} s later (correlation {est.corr:.3f}; the next best "
+                         f"shift more than {CLOCK_PEAK_SEPARATION_S:g} s away {est.corr_other:.2f}), outside the "
+                         f"search range {LATENCY_MIN_S:g}..{LATENCY_MAX_S:g} s: the latency is searched around it "
+                         "instead; a receiver on its own clock, or a very late one: check the logger's clocks; "
+                         "ProcessResult.quality['latency']['pre_shift']")
+        return shift, q
+    return 0.0, q
+
+
 def _undo_clock_steps(dec: dict, week_ref, tow_ref, path: Path, warns: list[str]) -> tuple[dict, list[dict]]:
     """Undo steps of the host clock that the GPS time in the frames shows
     (:func:`.timebase.find_clock_steps`): every frame logged after a step gets its host time
@@ -1188,6 +1307,7 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
     dec, clock_steps = _undo_clock_steps(dec, sig["gnss_time_week"], sig["gnss_time_tow"], path, warns)
     dec, tb_runs, tb_parts, tb_quality = _clean_time_base(dec, path, warns)
     tb_quality["clock_steps"] = clock_steps
+    dec, bus_clocks = _align_bus_clocks(dec, sig, path, warns)
     if not dec:
         raise ValueError(f"{path}: no frame of the configured messages has a usable timestamp")
     t0_ns = min(int(m.timestamp_ns[0]) for m in dec.values())
@@ -1202,6 +1322,8 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
     t_grid = np.arange(n_grid) / rate_hz
     excluded: list[dict] = _time_base_excluded(tb_runs, tb_parts, dec, t0_ns)
     quality: dict = {"timestamps": {**tb_quality, "grid_rows": n_grid, "span_s": span_s}}
+    if bus_clocks is not None:
+        quality["bus_clocks"] = bus_clocks
     width = float(cfg.wheel_width_m)
     recorded = _recorded_wheel(read_report) if cfg_where == ASSUMED_CONFIG else None
     if recorded is not None and wheel_radius_m is None:  # the configuration is lost, the wheel is not
@@ -1274,8 +1396,8 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
             wft_period = ws.period_s
             if ws.stride > 1:
                 quality["wft_counter_stride"] = ws.stride
-                warns.append(f"WFT: the sample counter advances by {ws.stride} per frame: the transducer sends one sample "
-                             f"in {ws.stride} ({1 / ws.period_s:.0f} Hz, one frame each {ws.period_s * 1e3:.2f} "
+                warns.append(f"WFT: the sample counter advances by {ws.stride} per frame: the transducer sends one "
+                             f"sample in {ws.stride} ({1 / ws.period_s:.0f} Hz, one frame each {ws.period_s * 1e3:.2f} "
                              "ms; a decimated output rate); lost frames are counted in samples sent")
             for name, rep in ws.reports.items():
                 # the time between joined parts was not recorded: not lost frames
@@ -1511,6 +1633,12 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
         rep, g_period = _time_gaps(g_msg, g_t, *cfg.cycle_time_s(g_bus, g_msg), parts=tb_parts.get(g_msg))
         lost_frames[g_msg] = rep
         g_rel = rel_s(g_t)
+        refs = [(rel_s(s_[0]), s_[1] * r) for s_ in (get(f, measured=True) for f in fronts)
+                if s_ is not None and s_[0].shape[0] >= 3]
+        if wss_t is not None:
+            refs.append((wss_rel, got[1] * r))
+        g_pre, pre_q = _gnss_far_shift(g_rel, g_v, refs, path, g_msg, warns)
+        g_rel = g_rel - g_pre
         # latency candidates (docs/architecture.md "GNSS latency"): a wheel-speed reference
         # (free-rolling front wheels, else the measured wheel at low torque), the measured wheel's
         # slip-traction consistency, and the vehicle dynamics; combined in _choose_latency
@@ -1600,11 +1728,16 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
             cands["dynamics"] = alt
         else:
             errs["dynamics"] = "needs the measured Fx and the GNSS speed"
+        if g_pre:  # the estimates measured from the first shift: each the whole delay
+            cands = {k: dataclasses.replace(c, latency_s=c.latency_s + g_pre) for k, c in cands.items()}
+            g_rel = g_rel + g_pre
         latency, lat_ref, quality["latency"], lat_warns = _choose_latency(
             cands, errs, coupled=coupled, wheel_ref_label=wheel_ref_label, fronts=front_ref,
             speed_rms_mps=float(np.sqrt(np.nanmean(g_v ** 2))) if np.isfinite(g_v).any() else None)
         warns.extend(lat_warns)
-        shift = latency.latency_s if latency is not None else 0.0
+        if pre_q is not None:
+            quality["latency"]["pre_shift"] = pre_q
+        shift = latency.latency_s if latency is not None else g_pre
         speed, dspeed = filter_to_grid(g_rel - shift, g_v, g_period, t_grid, min(cutoff, 0.4 / g_period),
                                        derivative=True)
 

@@ -11,6 +11,9 @@ estimated from the data:
   least squares on the points within 5 MADs (at least 2 ms) of it.
 * :func:`estimate_tooth_lag` — a wheel-speed module's delay that grows at low
   speed (a tone wheel timed per tooth): ``lag + pitch / omega``.
+* :func:`estimate_clock_offset` — the offset between the clocks of two buses that each read the
+  same wheel's speed (a logger whose adapters stamp frames each on its own clock), by the
+  correlation of the two speed histories over shifts of up to the run's length.
 * :func:`estimate_latency` — the delay of the GNSS velocity behind a
   reference speed measured without delay: ``v_gnss(t) = a * v_ref(t - tau) + b``
   (the gain ``a`` absorbs an effective rolling radius different from r, ``b``
@@ -30,7 +33,7 @@ from scipy import optimize, stats
 from .filters import filter_to_grid, lowpass_segments
 
 __all__ = ["GPS_EPOCH_UNIX_S", "fit_gps_time_mapping", "LatencyEstimate", "estimate_latency",
-           "estimate_latency_traction", "ToothLag", "estimate_tooth_lag"]
+           "estimate_latency_traction", "ToothLag", "estimate_tooth_lag", "ClockOffset", "estimate_clock_offset"]
 
 #: 1980-01-06T00:00:00 (GPS epoch) in Unix seconds (UTC, no leap seconds).
 GPS_EPOCH_UNIX_S = 315_964_800
@@ -468,3 +471,111 @@ def estimate_latency_traction(t_gnss_s: np.ndarray, v_gnss: np.ndarray, t_ref_s:
     if tau <= min_latency_s + edge or tau >= max_latency_s - edge:
         note = _edge_note(min_latency_s, max_latency_s)
     return LatencyEstimate(tau, stderr, 1.0, 0.0, float(np.sqrt(s0 / max(n, 1))), n, note)
+
+
+#: Grid [s] on which :func:`estimate_clock_offset` compares the two speed histories (bin means).
+CLOCK_GRID_S = 0.05
+#: Its peak must be this far [s] from any other shift it compares against (the width of a peak of a
+#: speed history: spin-ups of a few tenths of a second to seconds) ...
+CLOCK_PEAK_SEPARATION_S = 2.0
+#: ... reach at least this correlation (the same wheel read twice) ...
+CLOCK_MIN_CORR = 0.9
+#: ... and leave at most this share of the unexplained variance (1 - rho^2) that the best other shift
+#: leaves: a run of identical slip sweeps correlates nearly as well one sweep later, and then the
+#: shift cannot be told.
+CLOCK_DISTINCT_RATIO = 0.5
+#: The two histories must overlap over at least this share of the shorter one, and this long [s].
+CLOCK_MIN_OVERLAP = 0.5
+CLOCK_MIN_OVERLAP_S = 10.0
+
+
+@dataclass
+class ClockOffset:
+    """The offset between two clocks that time the same wheel's speed (:func:`estimate_clock_offset`).
+
+    ``offset_s`` how much later the second series' times are than the first's for the same moment
+    [s] (its times less ``offset_s`` put it on the first clock), to the grid's resolution
+    (:data:`CLOCK_GRID_S`); ``corr`` the correlation of the two speed histories at that shift;
+    ``corr_other`` the best correlation at least :data:`CLOCK_PEAK_SEPARATION_S` away from it;
+    ``corr_zero`` the correlation at the best shift within ``near_s`` of zero (NaN if none
+    overlaps); ``overlap_s`` the time compared at ``offset_s``; ``clear`` whether the peak is high and
+    distinct (:data:`CLOCK_MIN_CORR`, :data:`CLOCK_DISTINCT_RATIO`); ``note`` why not."""
+
+    offset_s: float
+    corr: float
+    corr_other: float
+    corr_zero: float
+    overlap_s: float
+    clear: bool
+    note: str = ""
+
+
+def _bin_means(t_s: np.ndarray, v: np.ndarray, t0: float, n: int, h: float) -> np.ndarray:
+    ok = np.isfinite(t_s) & np.isfinite(v)
+    k = np.floor((t_s[ok] - t0) / h).astype(np.int64)
+    inside = (k >= 0) & (k < n)
+    s = np.bincount(k[inside], weights=v[ok][inside], minlength=n)
+    c = np.bincount(k[inside], minlength=n)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.where(c > 0, s / np.maximum(c, 1), np.nan)
+
+
+def estimate_clock_offset(t_a_s: np.ndarray, v_a: np.ndarray, t_b_s: np.ndarray, v_b: np.ndarray, *,
+                          near_s: tuple[float, float] = (-0.1, 0.3)) -> ClockOffset:
+    """The offset between the clocks of two series that measure the same speed, from the shift at which
+    their histories correlate best.
+
+    ``t_a_s`` (N,), ``v_a`` (N,): times [s] and speeds of the first series (e.g. the transducer's wheel
+    angle's rate on its bus); ``t_b_s`` (M,), ``v_b`` (M,): the second (the wheel-speed module's reading
+    of the same wheel on another bus), in any units shared with ``v_a`` (NaN allowed).  Both are
+    averaged on a :data:`CLOCK_GRID_S` grid and their Pearson correlation is computed at every shift
+    at which they overlap over at least :data:`CLOCK_MIN_OVERLAP` of the shorter series and
+    :data:`CLOCK_MIN_OVERLAP_S` (by FFT: all shifts, including ones larger than the run, as two
+    adapters stamping on their own clocks give).  ``near_s`` the shifts that are no clock offset (a
+    module's own delay, which :func:`estimate_latency` measures finely).
+
+    Returns :class:`ClockOffset`.  Raises ``ValueError`` when either series has fewer than 2 grid
+    points with a value or they overlap at no shift.  Source: cross-correlation time-delay estimation
+    (Knapp & Carter 1976), normalised per shift over the overlap (Pearson)."""
+    from scipy import signal
+
+    h = CLOCK_GRID_S
+    t_a, t_b = np.asarray(t_a_s, float), np.asarray(t_b_s, float)
+    va, vb = np.asarray(v_a, float), np.asarray(v_b, float)
+    fa, fb = np.isfinite(t_a) & np.isfinite(va), np.isfinite(t_b) & np.isfinite(vb)
+    if fa.sum() < 2 or fb.sum() < 2:
+        raise ValueError("fewer than 2 values in a series: no clock offset can be estimated")
+    a0, b0 = float(t_a[fa].min()), float(t_b[fb].min())
+    na, nb = int((t_a[fa].max() - a0) / h) + 1, int((t_b[fb].max() - b0) / h) + 1
+    x, y = _bin_means(t_a, va, a0, na, h), _bin_means(t_b, vb, b0, nb, h)
+    mx, my = np.isfinite(x).astype(float), np.isfinite(y).astype(float)
+    x0, y0 = np.nan_to_num(x), np.nan_to_num(y)
+
+    def corr(u, w):  # sum over i of u[i + k] w[i] for every k, lags from -(len(w) - 1)
+        return signal.correlate(u, w, mode="full", method="fft")
+
+    n = np.rint(corr(my, mx))
+    sx, sy = corr(my, x0), corr(y0, mx)
+    sxx, syy, sxy = corr(my, x0 * x0), corr(y0 * y0, mx), corr(y0, x0)
+    lags = signal.correlation_lags(nb, na, mode="full")  # y[i + k] against x[i]: y's time b0 + (i + k) h, x's a0 + i h
+    shift = (b0 - a0) + lags * h
+    need = max(CLOCK_MIN_OVERLAP * min(mx.sum(), my.sum()), CLOCK_MIN_OVERLAP_S / h, 3)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        cov = sxy - sx * sy / n
+        var = (sxx - sx * sx / n) * (syy - sy * sy / n)
+        rho = np.where((n >= need) & (var > 0), cov / np.sqrt(np.where(var > 0, var, 1.0)), np.nan)
+    if not np.isfinite(rho).any():
+        raise ValueError("the two series overlap at no shift (or one of them never changes)")
+    i = int(np.nanargmax(rho))
+    best, r_best = float(shift[i]), float(rho[i])
+    far = np.abs(shift - best) > CLOCK_PEAK_SEPARATION_S
+    r_other = float(np.nanmax(rho[far])) if np.isfinite(rho[far]).any() else float("nan")
+    near = (shift >= near_s[0] - h) & (shift <= near_s[1] + h)
+    r_zero = float(np.nanmax(rho[near])) if np.isfinite(rho[near]).any() else float("nan")
+    note = ""
+    if r_best < CLOCK_MIN_CORR:
+        note = f"the best correlation of the two speed histories is {r_best:.2f} (< {CLOCK_MIN_CORR:g})"
+    elif np.isfinite(r_other) and (1 - r_best ** 2) > CLOCK_DISTINCT_RATIO * (1 - r_other ** 2):
+        note = (f"the correlation at {best:+.2f} s ({r_best:.3f}) is not distinct from another shift's "
+                f"({r_other:.3f}): a run of repeated, alike manoeuvres")
+    return ClockOffset(best, r_best, r_other, r_zero, float(n[i]) * h, not note, note)

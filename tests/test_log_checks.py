@@ -338,3 +338,76 @@ def test_counter_stride_tells_a_decimated_output_from_lost_frames():
     # a stride of 3 changes residue at every wrap of 256: refused, saying why
     with pytest.raises(ValueError, match="does not divide its wrap"):
         counter_stride(np.arange(0, 9000, 3) % 256)
+
+
+# --------------------------------------------------------------------------- 9. buses stamped on two clocks
+def _shift_bus(log_text: str, bus: str, shift_s: float) -> str:
+    """The candump log with every frame of ``bus`` stamped ``shift_s`` later, in time order."""
+    rows = []
+    for line in log_text.splitlines(keepends=True):
+        stamp, rest = line.split(" ", 1)
+        t = float(stamp[1:-1]) + (shift_s if rest.startswith(bus + " ") else 0.0)
+        rows.append((t, f"({t:.6f}) {rest}"))
+    rows.sort(key=lambda r: r[0])
+    return "".join(r[1] for r in rows)
+
+
+@pytest.mark.parametrize("shift_s", [8.0, 1000.0])
+def test_a_bus_stamped_on_another_clock_is_moved_back_and_said(sim_log, tmp_path, shift_s):
+    from wheelsoil.processing import process_recording
+
+    shifted = tmp_path / "shifted.log"
+    shifted.write_text(_shift_bus(sim_log.read_text(), "can1", shift_s))
+    same, moved = process_recording(sim_log), process_recording(shifted)
+    assert not any("CLOCK" in w for w in same.warnings) and not same.quality["bus_clocks"]["applied"]
+    q = moved.quality["bus_clocks"]
+    assert q["applied"] and q["bus"] == "can1" and q["reference_bus"] == "can0"
+    assert abs(q["estimate_s"] - shift_s) < 0.01
+    said = [w for w in moved.warnings if w.startswith("CLOCK OFFSET BETWEEN BUSES")]
+    assert len(said) == 1 and str(shifted) in said[0] and "can1" in said[0]
+    # the forces are paired with the slip of their own moment again: as on one clock, to the noise
+    n = min(len(same.signals), len(moved.signals))
+    for c, tol in (("slip", 0.01), ("drawbar_pull_n", 20.0)):
+        d = np.abs(same.signals[c].to_numpy()[:n] - moved.signals[c].to_numpy()[:n])
+        assert np.nanpercentile(d, 99) < tol, c
+    assert moved.signals["valid"].sum() >= 0.95 * same.signals["valid"].sum()
+
+
+def test_clock_offset_is_found_at_any_shift_and_not_claimed_for_repeated_alike_manoeuvres():
+    from wheelsoil.processing.timesync import estimate_clock_offset
+
+    rng = np.random.default_rng(2)
+    t = np.arange(0, 120, 0.01)
+    v = np.convolve(rng.normal(size=t.size), np.ones(150) / 150, mode="same")  # a speed history of no period
+    tb = np.arange(0, 120, 0.01)[::2]
+    for shift in (0.0, 3.7, -42.0, 500.0):
+        r = estimate_clock_offset(t, v, tb + shift, np.interp(tb, t, v))
+        assert r.clear and abs(r.offset_s - shift) <= 0.03, (shift, r)
+    # identical sweeps every 10 s: another sweep matches as well, so no shift is claimed
+    sweeps = np.abs(np.sin(np.pi * t / 10.0)) ** 3
+    r = estimate_clock_offset(t, sweeps, tb + 25.0, np.interp(tb, t, sweeps))
+    assert not r.clear and "not distinct" in r.note
+
+
+def test_a_gnss_later_than_the_latency_search_range_is_found_around_its_coarse_delay(sim_log, tmp_path):
+    from wheelsoil.processing import process_recording
+    from wheelsoil.processing.pipeline import LATENCY_MAX_S
+
+    rows = []
+    for line in sim_log.read_text().splitlines(keepends=True):  # the GNSS frames (29-bit ids) 0.9 s late
+        stamp, rest = line.split(" ", 1)
+        late = len(rest.split()[1].split("#")[0]) == 8
+        t = float(stamp[1:-1]) + (0.9 if late else 0.0)
+        rows.append((t, f"({t:.6f}) {rest}"))
+    late_log = tmp_path / "late.log"
+    late_log.write_text("".join(r for _, r in sorted(rows, key=lambda r: r[0])))
+    base, late = process_recording(sim_log), process_recording(late_log)
+    assert not base.quality["latency"]["pre_shift"]["applied"]
+    assert base.gnss_latency_s + 0.9 > LATENCY_MAX_S  # beyond what the fine search alone reaches
+    assert late.quality["latency"]["pre_shift"]["applied"]
+    assert abs(late.gnss_latency_s - (base.gnss_latency_s + 0.9)) < 0.01
+    said = [w for w in late.warnings if w.startswith("GNSS BEYOND THE LATENCY SEARCH RANGE")]
+    assert len(said) == 1 and str(late_log) in said[0]
+    n = min(len(base.signals), len(late.signals))  # the late frames lengthen the run at its end
+    d = np.abs(late.signals["slip"].to_numpy()[:n] - base.signals["slip"].to_numpy()[:n])
+    assert np.nanpercentile(d, 99) < 0.01
