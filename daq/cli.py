@@ -51,11 +51,13 @@ def register(subparsers) -> None:
         "and reported with file:line.",
         epilog="examples:\n  wheelsoil import candump-2024-05-03.log -o run.mcap\n"
         "  wheelsoil import drive.asc -o run.mcap --map can0=can1   (ASC channel 1 is the GNSS bus)\n"
-        "  wheelsoil import a.log b.log -o run.mcap --map vcan0=can0 --map vcan1=can1")
+        "  wheelsoil import a.log b.log -o run.mcap --map vcan0=can0 --map vcan1=can1\n"
+        "  wheelsoil import wft.trc wss.trc -o run.mcap --map wss.trc:can0=can1   (one bus per file: TRC 1.x)")
     p.add_argument("inputs", nargs="+", help="input log file(s), format from the suffix")
     p.add_argument("-o", "--output", required=True, help="output .mcap file")
     p.add_argument("--map", action="append", default=[], metavar="SRC=BUS",
-                   help="name bus BUS what the file calls SRC (python-can channel or default bus name); repeatable")
+                   help="name bus BUS what the file calls SRC (python-can channel or default bus name); "
+                   "FILE:SRC=BUS for the input FILE only; repeatable")
     p.add_argument("--vehicle", default=None, metavar="TOML", help="vehicle configuration to attach (default: shipped)")
     p.add_argument("--overwrite", action="store_true", help="replace OUTPUT if it exists (default: keep it, refuse)")
     p.set_defaults(func=_cmd_import)

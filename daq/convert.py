@@ -36,6 +36,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Mapping
 
+import numpy as np
+
 from .frames import FrameBatch, checked_batch_from_messages
 from .recording import MAX_FRAMES_PER_MESSAGE, RecordingWriter, _iter_records, _Records, iter_frame_batches
 
@@ -1008,13 +1010,76 @@ def _pending_flush(w_get, bus, msgs, poss, text, rejected):
     return batch
 
 
+def _names_file(key: str, p: Path) -> bool:
+    """Whether the ``FILE`` of a ``FILE:SRC`` channel-map key names the input ``p`` (its path as given,
+    its name, or the same file)."""
+    f = key.rsplit(":", 1)[0] if ":" in key else ""
+    if not f:
+        return False
+    if f in (str(p), p.name):
+        return True
+    try:
+        return Path(f).resolve() == p.resolve()
+    except (OSError, RuntimeError):
+        return False
+
+
+def _file_map(cmap: Mapping[str, str], p: Path) -> dict[str, str]:
+    """The ``FILE:SRC=BUS`` entries of ``cmap`` that name the input ``p``: SRC -> BUS."""
+    return {k.rsplit(":", 1)[1]: v for k, v in cmap.items() if _names_file(k, p)}
+
+
+def _note_ids(ids: dict, batch) -> None:
+    """Add the (id, extended) pairs of ``batch``'s frames to ``ids[batch.bus]``."""
+    if len(batch):
+        key = batch.arbitration_id.astype(np.int64) | (batch.is_extended.astype(np.int64) << 32)
+        ids.setdefault(batch.bus, set()).update((int(k) & 0xFFFFFFFF, bool(k >> 32)) for k in np.unique(key))
+
+
+def _mixed_up_buses(inputs: list, file_ids: list, config) -> str | None:
+    """``BUS NAMES MIXED UP`` with the ``--map`` that fixes it, when the frames an input put on a bus are, by
+    most of their ids, messages the vehicle configuration has on one other bus (and on no other); None
+    otherwise (or without a configuration).
+    Several inputs get ``FILE:SRC=BUS`` maps (each may hold one bus: TRC 1.x files have no bus column)."""
+    where: dict = {}
+    try:
+        for bus in config.buses:
+            for m in config.database(bus).messages:
+                where[(int(m.frame_id), bool(m.is_extended_frame))] = (bus, m.name)
+    except Exception:  # noqa: BLE001 - only a hint depends on it
+        return None
+    moves, parts = [], []
+    for p, ids in zip(inputs, file_ids):
+        for bus, got in ids.items():
+            known = [where[k] for k in got if k in where]
+            targets = {b for b, _ in known}
+            if len(targets) != 1 or bus in targets or 2 * len(known) < len(got):
+                continue  # (a bus of other traffic sharing an id with the configuration's is no mix-up)
+            to = targets.pop()
+            moves.append((p, bus, to))
+            parts.append(f"{p.name}: its frames on {bus} are messages configured on {to} ("
+                         + ", ".join(sorted({n for _, n in known})) + ")")
+    if not moves:
+        return None
+    several = len(inputs) > 1
+    maps = " ".join(f"--map {p.name + ':' if several else ''}{bus}={to}" for p, bus, to in moves)
+    return ("BUS NAMES MIXED UP: " + "; ".join(parts) + ": import with the configuration's bus names: wheelsoil "
+            f"import {' '.join(str(p) for p in inputs)} -o NEW.mcap {maps}"
+            + (" (FILE:SRC=BUS maps one file's channel)" if several else ""))
+
+
 def import_log(inputs, output, *, channel_map: Mapping[str, str] | None = None, config=None,
                metadata: Mapping | None = None, overwrite: bool = False) -> ConvertResult:
     """Convert candump ``.log``, ``.asc``, ``.blf`` or ``.trc`` files into one MCAP recording.
 
     Frames keep their file order per bus. Bus names: see the module docstring;
     ``channel_map`` maps a source channel (python-can's value as text, e.g.
-    ``"0"`` or ``"vcan0"``) or a default bus name to the bus name to use.
+    ``"0"`` or ``"vcan0"``) or a default bus name to the bus name to use; a key
+    ``"FILE:SRC"`` does so for the input ``FILE`` only (its path as given or its
+    name: logs of one bus each, as PCAN-View writes TRC 1.x files without a bus
+    column, all read as channel 1).  Frames that land on a bus whose configured
+    messages they are not, while another configured bus has them all, are named
+    with the ``--map`` that fixes it (``BUS NAMES MIXED UP`` in the warnings).
 
     Data safety: the output may not be an input; an existing output is kept
     unless ``overwrite``; the recording is written to a temporary file next to
@@ -1078,6 +1143,7 @@ def import_log(inputs, output, *, channel_map: Mapping[str, str] | None = None, 
     prov = make_provenance("imported", sources=sources)
     res = ConvertResult(out)
     names: dict[object, str] = {}
+    used: set[str] = set()  # the channel_map keys that named a channel of an input
     tmp = _temp_path(out)
     state: dict = {"w": None, "first_ns": None}
 
@@ -1096,8 +1162,12 @@ def import_log(inputs, output, *, channel_map: Mapping[str, str] | None = None, 
     files_rec = []
     last_ns = None
     channels_seen: set[str] = set()  # the inputs' channels, as python-can gives them and as bus names
+    file_ids: list[dict[str, set]] = []  # per input: bus -> its (id, extended) with frames
     try:
-        for p in inputs:
+        for i_file, p in enumerate(inputs):
+            fmap = _file_map(cmap, p)
+            ids_here: dict[str, set] = {}
+            file_ids.append(ids_here)
             src = LogSource(p)
             trc = src.suffix == ".trc"
             text = src.unit == "line"
@@ -1116,14 +1186,21 @@ def import_log(inputs, output, *, channel_map: Mapping[str, str] | None = None, 
                 entry = by_channel.get(msg.channel)
                 if entry is None:
                     ch = msg.channel
-                    bus = names.get((trc, ch))
+                    bus = names.get((i_file, ch))
                     if bus is None:
                         raw = ch
                         if trc and isinstance(ch, int):
                             raw = ch - 1  # python-can's TRC reader keeps the 1-based number
                         dflt = default_bus_name(raw)
-                        bus = cmap.get(str(ch), cmap.get(dflt, dflt))
-                        names[(trc, ch)] = bus
+                        key = next((k for k in (str(ch), dflt) if k in fmap), None)
+                        if key is not None:
+                            bus = fmap[key]
+                            used.add(next(k for k in cmap if k.endswith(":" + key) and _names_file(k, p)))
+                        else:
+                            key = next((k for k in (str(ch), dflt) if k in cmap), None)
+                            bus = dflt if key is None else cmap[key]
+                            used.add(key)
+                        names[(i_file, ch)] = bus
                         channels_seen.update((str(ch), dflt))
                     entry = by_channel[ch] = pending.setdefault(bus, (bus, [], []))
                 msgs = entry[1]
@@ -1131,6 +1208,7 @@ def import_log(inputs, output, *, channel_map: Mapping[str, str] | None = None, 
                 entry[2].append(src.pos)
                 if len(msgs) >= MAX_FRAMES_PER_MESSAGE:
                     b = _pending_flush(writer, entry[0], msgs, entry[2], text, rejected)
+                    _note_ids(ids_here, b)
                     good += len(b)
                     if len(b):
                         t = int(b.timestamp_ns.max())
@@ -1140,6 +1218,7 @@ def import_log(inputs, output, *, channel_map: Mapping[str, str] | None = None, 
             for bus, msgs, poss in pending.values():
                 if msgs:
                     b = _pending_flush(writer, bus, msgs, poss, text, rejected)
+                    _note_ids(ids_here, b)
                     good += len(b)
                     if len(b):
                         t = int(b.timestamp_ns.max())
@@ -1169,14 +1248,20 @@ def import_log(inputs, output, *, channel_map: Mapping[str, str] | None = None, 
                               "unit": src.unit,
                               "first_rejected": [{src.unit: pos, "reason": why} for pos, why in rejected[:MAX_LISTED]],
                               "truncated": src.truncated, "notes": src.notes})
-        unused = [k for k in cmap if k not in channels_seen]
-        if unused:
-            has = ", ".join(sorted({default_bus_name(c) for c in channels_seen}))
-            for k in unused:
-                msg = (f"--map {k}={cmap[k]}: {k} is no bus or channel of the input (it has {has}); "
-                       f"nothing was mapped to {cmap[k]}")
-                warnings.warn(msg, RuntimeWarning, stacklevel=2)
-                res.warnings.append(msg)
+        unused = [k for k in cmap if k not in used]
+        has = ", ".join(sorted({default_bus_name(c) for c in channels_seen}))
+        mixed = _mixed_up_buses(inputs, file_ids, config)
+        for k in unused:
+            msg = (f"--map {k}={cmap[k]}: {k} is no bus or channel of the input (it has {has}); "
+                   f"nothing was mapped to {cmap[k]}")
+            if ":" in k and not any(_names_file(k, q) for q in inputs):
+                msg = (f"--map {k}={cmap[k]}: no input is named {k.rsplit(':', 1)[0]} (FILE:SRC=BUS maps the "
+                       f"channel SRC of the input FILE only); nothing was mapped to {cmap[k]}")
+            warnings.warn(msg, RuntimeWarning, stacklevel=2)
+            res.warnings.append(msg)
+        if mixed:
+            warnings.warn(mixed, RuntimeWarning, stacklevel=2)
+            res.warnings.append(mixed)
         w = writer()
         res.record = {"frames": sum(f["frames"] for f in files_rec), "rejected": res.skipped,
                       "truncated": bool(res.truncated), "files": files_rec}

@@ -1932,6 +1932,10 @@ def bus_mix_up(cfg, select, found: set, ids_seen: dict, path, sources=()) -> str
     how = f"wheelsoil import {' '.join(sources) or 'LOG'} -o NEW.mcap {maps}"
     if not sources:
         how += f" (LOG: the log the recording was made from, or 'wheelsoil export {path} -o LOG.log' first)"
+    elif len(sources) > 1:
+        how += (f" (the recording was imported from {len(sources)} logs: when each holds one bus, as TRC 1.x files "
+                "without a bus column do, map it in the file that holds it only, --map FILE:SRC=BUS; 'wheelsoil "
+                "import' names the file)")
     return f"BUS NAMES MIXED UP: {'; '.join(parts)}: import the log with the bus names of the configuration: {how}"
 
 

@@ -220,6 +220,45 @@ def test_import_map_of_a_channel_the_input_does_not_have_is_a_warning(tmp_path):
     assert not any("can1=can1" in w for w in res.warnings)
 
 
+def _trc_v11(path, rows):
+    """A PCAN-View TRC 1.1 file (no bus column: every frame reads as channel 1) of candump-log ``rows``."""
+    t0 = float(rows[0].split()[0][1:-1])
+    out = [";$FILEVERSION=1.1", f";$STARTTIME={t0 / 86400 + 25569:.10f}", ";",
+           ";---+--   ----+----  --+--  ----+---  +  -+ -- -- -- -- -- -- --"]
+    for n, line in enumerate(rows, 1):
+        stamp, _, frame = line.split()[:3]
+        cid, data = frame.split("#")
+        b = bytes.fromhex(data)
+        out.append(f"{n:6d}) {1e3 * (float(stamp[1:-1]) - t0):11.1f}  Rx     {cid.upper():>8}  {len(b)}  "
+                   + " ".join(f"{x:02X}" for x in b))
+    path.write_text("\r\n".join(out) + "\r\n")
+
+
+def test_logs_of_one_bus_each_are_mapped_per_file_and_the_map_is_named(sim_log, tmp_path):
+    from wheelsoil.processing import process_recording
+
+    rows = sim_log.read_text().splitlines()
+    a, b = tmp_path / "wft.trc", tmp_path / "wss_gnss.trc"
+    _trc_v11(a, [r for r in rows if " can0 " in r])
+    _trc_v11(b, [r for r in rows if " can1 " in r])
+    n0, n1 = sum(" can0 " in r for r in rows), sum(" can1 " in r for r in rows)
+    res = _import([a, b], tmp_path / "one_bus.mcap")  # both read as channel 1: all on can0
+    assert res.frames == {"can0": n0 + n1}
+    said = [w for w in res.warnings if w.startswith("BUS NAMES MIXED UP")]
+    assert len(said) == 1 and "wss_gnss.trc: its frames on can0 are messages configured on can1" in said[0]
+    assert "--map wss_gnss.trc:can0=can1" in said[0] and "wft.trc:" not in said[0]
+    # the map it names: one file's channel only
+    res = _import([a, b], tmp_path / "mapped.mcap", channel_map={"wss_gnss.trc:can0": "can1"})
+    assert res.frames == {"can0": n0, "can1": n1}
+    assert not any("MIXED UP" in w or "--map" in w for w in res.warnings)
+    assert process_recording(tmp_path / "mapped.mcap").signals["valid"].sum() == \
+        process_recording(sim_log).signals["valid"].sum()
+    # a file key naming no input is said, and maps nothing
+    with pytest.warns(RuntimeWarning, match=r"no input is named other.trc"):
+        res = import_log([a, b], tmp_path / "x.mcap", channel_map={"other.trc:can0": "can1"})
+    assert res.frames == {"can0": n0 + n1}
+
+
 # --------------------------------------------------------------------------- 6. what a refused file looks like
 LINES = [(1700000000.000100 + i * 1e-3, 0x120 + i % 3, "0102030405060708") for i in range(30)]
 
