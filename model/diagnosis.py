@@ -1655,7 +1655,7 @@ def diagnose(
         elif remain:
             effect, why = "unexplained", "leaves_structure"
             reasons.append(f"{TITLES[best]} lowers the drawbar pull error but leaves significant structure ("
-                           + ", ".join(remain) + ")")
+                           + _tests_text(remain) + ")")
         elif contra := _sinkage_contradicts(data, fits[best], sink_ev):
             effect, why = "unexplained", "sinkage_contradicts"
             reasons.append(f"the measured sinkage does not grow with slip as {TITLES[best]} says it does "
@@ -2241,6 +2241,17 @@ def _noisy_text(noisy: dict) -> str:
 _AGAINST = {"": "against slip", "@load": "against load", "@x": "along the run"}
 
 
+def structure_title(key: str) -> str:
+    """The words for a structure test's key (:func:`_structure_cells`): ``"drawbar_pull_n@x"`` ->
+    ``"drawbar pull along the run"``."""
+    c, at, against = key.partition("@")
+    return f"{CHANNEL_TITLES.get(c, c)} {_AGAINST.get(at + against, 'against ' + against)}"
+
+
+def _tests_text(keys) -> str:
+    return ", ".join(structure_title(k) for k in keys)
+
+
 def _loose_text(loose: list) -> str:
     parts = []
     for key, kind, b_abs, b_rel, c in loose:
@@ -2403,12 +2414,11 @@ def _summary(d: Diagnosis) -> str:
                      + f" (slope {zr['slope'] * 1e3:.1f} +/- {zr['stderr'] * 1e3:.1f} mm per unit slip); Wong's static "
                      f"sinkage is {np.nanmean(zw) * 1e3:.1f} mm.")
     tw = d.structure["wong"]
-    ptxt = "Holm-adjusted " + ", ".join(
-        f"{k.replace('drawbar_pull_n', 'Dp').replace('torque_nm', 'T').replace('sinkage_m', 'z')} p = {t['p_holm']:.2g}"
-        for k, t in tw.items() if np.isfinite(t.get("p_holm", np.nan)))
+    ptxt = "Holm-adjusted p: " + ", ".join(
+        f"{structure_title(k)} {t['p_holm']:.2g}" for k, t in tw.items() if np.isfinite(t.get("p_holm", np.nan)))
     if d.effect == "none" and d.lab_uncertainty:
         lu = d.lab_uncertainty
-        parts.append(f"Wong's residuals are systematic in {', '.join(d._sig_w)} ({ptxt}), but within what the lab "  # noqa: SLF001
+        parts.append(f"Wong's residuals are systematic in {_tests_text(d._sig_w)} ({ptxt}), but within what the lab "  # noqa: SLF001
                      f"values' stated uncertainty allows: {TITLES['terrain']} moves no value beyond {LAB_Z:g} lab "
                      "standard deviations (" + ", ".join(f"{q} {v:+.2g}" for q, v in lu["z"].items()) + " sigma), "
                      "and leaves no relevant structure" + (", and the measured sinkage does not grow with slip"
@@ -2424,10 +2434,10 @@ def _summary(d: Diagnosis) -> str:
                         "evidence, not because the data confirm it." if loose else "so Wong's model is kept."))
         small = _detectable_only(tw)
         if small:
-            parts.append("A small systematic error is statistically detectable in " + ", ".join(small)
+            parts.append("A small systematic error is statistically detectable in " + _tests_text(small)
                          + " but is below the relevance threshold; it is not attributed to a cause.")
     else:
-        parts.append(f"Wong's residuals are systematic in {', '.join(d._sig_w)} ({ptxt}).")  # noqa: SLF001
+        parts.append(f"Wong's residuals are systematic in {_tests_text(d._sig_w)} ({ptxt}).")  # noqa: SLF001
     # per channel
     ch = []
     for c, r in d.channels.items():

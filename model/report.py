@@ -42,7 +42,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .diagnosis import CHANNEL_TITLES, LAB_Z, SLIP_SINKAGE_MODELS, TITLES, WHY_UNEXPLAINED, data_estimates, prior_z
+from .diagnosis import (CHANNEL_TITLES, EFFECT_TITLES, LAB_Z, SLIP_SINKAGE_MODELS, TITLES, WHY_UNEXPLAINED,
+                        data_estimates, prior_z, structure_title)
 from .diagnosis import json_ready as _clean
 
 __all__ = ["write_report", "report_dict", "fmt", "fmt_param", "param_unit", "SCHEMA", "ALL_MODELS",
@@ -261,7 +262,8 @@ def _legacy_diagnosis(diag) -> dict:
     g = lambda k, d=None: getattr(diag, k, d)  # noqa: E731
     structure = {}
     for k, v in (g("structure") or {}).items():
-        structure[_canon(k)] = {c: {"p": t.get("p"), "p_poly": t.get("p_poly"), "p_bins": t.get("p_bins"),
+        structure[_canon(k)] = {c: {"p": t.get("p"), "p_holm": t.get("p_holm"), "p_poly": t.get("p_poly"),
+                                    "p_bins": t.get("p_bins"),
                                     "effect_sigma": t.get("effect"), "effect_abs": t.get("effect_abs"),
                                     "effect_rel": t.get("effect_rel"), "units": t.get("units"),
                                     "channel": t.get("channel", c.partition("@")[0])}
@@ -608,12 +610,6 @@ def _test_level(rep, t: dict) -> tuple[float | None, float | None, str]:
     return t.get("p"), (alpha / max(1, n) if alpha is not None else None), "p"
 
 
-_AGAINST = {"": "against slip", "load": "against load", "x": "against distance/time"}
-
-
-def _test_label(key: str) -> str:
-    c, _, against = key.partition("@")
-    return f"{CHANNEL_TITLES.get(c, c)} {_AGAINST.get(against, 'against ' + against)}"
 
 
 def structure_statements(rep) -> list:
@@ -633,7 +629,7 @@ def structure_statements(rep) -> list:
         c = t.get("channel") or key.partition("@")[0]
         p, lvl, adj = _test_level(rep, t)
         es, er, ea = t.get("effect_sigma"), t.get("effect_rel"), t.get("effect_abs")
-        ch = _test_label(key)
+        ch = structure_title(key)
         if p is None:
             out.append({"test": key, "channel": c, "kind": "untested", "text": f"{ch}: too few independent units to test."})
             continue
@@ -1173,15 +1169,22 @@ def _glance(d: dict) -> str:
         rows.append([CHANNEL_TITLES.get(c, c), _chan_fmt(v.get("wong_cv_rmse"), c),
                      (f"{_chan_fmt(best, c)} ({_title(_canon(shown))})" if best is not None and shown
                       else "n/a (no model supported on this channel)"),
-                     str(v.get("effect") or "n/a")])
+                     _effect_word(v.get("effect"))])
     if rows:
         out += _table(["channel", "Wong's error on new data (CV R0)", "the compared model's (named, else the "
                        "channel's best supported)", "this channel's verdict"], rows)
     probs = sorted(((k, p) for k, p in (d.get("effect_probabilities") or {}).items() if p is not None and p >= 1e-3),
                    key=lambda kp: -kp[1])
     if probs:
+        hp = {k: p for k, p in (d.get("probabilities") or {}).items() if p is not None}
+        top_h = max(hp, key=hp.get) if hp else None
+        own = ((d.get("models") or {}).get(top_h) or {}).get("effect")
+        counted = ""
+        if own and own != probs[0][0] and top_h is not None:
+            counted = (f" The most probable hypothesis, {TITLES.get(_canon(top_h), top_h)} ({num(hp[top_h], 2)}), counts "
+                       f"for {_effect_word(probs[0][0])}: what it adds does not improve its predictions of new data.")
         out += ("<p>Probability of each effect, over the hypotheses tried: "
-                + _e(", ".join(f"{k} {num(p, 2)}" for k, p in probs)) + "."
+                + _e(", ".join(f"{_effect_word(k)} {num(p, 2)}" for k, p in probs)) + "." + _e(counted)
                 + (" A probable effect is named only when its model also holds on new data and against the "
                    "causes on no list that act alike (below)." if probs[0][0] != d.get("effect") else "") + "</p>")
     why = d.get("confidence_reasons") or []
@@ -1207,8 +1210,13 @@ def _not_named(d: dict) -> str:
     why = (WHY_UNEXPLAINED.get(d.get("why"), d.get("why")) if eff == "unexplained" else
            "Wong's residuals show no systematic error of relevant size (the structure tests, thresholds below): "
            "the rule names a cause only for an error it can see")
-    return (f"<p><b>Not named:</b> the most probable effect is {_e(top)} (probability "
+    return (f"<p><b>Not named:</b> the most probable effect is {_e(_effect_word(top))} (probability "
             f"{_e(num(probs[top], 2))}), but {_e(why or 'the rule did not name it')}.</p>")
+
+
+def _effect_word(effect) -> str:
+    """An effect's words for the reader (``slip_sinkage`` -> "slip sinkage"; report.json keeps the codes)."""
+    return EFFECT_TITLES.get(effect, str(effect or "n/a").replace("_", " "))
 
 
 def _table(headers, rows, raw: bool = False) -> str:

@@ -306,14 +306,50 @@ def test_a_probable_effect_that_is_not_named_says_why_under_the_headline():
     from wheelsoil.model.report import _glance
 
     none = html.unescape(_glance({"effect": "none", "effect_probabilities": {"none": 1e-59, "terrain_mismatch": 1.0}}))
-    assert "Not named:</b> the most probable effect is terrain_mismatch (probability 1.0)" in none
+    assert "Not named:</b> the most probable effect is a terrain mismatch (probability 1.0)" in none
     assert "no systematic error of relevant size" in none
     unx = html.unescape(_glance({"effect": "unexplained", "why": "equally_well",
                                  "effect_probabilities": {"stress_distribution": 0.9, "slip_sinkage": 0.1}}))
-    assert "stress_distribution (probability 0.90)" in unx and WHY_UNEXPLAINED["equally_well"] in unx
+    assert "a different normal-stress distribution (probability 0.90)" in unx and WHY_UNEXPLAINED["equally_well"] in unx
     for d in ({"effect": "slip_sinkage", "effect_probabilities": {"slip_sinkage": 1.0}},
               {"effect": "none", "effect_probabilities": {"none": 0.7, "terrain_mismatch": 0.3}}):
         assert "Not named" not in _glance(d)
+
+
+def test_the_glance_speaks_of_effects_in_words_and_says_what_a_probable_hypothesis_counts_for():
+    """The glance listed "terrain_mismatch 1.0" and channel verdicts "slip_sinkage" (report.json's codes) while
+    the text named Vasil'ev + terrain re-fitted as the most probable hypothesis (0.75): the words are used, and
+    why that hypothesis's probability counts for another effect is said."""
+    from wheelsoil.model.report import _glance
+
+    d = {"effect": "unexplained", "why": "rival_more_evidence",
+         "channels": {"drawbar_pull_n": {"measured": True, "effect": "slip_sinkage", "wong_cv_rmse": 908.0,
+                                         "best_cv_rmse": 284.0, "compared_model": "vasilev"}},
+         "effect_probabilities": {"terrain_mismatch": 1.0},
+         "probabilities": {"vasilev+terrain": 0.75, "lyasko+terrain": 0.25},
+         "models": {"vasilev+terrain": {"effect": "slip_sinkage"}, "lyasko+terrain": {"effect": "slip_sinkage"}}}
+    text = html.unescape(_glance(d))
+    assert "slip_sinkage" not in text and "terrain_mismatch" not in text
+    assert "a terrain mismatch 1.0" in text and "<td>slip sinkage</td>" in text
+    assert "(0.75), counts for a terrain mismatch: what it adds does not improve its predictions of new data" in text
+
+
+def test_structure_tests_are_told_in_words_with_the_p_the_verdict_used():
+    """The summary named the tests by their keys ("drawbar_pull_n@x") with Holm-adjusted p-values while the
+    structure statements quoted raw p-values against a Bonferroni level for the same tests; report.json now
+    keeps p_holm, and both speak of "drawbar pull along the run"."""
+    from wheelsoil.model.diagnosis import structure_title
+    from wheelsoil.model.report import structure_statements
+
+    assert structure_title("drawbar_pull_n@x") == "drawbar pull along the run"
+    assert structure_title("torque_nm") == "torque against slip"
+    rep = {"diagnosis": {"thresholds": {"alpha": 0.01, "min_effect_sigma": 1.0, "min_effect_rel": 0.03},
+                         "structure_tests": {"wong": {
+                             "drawbar_pull_n@x": {"p": 0.001, "p_holm": 0.02, "effect_sigma": 3.0, "effect_rel": 0.1,
+                                                  "effect_abs": 300.0, "channel": "drawbar_pull_n"}}}}}
+    (st,) = structure_statements(rep)
+    assert st["kind"] == "not_significant" and "Holm-adjusted p = 0.020 >= 0.010" in st["text"]
+    assert st["text"].startswith("drawbar pull along the run")
 
 
 def test_overview_plots_take_the_figure_width_and_its_legends_stay_inside(tmp_path, monkeypatch):
