@@ -6,8 +6,9 @@ The main loop wakes every ``BATCH_INTERVAL_S`` (0.5 s), turns what arrived into 
 no per-frame numpy), updates the counters vectorised (lost WFT frames from
 Counter gaps, error frames, unknown ids, DLC mismatches) and hands the batch to
 :class:`~wheelsoil.daq.recording.RecordingWriter`, which then closes a chunk and
-fsyncs: a power cut loses at most the last ~0.5 s. Half-second batches keep
-MCAP messages large (hundreds of frames), which makes reading back fast.
+fsyncs: a power cut loses at most the last ~0.6 s (the batch in progress and its
+writing). Half-second batches keep MCAP messages large (hundreds of frames), which
+makes reading back fast.
 Nothing per frame can raise: a frame python-can delivers is recorded as is;
 a bad frame only shows up in the counters.
 """

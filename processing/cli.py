@@ -19,7 +19,7 @@ output columns (one row per grid point, from the first frame on):
   torque_nm       driving torque T [N m]         (WFT: My - I_w domega/dt, inertia compensated)
   speed_mps       vehicle speed V [m/s]          (GNSS/INS forward velocity, latency removed)
   omega_radps     wheel angular speed [rad/s]    (wheel speed module)
-  phase           accel | brake | standstill | other
+  phase           accel | drive | brake | standstill | other
   valid           all values present, no long frame gap, slip in [-1, 1)
   distance_m      travelled distance [m]         (integral of V)
   fx_n, my_nm     WFT Fx [N] and My [N m] as measured (filtered, before inertia compensation)
