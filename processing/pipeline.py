@@ -702,9 +702,14 @@ def _choose_latency(cands: dict, errs: dict, *, coupled: bool, wheel_ref_label: 
                                      f"{v['estimate_s'] * 1e3:.1f} +- {v['stderr_s'] * 1e3:.1f} ms")
                          + ("" if v["usable"] else f" (not used: {v['note']})") for k, v in info.items())
     if chosen is None:
-        warns.append(f"GNSS latency not estimated (LATENCY UNKNOWN): GNSS timestamps used as received; slip "
+        top = [v for v in info.values() if v["estimate_s"] is not None]
+        beyond = bool(top) and all(v["estimate_s"] >= LATENCY_MAX_S - 0.011 for v in top)
+        warns.append("GNSS LATENCY UNKNOWN: GNSS latency not estimated; GNSS timestamps used as received; slip "
                      "may be biased "
-                     f"(candidates: {cand_txt}); ProcessResult.quality['latency']")
+                     + (f"(every estimate stops at the search range's top, {LATENCY_MAX_S:g} s: the GNSS speed may "
+                        "arrive later than that, a very late receiver or one stamped on another clock than the "
+                        "wheels'; check the logger's clocks) " if beyond else "")
+                     + f"(candidates: {cand_txt}); ProcessResult.quality['latency']")
     elif not reliable:
         warns.append(f"GNSS LATENCY UNRELIABLE: applied {chosen.latency_s * 1e3:.1f} +- "
                      f"{chosen.stderr_s * 1e3:.1f} ms from {label} ({'; '.join(reasons)}); slip and every verdict "
@@ -778,7 +783,7 @@ MAX_EXCLUDED_LISTED = 50
 CLOCK_STEP_TOL_S = 0.5
 
 
-def _align_bus_clocks(dec: dict, sig: dict, path: Path, warns: list[str]) -> tuple[dict, dict | None]:
+def _align_bus_clocks(dec: dict, sig: dict, cfg, path: Path, warns: list[str]) -> tuple[dict, dict | None]:
     """Put the wheel-speed module's bus on the transducer's bus's clock, when the two read the same
     wheel at moments that differ by more than a module's delay.
 
@@ -793,8 +798,8 @@ def _align_bus_clocks(dec: dict, sig: dict, path: Path, warns: list[str]) -> tup
     frame of the module's bus is moved back by it, loudly.  When the histories match at no shift near
     zero and no clear offset is found, it is said, and nothing is moved.
 
-    ``dec`` message name -> :class:`DecodedMessage` (sorted times); ``sig`` the configured signals;
-    ``warns`` receives the messages.  Returns ``(dec, quality)``: ``quality`` None when the two are on
+    ``dec`` message name -> :class:`DecodedMessage` (sorted times); ``sig`` the configured signals; ``cfg``
+    the vehicle configuration (readings at a DBC range limit are left out); ``warns`` receives the messages.  Returns ``(dec, quality)``: ``quality`` None when the two are on
     one bus or either is missing, else ``{"bus", "reference_bus", "estimate_s", "corr", "corr_other",
     "corr_near_zero", "applied", "note"}``.  Never raises."""
     a_ref, b_ref = sig["wft_angle"], sig["wheel_speed"]
@@ -810,7 +815,8 @@ def _align_bus_clocks(dec: dict, sig: dict, path: Path, warns: list[str]) -> tup
         om_a = np.abs(np.where(ok, np.angle(np.exp(1j * np.diff(ang))) / np.where(ok, dt, 1.0), np.nan))
     t_mid = 0.5 * (ta[1:] + ta[:-1])
     tb = (mb.timestamp_ns - t0) * 1e-9
-    om_b = np.abs(mb.signals[b_ref.signal] * b_ref.scale_to_si)
+    om_b = mb.signals[b_ref.signal] * b_ref.scale_to_si
+    om_b = np.abs(np.where(_at_range_limit(cfg, b_ref, om_b), np.nan, om_b))  # a pinned reading is no speed
     where = f"{b_ref.message} on {mb.bus} against {a_ref.message} on {ma.bus}"
     try:
         est = estimate_clock_offset(t_mid, om_a, tb, om_b, near_s=WSS_LAG_RANGE_S)
@@ -863,8 +869,8 @@ def _gnss_far_shift(g_rel: np.ndarray, g_v: np.ndarray, refs: list, path: Path, 
     of another moment.
 
     ``g_rel`` (N,) GNSS times [s], ``g_v`` (N,) its speed [m/s]; ``refs`` [(times (M,) [s], r*omega (M,)
-    [m/s])] the wheels' speeds (the front wheels', then the measured one's), the first one with a clear
-    answer used.  The coarse delay is the shift at which the two speed histories correlate best
+    [m/s])] free-rolling wheels' speeds (the front wheels', when they do not turn with the measured one: a
+    driven wheel's speed leads the vehicle's by its slip), the first one with a clear answer used.  The coarse delay is the shift at which the two speed histories correlate best
     (:func:`.timesync.estimate_clock_offset`, every shift, 50 ms grid).  When it is clear and lies outside
     the range less two grid steps at its top, the GNSS times are shifted by it less the range's centre, so
     that the fine search is centred on it and measures the rest; the total is the latency reported.  Beyond
@@ -1307,7 +1313,7 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
     dec, clock_steps = _undo_clock_steps(dec, sig["gnss_time_week"], sig["gnss_time_tow"], path, warns)
     dec, tb_runs, tb_parts, tb_quality = _clean_time_base(dec, path, warns)
     tb_quality["clock_steps"] = clock_steps
-    dec, bus_clocks = _align_bus_clocks(dec, sig, path, warns)
+    dec, bus_clocks = _align_bus_clocks(dec, sig, cfg, path, warns)
     if not dec:
         raise ValueError(f"{path}: no frame of the configured messages has a usable timestamp")
     t0_ns = min(int(m.timestamp_ns[0]) for m in dec.values())
@@ -1633,10 +1639,16 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
         rep, g_period = _time_gaps(g_msg, g_t, *cfg.cycle_time_s(g_bus, g_msg), parts=tb_parts.get(g_msg))
         lost_frames[g_msg] = rep
         g_rel = rel_s(g_t)
-        refs = [(rel_s(s_[0]), s_[1] * r) for s_ in (get(f, measured=True) for f in fronts)
-                if s_ is not None and s_[0].shape[0] >= 3]
-        if wss_t is not None:
-            refs.append((wss_rel, got[1] * r))
+        # the first shift needs free-rolling wheels: a driven wheel's speed leads the vehicle's by its slip
+        # (a 4x4's sweeps matched 0.9 s late)
+        f_ser = [s_ for s_ in (get(f, measured=True) for f in fronts) if s_ is not None and s_[0].shape[0] >= 3]
+        refs = []
+        if f_ser and wss_t is not None:
+            with _w.catch_warnings():
+                _w.simplefilter("ignore", RuntimeWarning)
+                fv0 = np.nanmean(np.vstack([np.interp(f_ser[0][0], t_, v_) for t_, v_ in f_ser]), axis=0) * r
+            if not _fronts_coupled(f_ser[0][0], fv0, wss_t, got[1] * r):
+                refs = [(rel_s(f_ser[0][0]), fv0)]
         g_pre, pre_q = _gnss_far_shift(g_rel, g_v, refs, path, g_msg, warns)
         g_rel = g_rel - g_pre
         # latency candidates (docs/architecture.md "GNSS latency"): a wheel-speed reference
@@ -1794,6 +1806,8 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
     out_range = np.isfinite(slip) & ~in_range
     if out_range.any():
         warns.append(f"slip outside [-1, 1) in {np.count_nonzero(out_range)} samples: flagged invalid")
+    quality["implausible"] = _implausible(load, dp, torque, slip, speed, rw, r, quality.get("wheel_speed_lag"),
+                                          label, warns, ripple=quality.get("wft_ripple"))
 
     df = pd.DataFrame({
         "t_s": t_grid, "slip": slip, "load_n": load, "drawbar_pull_n": dp, "torque_nm": torque,
@@ -1810,6 +1824,101 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
         latency_reference=lat_ref if latency is not None else "", latency_detail=latency,
         wheel_radius_source=r_source, inertia=inertia_info, excluded=excluded, quality=quality,
     )
+
+
+#: Physical limits a decoded run must keep (:func:`_implausible`): a wheel on soil transmits a driving torque
+#: T <= mu r W with mu below about 1 (Wong 2008, ch. 2: c A + W tan(phi), phi < 45 deg; cohesion adds a
+#: fraction of W at field loads): a median T/(r W) or |Dp|/W above ``TRACTION_MAX`` over the driving samples is
+#: a scaling error of the force or moment signals, and above ``TRACTION_GROSS`` no fit of it means anything.
+TRACTION_MAX = 1.2
+TRACTION_GROSS = 2.0
+#: The wheel-speed module and the transducer's wheel angle read one wheel's rotation [rad/s]: their gain
+#: (:func:`_wheel_speed_lag`) is 1 but for the tooth count's tolerance; outside ``WHEEL_GAIN_MAX`` (and its
+#: inverse) one of them is decoded in another unit or scale, or is another wheel's, and outside
+#: ``WHEEL_GAIN_GROSS`` slip (Eq. 6) from it is meaningless.
+WHEEL_GAIN_MAX = 1.1
+WHEEL_GAIN_GROSS = 1.5
+#: A transducer's bridges differ in gain by a few per cent, its crosstalk is a few per cent: a once- or twice-
+#: per-revolution part of the hub forces above this share of the load is two force signals decoded with
+#: different factors (or one with another byte order), and the load's level is then wrong too.
+RIPPLE_DECODE_REL = 0.2
+#: A ground vehicle on a test track: a speed above this [m/s] (216 km/h) is a decoding error.
+SPEED_MAX_MPS = 60.0
+#: Driving samples (slip above this, r*omega and V defined) that the traction and torque-sign checks use.
+PLAUSIBLE_SLIP_MIN = 0.1
+
+
+def _implausible(load, dp, torque, slip, speed, rw, r, lag_q, label, warns: list[str], *,
+                 ripple: dict | None = None) -> list[dict]:
+    """What a decoded run says that no wheel on soil can do, as loud warnings (``warns``) and a list of
+    ``{"check", "value", "gross", "text"}`` (``ProcessResult.quality["implausible"]``; ``gross``: no fit of the
+    run means anything, and ``fit`` refuses it).  Each is what a vehicle configuration or DBC that does not
+    match the recording produces (a factor, a unit, a sign, a byte order, a swapped signal or id), so each
+    names the signals to check.  The arrays are the processing grid's (N,) [N, N m, -, m/s, m/s]; ``r`` [m];
+    ``lag_q`` ``quality["wheel_speed_lag"]`` or None; ``ripple`` ``quality["wft_ripple"]`` or None; ``label(key)``
+    names a configured signal.  Never raises.
+    Checks: median load over the run > 0; median T/(r W) and |Dp|/W over the driving samples at most
+    :data:`TRACTION_MAX`; the torque not opposing positive slip in most driving samples; the module's speed
+    within :data:`WHEEL_GAIN_MAX` of the transducer's wheel-angle rate; the forces' part locked to the wheel
+    angle under :data:`RIPPLE_DECODE_REL` of the load; V below :data:`SPEED_MAX_MPS` and not
+    nil while the wheel turns.  Source: Wong 2008 ch. 2 (traction limit), hardware.md (frames and signs)."""
+    out = []
+
+    def add(check, value, gross, text):
+        out.append({"check": check, "value": value, "gross": bool(gross), "text": text})
+        warns.append("SIGNALS IMPLAUSIBLE: " + text)
+
+    forces = f"{label('wft_fx_w')}, {label('wft_fz_w')}, {label('wft_my')}"
+    with np.errstate(invalid="ignore", divide="ignore"):
+        w_med = float(np.nanmedian(load)) if np.isfinite(load).any() else float("nan")
+        if np.isfinite(w_med) and w_med <= 0:
+            add("load", w_med, True, f"the vertical load's median over the run is {w_med:.3g} N (a wheel carries a "
+                "positive load): check the sign and factor of the vertical force in the DBC, and that the configured "
+                f"force signals ({forces}) are not swapped, nor the force and moment messages' ids")
+        amp = max((float((ripple or {}).get(k) or 0.0) for k in ("fx_1x_n", "fx_2x_n", "fz_1x_n", "fz_2x_n")),
+                  default=0.0)
+        if np.isfinite(w_med) and w_med > 0 and amp > RIPPLE_DECODE_REL * w_med:
+            add("ripple", amp / w_med, True,
+                f"the hub forces carry {amp:.0f} N ({100 * amp / w_med:.0f} % of the load) once or twice per wheel "
+                "revolution, far beyond a transducer's bridge gains or crosstalk (a few per cent): the two in-plane "
+                f"forces ({label('wft_fx_w')}, {label('wft_fz_w')}) are decoded with different factors or byte "
+                "orders, and the load's level is wrong too")
+        drive = (np.isfinite(slip) & (slip > PLAUSIBLE_SLIP_MIN) & np.isfinite(load) & (load > 0)
+                 & np.isfinite(torque) & np.isfinite(dp))
+        if np.count_nonzero(drive) >= 50 and r > 0:
+            mu_t = float(np.median(torque[drive] / (r * load[drive])))
+            mu_d = float(np.median(np.abs(dp[drive]) / load[drive]))
+            mu = max(abs(mu_t), mu_d)
+            if mu > TRACTION_MAX:
+                which = "T/(r W)" if abs(mu_t) >= mu_d else "|Dp|/W"
+                add("traction", mu, mu > TRACTION_GROSS,
+                    f"the median {which} over the driving samples (slip > {PLAUSIBLE_SLIP_MIN:g}) is {mu:.3g}, beyond "
+                    f"what a wheel on soil transmits (about 1 at most): the force and moment signals ({forces}) are "
+                    "scaled inconsistently (a factor or unit in the DBC or vehicle.toml)")
+            if np.mean(torque[drive] < 0) > 0.8:
+                add("torque_sign", float(np.mean(torque[drive] < 0)), True,
+                    f"the torque opposes the slip in {100 * np.mean(torque[drive] < 0):.0f} % of the driving samples "
+                    f"(slip > {PLAUSIBLE_SLIP_MIN:g} needs a driving torque, T > 0): check the sign of "
+                    f"{label('wft_my')} (its DBC factor, or the transducer's mounting against hardware.md's frames)")
+        g = (lag_q or {}).get("gain")
+        if g is not None and np.isfinite(g) and g > 0 and max(g, 1 / g) > WHEEL_GAIN_MAX:
+            add("wheel_speed", float(g), max(g, 1 / g) > WHEEL_GAIN_GROSS,
+                f"the wheel speed {label('wheel_speed')} reads {g:.3g} times the transducer's wheel-angle rate "
+                f"({label('wft_angle')}), which measures the same wheel's rotation: one of them is decoded in "
+                "another unit or scale (rpm read as rad/s is 9.55; a factor; a byte order) or is another wheel's "
+                "channel; slip (Eq. 6) takes the wheel speed")
+        v = np.abs(speed[np.isfinite(speed)])
+        if v.size and float(np.percentile(v, 95)) > SPEED_MAX_MPS:
+            add("speed", float(np.percentile(v, 95)), True,
+                f"the vehicle speed {label('gnss_forward_velocity')} reaches {np.percentile(v, 95):.3g} m/s (95th "
+                "percentile), beyond a test vehicle's: check its factor and byte order in the DBC")
+        turning = np.isfinite(rw) & (np.abs(rw) > 0.5) & np.isfinite(speed)
+        if np.count_nonzero(turning) >= 100 and float(np.median(np.abs(speed[turning]))) < 0.05:
+            add("speed", float(np.median(np.abs(speed[turning]))), True,
+                f"the vehicle speed is nil (median {np.median(np.abs(speed[turning])):.2g} m/s) while the wheel turns "
+                "at r*omega > 0.5 m/s: the configured GNSS velocity signal is not the forward one (a sideways or "
+                "vertical component?), or is not decoded")
+    return out
 
 
 def _distance(speed: np.ndarray, dt: float) -> np.ndarray:

@@ -484,8 +484,10 @@ CLOCK_MIN_CORR = 0.9
 #: leaves: a run of identical slip sweeps correlates nearly as well one sweep later, and then the
 #: shift cannot be told.
 CLOCK_DISTINCT_RATIO = 0.5
-#: The two histories must overlap over at least this share of the shorter one, and this long [s].
-CLOCK_MIN_OVERLAP = 0.5
+#: The two histories must overlap over at least this share of the shorter one, and this long [s]: at the
+#: true shift two records of one run overlap nearly whole, while a shift that pushes an odd stretch of one
+#: (a sensor's dropout) off the other's end must not win by leaving it out.
+CLOCK_MIN_OVERLAP = 0.8
 CLOCK_MIN_OVERLAP_S = 10.0
 
 
@@ -520,6 +522,15 @@ def _bin_means(t_s: np.ndarray, v: np.ndarray, t0: float, n: int, h: float) -> n
         return np.where(c > 0, s / np.maximum(c, 1), np.nan)
 
 
+def _ranks(v: np.ndarray) -> np.ndarray:
+    """The finite values of ``v`` (n,) replaced by their ranks (ties averaged), NaN kept: a correlation of ranks
+    (Spearman's) is not carried by a few wild values (a sensor pinned at its range for a second)."""
+    out = np.full(v.shape, np.nan)
+    ok = np.isfinite(v)
+    out[ok] = stats.rankdata(v[ok])
+    return out
+
+
 def estimate_clock_offset(t_a_s: np.ndarray, v_a: np.ndarray, t_b_s: np.ndarray, v_b: np.ndarray, *,
                           near_s: tuple[float, float] = (-0.1, 0.3)) -> ClockOffset:
     """The offset between the clocks of two series that measure the same speed, from the shift at which
@@ -528,7 +539,8 @@ def estimate_clock_offset(t_a_s: np.ndarray, v_a: np.ndarray, t_b_s: np.ndarray,
     ``t_a_s`` (N,), ``v_a`` (N,): times [s] and speeds of the first series (e.g. the transducer's wheel
     angle's rate on its bus); ``t_b_s`` (M,), ``v_b`` (M,): the second (the wheel-speed module's reading
     of the same wheel on another bus), in any units shared with ``v_a`` (NaN allowed).  Both are
-    averaged on a :data:`CLOCK_GRID_S` grid and their Pearson correlation is computed at every shift
+    averaged on a :data:`CLOCK_GRID_S` grid and the Pearson correlation of their ranks (Spearman's) is
+    computed at every shift
     at which they overlap over at least :data:`CLOCK_MIN_OVERLAP` of the shorter series and
     :data:`CLOCK_MIN_OVERLAP_S` (by FFT: all shifts, including ones larger than the run, as two
     adapters stamping on their own clocks give).  ``near_s`` the shifts that are no clock offset (a
@@ -547,7 +559,7 @@ def estimate_clock_offset(t_a_s: np.ndarray, v_a: np.ndarray, t_b_s: np.ndarray,
         raise ValueError("fewer than 2 values in a series: no clock offset can be estimated")
     a0, b0 = float(t_a[fa].min()), float(t_b[fb].min())
     na, nb = int((t_a[fa].max() - a0) / h) + 1, int((t_b[fb].max() - b0) / h) + 1
-    x, y = _bin_means(t_a, va, a0, na, h), _bin_means(t_b, vb, b0, nb, h)
+    x, y = _ranks(_bin_means(t_a, va, a0, na, h)), _ranks(_bin_means(t_b, vb, b0, nb, h))
     mx, my = np.isfinite(x).astype(float), np.isfinite(y).astype(float)
     x0, y0 = np.nan_to_num(x), np.nan_to_num(y)
 

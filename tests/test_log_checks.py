@@ -450,3 +450,70 @@ def test_a_gnss_later_than_the_latency_search_range_is_found_around_its_coarse_d
     n = min(len(base.signals), len(late.signals))  # the late frames lengthen the run at its end
     d = np.abs(late.signals["slip"].to_numpy()[:n] - base.signals["slip"].to_numpy()[:n])
     assert np.nanpercentile(d, 99) < 0.01
+
+
+# --------------------------------------------------------------------------- 10. a configuration not the recording's
+def _config_copy(tmp_path, name, edits):
+    """A copy of the shipped dbc/ directory under ``tmp_path/name`` with ``edits`` {file: [(old, new)]} made
+    (each ``old`` must be there); returns the copy's vehicle.toml."""
+    import shutil
+    from pathlib import Path
+
+    src = Path(__file__).resolve().parents[1] / "dbc"
+    dst = tmp_path / name
+    shutil.copytree(src, dst, ignore=shutil.ignore_patterns("__init__.py", "__pycache__"))
+    for f, pairs in edits.items():
+        text = (dst / f).read_text()
+        for old, new in pairs:
+            assert old in text, (f, old)
+            text = text.replace(old, new)
+        (dst / f).write_text(text)
+    return dst / "vehicle.toml"
+
+
+@pytest.mark.parametrize("case, edits, check", [
+    ("rpm_as_rad_s", {"vehicle.toml": [('unit = "rpm"\nscale_to_si = 0.10471975511965977   # 2*pi/60 -> rad/s',
+                                        'unit = "rad/s"')],
+                      "wheel_speed.dbc": [('[0|655.35] "rpm"', '[0|655.35] "rad/s"')]}, "wheel_speed"),
+    ("forces_scaled", {"wft.dbc": [('SG_ Fx_w : 0|16@1- (0.5,0)', 'SG_ Fx_w : 0|16@1- (0.05,0)'),
+                                   ('SG_ Fz_w : 32|16@1- (1,0)', 'SG_ Fz_w : 32|16@1- (0.1,0)')]}, "traction"),
+    ("fx_fz_swapped", {"vehicle.toml": [('signal = "Fx_w"', 'signal = "FZ_TMP"'), ('signal = "Fz_w"', 'signal = "Fx_w"'),
+                                        ('signal = "FZ_TMP"', 'signal = "Fz_w"')]}, "load"),
+    ("torque_sign", {"wft.dbc": [('SG_ My : 16|16@1- (0.25,0) [-8192|8191.75]', 'SG_ My : 16|16@1- (-0.25,0) [-8191.75|8192]')]},
+     "torque_sign"),
+])
+def test_a_configuration_that_does_not_match_the_recording_is_refused_by_fit_naming_the_signals(
+        sim_log, tmp_path, case, edits, check):
+    """A DBC factor, unit, sign or a swapped signal of the user's configuration decoded a run into numbers no
+    wheel produces (a load of 1.1 kN carrying a torque of 3 r W, slip from rpm read as rad/s, a torque against
+    the slip) and the fit named a verdict: processing now says so loudly, naming the signals, and fit refuses."""
+    from wheelsoil.pipeline import run_fit
+    from wheelsoil.processing import process_recording
+
+    toml = _config_copy(tmp_path, case, edits)
+    res = process_recording(sim_log, config=toml)
+    found = [i for i in res.quality["implausible"] if i["check"] == check]
+    assert found and found[0]["gross"], res.quality["implausible"]
+    assert any(w.startswith("SIGNALS IMPLAUSIBLE: ") for w in res.warnings)
+    with pytest.raises(ValueError, match="the decoded signals are not physical") as err:
+        run_fit([sim_log], "clay", tmp_path / "rep", vehicle=toml)
+    assert str(sim_log) in str(err.value) and "--vehicle" in str(err.value)
+    assert not process_recording(sim_log).quality["implausible"]  # the recording's own configuration: nothing
+
+
+def test_fit_decodes_a_can_log_with_the_vehicle_configuration_given_and_records_it(sim_log, tmp_path):
+    """fit had no --vehicle: a CAN log was always decoded with the shipped configuration, silently when the
+    wheel was given."""
+    import json
+
+    toml = _config_copy(tmp_path, "mine", {})
+    assert cli("fit", sim_log, "--terrain", "clay", "-o", tmp_path / "a", "--models", "lyasko", "-q",
+               "--vehicle", toml) == 0
+    rep = json.loads((tmp_path / "a" / "report.json").read_text())
+    assert rep["provenance"]["vehicle_config"]["source"] == f"given: {toml}"
+    assert rep["provenance"]["command"][-2:] == ["--vehicle", str(toml)]
+    assert not any("WHEEL GEOMETRY ASSUMED" in n or "shipped vehicle configuration" in n for n in rep["notes"])
+    assert cli("fit", sim_log, "--terrain", "clay", "-o", tmp_path / "b", "--models", "lyasko", "-q",
+               "--wheel-radius", "0.47", "--wheel-width", "0.32") == 0
+    notes = json.loads((tmp_path / "b" / "report.json").read_text())["notes"]
+    assert any("decoded with the shipped vehicle configuration" in n for n in notes)

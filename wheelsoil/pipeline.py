@@ -69,7 +69,7 @@ def _read_table(path: Path):
 
 def load_inputs(inputs, *, progress: bool = False, rate_hz: float = 100.0, cutoff_hz: float | None = None,
                 wheel_radius_m: float | None = None, inertia: bool = True, wheel_mass_kg: float | None = None,
-                wheel_inertia_kgm2: float | None = None, wheel_width_m: float | None = None):
+                wheel_inertia_kgm2: float | None = None, wheel_width_m: float | None = None, vehicle=None):
     """Read every input into one DataFrame for fitting.
 
     Returns ``(df, info)``: ``df`` has the fit columns plus ``run`` (input
@@ -100,7 +100,8 @@ def load_inputs(inputs, *, progress: bool = False, rate_hz: float = 100.0, cutof
 
     Raises ValueError (naming the file) for a missing file, an unknown suffix,
     an unreadable table, a table failing :func:`_check_table`, tables stating different wheels,
-    or a recording processing cannot read.
+    a recording processing cannot read, or one whose decoded signals no wheel can produce (a gross
+    entry of ``ProcessResult.quality["implausible"]``: a vehicle configuration or DBC not the recording's).
     """
     import pandas as pd
 
@@ -117,9 +118,15 @@ def load_inputs(inputs, *, progress: bool = False, rate_hz: float = 100.0, cutof
         if suffix in RECORDING_SUFFIXES:
             from wheelsoil.processing import process_recording
 
-            res = process_recording(path, progress=progress, rate_hz=rate_hz, cutoff_hz=cutoff_hz,
+            res = process_recording(path, config=vehicle, progress=progress, rate_hz=rate_hz, cutoff_hz=cutoff_hz,
                                     wheel_radius_m=wheel_radius_m, inertia=inertia, wheel_mass_kg=wheel_mass_kg,
                                     wheel_inertia_kgm2=wheel_inertia_kgm2)
+            gross = [i["text"] for i in (res.quality.get("implausible") or []) if i.get("gross")]
+            if gross:
+                raise ValueError(f"{path}: the decoded signals are not physical: " + "; ".join(gross)
+                                 + ". A fit of them would mean nothing: decode the recording with the vehicle's own "
+                                 "configuration and DBC files (--vehicle TOML; 'wheelsoil process' writes the signals "
+                                 "to look at)")
             df = res.signals.copy()
             df["cycle"] = res.cycle
             kinds.append("recording")
@@ -457,7 +464,7 @@ def _environment() -> dict:
     return out
 
 
-def _vehicle_config_record(path: Path | None) -> dict:
+def _vehicle_config_record(path: Path | None, vehicle=None) -> dict:
     """The vehicle configuration a recording was processed with: its source, wheel geometry and
     mass/inertia, and the sha256 of vehicle.toml and of each DBC (the attached files, else the
     shipped default)."""
@@ -469,6 +476,16 @@ def _vehicle_config_record(path: Path | None) -> dict:
         return hashlib.sha256(b).hexdigest()
 
     attached = {}
+    if vehicle is not None:  # given (fit --vehicle): what processing used
+        from wheelsoil.daq import VehicleConfig, load_vehicle_config
+
+        cfg = vehicle if isinstance(vehicle, VehicleConfig) else load_vehicle_config(vehicle)
+        src = Path(cfg.source) if cfg.source else None
+        rec = {"source": f"given: {src if src else 'a VehicleConfig object'}",
+               "sha256": file_sha256(src) if src and src.exists() else None,
+               "dbcs": sorted(({"name": p.name, "sha256": file_sha256(p)} for ps in cfg.buses.values() for p in ps),
+                              key=lambda d: d["name"])}
+        return _wheel_record(rec, cfg)
     if path is not None and path.suffix.lower() == ".mcap":
         try:
             from wheelsoil.daq.recording import read_attachments
@@ -498,6 +515,11 @@ def _vehicle_config_record(path: Path | None) -> dict:
                     "sha256": file_sha256(src) if src and src.exists() else None,
                     "dbcs": sorted(({"name": p.name, "sha256": file_sha256(p)}
                                     for ps in cfg.buses.values() for p in ps), key=lambda d: d["name"])})
+    return _wheel_record(rec, cfg)
+
+
+def _wheel_record(rec: dict, cfg) -> dict:
+    """``rec`` with the configuration's name and wheel (radius, width, mass, inertia)."""
     rec.update({"name": getattr(cfg, "name", ""), "wheel_radius_m": float(cfg.wheel_radius_m),
                 "wheel_width_m": float(cfg.wheel_width_m)})
     for k in ("wheel_mass_kg", "wheel_inertia_kgm2"):  # interface B (proc)
@@ -524,7 +546,7 @@ def _find_key(obj, word: str):
     return None
 
 
-def _input_record(path: Path, kind: str, res, table) -> tuple[dict, dict]:
+def _input_record(path: Path, kind: str, res, table, vehicle=None) -> tuple[dict, dict]:
     """(provenance entry, data-quality dict) of one input."""
     from wheelsoil.daq.provenance import file_sha256
 
@@ -552,7 +574,7 @@ def _input_record(path: Path, kind: str, res, table) -> tuple[dict, dict]:
     elif "provenance" not in entry:
         entry["provenance"] = {"kind": "log file", "format": path.suffix.lower().lstrip("."),
                                "detail": "imported into a temporary recording for processing"}
-    entry["vehicle_config"] = _vehicle_config_record(path)
+    entry["vehicle_config"] = _vehicle_config_record(path, vehicle)
     sig = res.signals
     warns = list(res.warnings) + ([w for w in info.warnings if w not in res.warnings] if info else [])
     imp = _import_record(info)
@@ -635,7 +657,8 @@ def _terrain_setting(terrain, ter, wheel) -> dict:
 
 
 def _equivalent_command(inputs, terrain, out_dir, *, wheel_radius, wheel_width, slip_min, models, fit_terrain,
-                        sinkage, rate_hz, cutoff_hz, inertia, wheel_mass=None, wheel_inertia=None) -> list | None:
+                        sinkage, rate_hz, cutoff_hz, inertia, wheel_mass=None, wheel_inertia=None,
+                        vehicle=None) -> list | None:
     """The ``wheelsoil fit`` argument list that repeats a library call (None: the terrain is an object)."""
     if not isinstance(terrain, str):
         return None
@@ -656,10 +679,15 @@ def _equivalent_command(inputs, terrain, out_dir, *, wheel_radius, wheel_width, 
         cmd.append("--fit-terrain")
     if not inertia:
         cmd.append("--no-inertia")
+    if vehicle is not None:
+        if not isinstance(vehicle, (str, Path)):
+            return None  # a configuration object: no command repeats it
+        cmd += ["--vehicle", str(vehicle)]
     return cmd
 
 
-def build_provenance(inputs, info, *, command, terrain, ter, wheel, wheel_source, settings) -> tuple[dict, list]:
+def build_provenance(inputs, info, *, command, terrain, ter, wheel, wheel_source, settings,
+                     vehicle=None) -> tuple[dict, list]:
     """The report's provenance (``version, command, cwd, environment, inputs, vehicle_config,
     settings, created``) and the per-input data-quality dicts.
 
@@ -674,7 +702,7 @@ def build_provenance(inputs, info, *, command, terrain, ter, wheel, wheel_source
 
     entries, quality = [], []
     for path, kind, res, table in zip(inputs, info["kinds"], info["results"], info["tables"]):
-        e, q = _input_record(Path(path), kind, res, table)
+        e, q = _input_record(Path(path), kind, res, table, vehicle)
         entries.append(e)
         quality.append(q)
     first_cfg = next((e["vehicle_config"] for e in entries if "vehicle_config" in e), None)
@@ -770,6 +798,7 @@ def run_fit(
     command: list | None = None,
     wheel_mass: float | None = None,
     wheel_inertia: float | None = None,
+    vehicle=None,
 ) -> dict:
     """Fit Wong's model and the candidates to the inputs, diagnose, write the report.
 
@@ -796,6 +825,9 @@ def run_fit(
     wheel_mass, wheel_inertia : the wheel outboard of the transducer [kg], [kg m^2] for the
         inertia compensation of recordings; default: the vehicle configuration's (80 kg,
         11.5 kg m^2 in hardware.md's).
+    vehicle : recordings and CAN logs: the vehicle configuration (a ``vehicle.toml`` path or a
+        ``VehicleConfig``: buses, DBC files, signals, wheel) to decode and process them with; default:
+        a recording's attached one, else (a CAN log) the shipped one.
     progress : tqdm progress bars on stderr.
     command : the argument list that ran this (the CLI passes it); None: the
         equivalent ``wheelsoil fit`` command is recorded.
@@ -849,10 +881,10 @@ def run_fit(
         command = _equivalent_command(inputs, terrain, out_dir, wheel_radius=wheel_radius, wheel_width=wheel_width,
                                       slip_min=slip_min, models=models, fit_terrain=fit_terrain, sinkage=sinkage,
                                       rate_hz=rate_hz, cutoff_hz=cutoff_hz, inertia=inertia,
-                                      wheel_mass=wheel_mass, wheel_inertia=wheel_inertia)
+                                      wheel_mass=wheel_mass, wheel_inertia=wheel_inertia, vehicle=vehicle)
     df, info = load_inputs(inputs, progress=progress, rate_hz=rate_hz, cutoff_hz=cutoff_hz,
                            wheel_radius_m=wheel_radius, inertia=inertia, wheel_mass_kg=wheel_mass,
-                           wheel_inertia_kgm2=wheel_inertia, wheel_width_m=wheel_width)
+                           wheel_inertia_kgm2=wheel_inertia, wheel_width_m=wheel_width, vehicle=vehicle)
     recording = "recording" in info["kinds"]
     stated = "vehicle configuration" if recording else info["table_wheel_source"]
     r = next(v for v in (wheel_radius, info["wheel_radius_m"], DEFAULT_WHEEL.radius) if v is not None)
@@ -879,7 +911,7 @@ def run_fit(
         "wheel_width_m": wheel.width,
     }
     prov, quality = build_provenance(inputs, info, command=command, terrain=terrain, ter=ter, wheel=wheel,
-                                     wheel_source=wheel_source, settings=settings)
+                                     wheel_source=wheel_source, settings=settings, vehicle=vehicle)
     source = inputs[0] if len(inputs) == 1 else f"{len(inputs)} inputs"
     try:
         data = prepare_data(df, slip_min=slip_min, source=source, wheel_radius_m=wheel.radius)
@@ -907,20 +939,23 @@ def run_fit(
                      f"the vehicle's default wheel r = {wheel.radius} m, b = {wheel.width} m (hardware.md). "
                      "Data from another wheel need --wheel-radius and --wheel-width: the model's forces and "
                      "sinkage scale with both, and slip (Eq. 6) was computed with the radius.")
-    elif recording and (wheel_radius is None or wheel_width is None) and any(
+    elif recording and vehicle is None and (wheel_radius is None or wheel_width is None) and any(
             Path(p).suffix.lower() in LOG_SUFFIXES for p in inputs):  # CAN logs: no attached configuration
         logs = [Path(p).name for p in inputs if Path(p).suffix.lower() in LOG_SUFFIXES]
         missing = [w for w, given in (("radius", wheel_radius), ("width", wheel_width)) if given is None]
         notes.append(f"WHEEL GEOMETRY ASSUMED: {', '.join(logs)}: a CAN log carries no vehicle configuration and "
                      f"no {' or '.join(missing)} was given; the fit uses the shipped vehicle configuration's wheel "
                      f"r = {wheel.radius} m, b = {wheel.width} m (dbc/vehicle.toml). Data from another wheel need "
-                     "--wheel-radius and --wheel-width (or 'wheelsoil import LOG --vehicle TOML' and a fit of the "
-                     "recording): the model's forces and sinkage scale with both, and slip (Eq. 6) is computed "
-                     "with the radius.")
+                     "--wheel-radius and --wheel-width, or --vehicle TOML (the vehicle's configuration: its DBC "
+                     "files and signals too): the model's forces and sinkage scale with both, and slip (Eq. 6) is "
+                     "computed with the radius.")
     elif wheel_radius is None or wheel_width is None:
         notes.append(f"wheel radius {wheel.radius} m, width {wheel.width} m from "
                      + ("the vehicle configuration" if recording else info["table_wheel_source"])
                      + " where not given.")
+    if recording and vehicle is None and any(Path(p).suffix.lower() in LOG_SUFFIXES for p in inputs):
+        notes.append("CAN logs decoded with the shipped vehicle configuration (dbc/vehicle.toml: its buses, DBC "
+                     "files and signals), as a CAN log carries none; give --vehicle TOML for another vehicle's.")
     ts = _time_sync_summary(info["time_sync"]) if recording else {"gnss_latency_s": None}
     details = []
     for path, res, q in zip(inputs, info["results"], quality):
@@ -995,6 +1030,7 @@ def _handler(args) -> int:
         inertia=not args.no_inertia,
         wheel_mass=args.wheel_mass,
         wheel_inertia=args.wheel_inertia,
+        vehicle=args.vehicle,
         progress=not args.quiet,
         command=["wheelsoil", *getattr(args, "argv", None)] if getattr(args, "argv", None) is not None else None,
     )
@@ -1101,6 +1137,9 @@ def register(subparsers) -> None:
                    help="recordings: zero-phase low-pass cutoff [Hz] (default: processing's 5 Hz)")
     p.add_argument("--no-inertia", action="store_true",
                    help="recordings: do not compensate the wheel's inertia (Dp = Fx, T = My as measured)")
+    p.add_argument("--vehicle", default=None, metavar="TOML",
+                   help="recordings and CAN logs: the vehicle configuration (buses, DBC files, signals, wheel) to "
+                   "decode them with (default: a recording's attached one; a CAN log's: the shipped one, said)")
     from wheelsoil.processing.cli import wheel_mass_args
 
     wheel_mass_args(p)
