@@ -140,7 +140,7 @@ class VehicleConfig:
         for paths in self.buses.values():
             for p in paths:
                 if p.name not in self._texts:
-                    self._texts[p.name] = Path(p).read_text(encoding="utf-8", errors="replace")
+                    self._texts[p.name] = read_dbc_text(p)
                 out[p.name] = self._texts[p.name]
         return out
 
@@ -195,22 +195,59 @@ def default_vehicle_path() -> Path:
     return Path(str(files("wheelsoil.dbc") / "vehicle.toml"))
 
 
+def read_dbc_text(path) -> str:
+    """A DBC file's text: UTF-8, else Windows-1252 (CANdb++ writes its comments and units, a "°", so).
+
+    Raises:
+        OSError: the file cannot be read.
+    """
+    raw = Path(path).read_bytes()
+    try:
+        return raw.decode("utf-8")
+    except UnicodeDecodeError:
+        return raw.decode("cp1252", errors="replace")
+
+
+def _layout(m) -> tuple:
+    return (m.length, tuple((g.name, g.start, g.length, g.byte_order, g.is_signed, g.scale, g.offset)
+                            for g in m.signals))
+
+
 def load_dbc_files(paths) -> "object":
     """Parse DBC files into one cantools database.
 
     Raises:
         OSError: a file that cannot be read.
-        ValueError: a file cantools cannot parse, naming the file and the parser's message.
+        ValueError: a file cantools cannot parse, naming the file and the parser's message; a message id
+            that two files define differently (which one decodes the bus's frames would depend on the
+            order), naming both files.
     """
+    import logging
+
     import cantools
 
     db = cantools.database.Database()
+    where: dict = {}  # (frame id, extended) -> (file, layout)
     for p in paths:
-        text = Path(p).read_text(encoding="utf-8", errors="replace")
+        text = read_dbc_text(p)
         try:
-            db.add_dbc_string(text)
+            one = cantools.database.Database()
+            one.add_dbc_string(text)
         except Exception as exc:  # cantools raises several parser error types
             raise ValueError(f"{p}: cannot parse DBC file: {exc}") from None
+        for m in one.messages:
+            key = (m.frame_id, bool(m.is_extended_frame))
+            if key in where and where[key][1] != _layout(m):
+                raise ValueError(f"{p}: message {m.name} (id 0x{m.frame_id:X}) is also defined, differently, in "
+                                 f"{where[key][0]} on the same bus: which definition decodes its frames would depend "
+                                 "on the order of the files; keep one")
+            where.setdefault(key, (p, _layout(m)))
+        log = logging.getLogger("cantools.database")
+        level, log.level = log.level, logging.ERROR  # an identical message twice: no "Overwriting" noise
+        try:
+            db.add_dbc_string(text)
+        finally:
+            log.level = level
     return db
 
 

@@ -185,7 +185,7 @@ def config_from_attachments(attachments: dict[str, bytes]):
 
 
 def _config_from_attachments(attachments: dict[str, bytes]):
-    from .config import tomllib, vehicle_config_from_dict
+    from .config import read_dbc_text, tomllib, vehicle_config_from_dict
 
     if "vehicle.toml" not in attachments:
         return None
@@ -231,7 +231,7 @@ def _config_from_attachments(attachments: dict[str, bytes]):
             except Exception as exc:  # cantools raises many kinds on a broken DBC
                 raise ValueError(f"attachment DBC of bus {bus}: {type(exc).__name__}: {exc}") from None
             for p in cfg.buses[bus]:
-                by_path[str(p)] = Path(p).read_text(encoding="utf-8", errors="replace")
+                by_path[str(p)] = read_dbc_text(p)
         cfg.dbc_texts()
     cfg._dbc_texts_by_path = by_path  # what the writer embeds when this config is written again
     cfg.source = None

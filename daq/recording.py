@@ -432,6 +432,8 @@ def dbc_attachments(config) -> dict[str, str]:
     stored as ``dbc/<name>``; a file name used on several buses with different
     contents as ``dbc/<bus>/<name>`` for each, so none hides another.
     """
+    from .config import read_dbc_text
+
     cached = getattr(config, "_dbc_texts_by_path", {}) or {}
     per: list[tuple[str, str, str]] = []
     for bus, paths in config.buses.items():
@@ -440,7 +442,7 @@ def dbc_attachments(config) -> dict[str, str]:
             text = cached.get(str(p))
             if text is None:
                 try:
-                    text = p.read_text(encoding="utf-8", errors="replace")
+                    text = read_dbc_text(p)
                 except OSError:
                     text = config.dbc_texts().get(p.name, "")
             per.append((bus, p.name, text))

@@ -517,3 +517,24 @@ def test_fit_decodes_a_can_log_with_the_vehicle_configuration_given_and_records_
                "--wheel-radius", "0.47", "--wheel-width", "0.32") == 0
     notes = json.loads((tmp_path / "b" / "report.json").read_text())["notes"]
     assert any("decoded with the shipped vehicle configuration" in n for n in notes)
+
+
+def test_a_windows_1252_dbc_is_read_as_such_and_a_message_defined_twice_differently_is_refused(sim_log, tmp_path):
+    """A CANdb++ file with "°" in Windows-1252 was read as UTF-8 with replacement characters (its unit "\ufffd"
+    then failed the unit check); two DBCs of one bus defining one id differently decoded with whichever came
+    first while cantools said the later one overwrote it."""
+    from wheelsoil.daq import load_vehicle_config
+    from wheelsoil.processing import process_recording
+
+    toml = _config_copy(tmp_path, "cp1252", {"wft.dbc": [('"deg"', '"°"')], "vehicle.toml": [('unit = "deg"', 'unit = "°"')]})
+    (toml.parent / "wft.dbc").write_bytes((toml.parent / "wft.dbc").read_text().encode("cp1252"))
+    cfg = load_vehicle_config(toml)
+    assert any(g.unit == "°" for m in cfg.database("can0").messages for g in m.signals)
+    assert process_recording(sim_log, config=toml).signals["valid"].any()
+    twice = _config_copy(tmp_path, "twice", {"vehicle.toml": [('dbc = ["wft.dbc"]', 'dbc = ["wft.dbc", "wft_old.dbc"]')]})
+    old = (twice.parent / "wft.dbc").read_text().replace("SG_ Fx_w : 0|16@1- (0.5,0)", "SG_ Fx_w : 0|16@1- (0.25,0)")
+    (twice.parent / "wft_old.dbc").write_text(old)
+    with pytest.raises(ValueError, match=r"wft_old.dbc: message WFT_RL_Force \(id 0x120\) is also defined, differently"):
+        load_vehicle_config(twice)
+    (twice.parent / "wft_old.dbc").write_text((twice.parent / "wft.dbc").read_text())  # the same: harmless
+    assert load_vehicle_config(twice).database("can0").get_message_by_name("WFT_RL_Force")
