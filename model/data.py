@@ -464,7 +464,8 @@ def prepare_data(df, *, slip_min: float = 0.1, source: str = "data", n_blocks: i
             rows = np.flatnonzero(keep)[big]
             at = f"on {_where(df, rows)}" if "_line" in df.columns else f"at row {int(rows[0])}"
             raise ValueError(f"{source}: {col} = {v[i]:.4g} {at} is not a plausible "
-                             f"wheel force or torque (|value| > {MAX_FORCE:.0e} in N or N m)")
+                             f"wheel force or torque (|value| > {MAX_FORCE:.0e} in N or N m): a unit, in the table's "
+                             "column or, for a recording, in the DBC or vehicle.toml (kN decoded as N?)")
     ratio = float(np.nanmedian(np.abs(channels["drawbar_pull_n"]) / np.abs(w[keep]))) if keep.any() else 0.0
     if ratio > MAX_DP_OVER_W:  # no wheel in soil pulls twice its load
         raise ValueError(f"{source}: the drawbar pull is {ratio:.3g} times the load in the median row: not a wheel in "

@@ -355,7 +355,10 @@ def assemble_wft_samples(streams: dict[str, tuple[np.ndarray, np.ndarray, dict[s
                    for k, (ts, c, cols) in streams.items()}
         modulo //= stride
         ts_ref, c_ref, _ = streams[reference]
-    idx_ref, period, jumps_ref = unwrap_counter(ts_ref[order], c_ref[order], modulo=modulo)
+    try:
+        idx_ref, period, jumps_ref = unwrap_counter(ts_ref[order], c_ref[order], modulo=modulo)
+    except ValueError as exc:
+        raise ValueError(f"{reference}'s counter: {exc}") from None
     jumps = {reference: jumps_ref}
     t_ref = ts_ref[order]
     unwrapped: dict[str, tuple[np.ndarray, np.ndarray, np.ndarray]] = {reference: (t_ref, idx_ref, order)}
@@ -365,7 +368,10 @@ def assemble_wft_samples(streams: dict[str, tuple[np.ndarray, np.ndarray, dict[s
         o = np.argsort(ts, kind="stable")
         t = ts[o]
         if t.shape[0] >= 2:
-            idx, _, jumps[name] = unwrap_counter(t, c[o], modulo=modulo, period_s=period)
+            try:
+                idx, _, jumps[name] = unwrap_counter(t, c[o], modulo=modulo, period_s=period)
+            except ValueError as exc:
+                raise ValueError(f"{name}'s counter: {exc}") from None
         else:
             idx = np.asarray(c[o], dtype=np.int64) % modulo
             jumps[name] = 0
