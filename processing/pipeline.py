@@ -870,7 +870,8 @@ def _gnss_far_shift(g_rel: np.ndarray, g_v: np.ndarray, refs: list, path: Path, 
 
     ``g_rel`` (N,) GNSS times [s], ``g_v`` (N,) its speed [m/s]; ``refs`` [(times (M,) [s], r*omega (M,)
     [m/s])] free-rolling wheels' speeds (the front wheels', when they do not turn with the measured one: a
-    driven wheel's speed leads the vehicle's by its slip), the first one with a clear answer used.  The coarse delay is the shift at which the two speed histories correlate best
+    driven wheel's speed leads the vehicle's by its slip), the first one with a clear answer used.  The
+    coarse delay is the shift at which the two speed histories correlate best
     (:func:`.timesync.estimate_clock_offset`, every shift, 50 ms grid).  When it is clear and lies outside
     the range less two grid steps at its top, the GNSS times are shifted by it less the range's centre, so
     that the fine search is centred on it and measures the rest; the total is the latency reported.  Beyond
@@ -1914,10 +1915,12 @@ def _implausible(load, dp, torque, slip, speed, rw, r, lag_q, label, warns: list
                 "percentile), beyond a test vehicle's: check its factor and byte order in the DBC")
         turning = np.isfinite(rw) & (np.abs(rw) > 0.5) & np.isfinite(speed)
         if np.count_nonzero(turning) >= 100 and float(np.median(np.abs(speed[turning]))) < 0.05:
-            add("speed", float(np.median(np.abs(speed[turning]))), True,
+            never = float(np.percentile(np.abs(speed[turning]), 99)) < 0.05
+            add("speed", float(np.median(np.abs(speed[turning]))), never,
                 f"the vehicle speed is nil (median {np.median(np.abs(speed[turning])):.2g} m/s) while the wheel turns "
-                "at r*omega > 0.5 m/s: the configured GNSS velocity signal is not the forward one (a sideways or "
-                "vertical component?), or is not decoded")
+                "at r*omega > 0.5 m/s" + (", all run long" if never else "") + ": the configured GNSS velocity "
+                "signal is not the forward one (a sideways or vertical component?), or is not decoded; or the "
+                "vehicle was stuck, the wheel spinning in place")
     return out
 
 
