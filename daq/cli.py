@@ -379,11 +379,12 @@ def format_info(info) -> str:
     for bus, b in d["buses"].items():
         drop = "" if b["rx_dropped"] is None else f", kernel rx drops {b['rx_dropped']}"
         rate = b["frames"] / info.duration_s if info.duration_s > 0 else 0.0
+        no_dbc = bus not in info.stats.names  # a bus the configuration gives no DBC: its ids are not "unknown"
         out.append(f"  bus {bus}: {b['frames']} frames ({rate:.0f}/s), error frames {b['error_frames']}, "
-                   f"remote {b['remote_frames']}{drop}")
+                   f"remote {b['remote_frames']}{drop}" + ("; no DBC configured for it" if no_dbc else ""))
         for fid, v in b["ids"].items():
             bad = b["dlc_mismatch"].get(fid, {}).get("frames", 0)
-            out.append(f"    {fid:>12} {v['frames']:>10}  {v.get('message', '(unknown id)')}"
+            out.append(f"    {fid:>12} {v['frames']:>10}  {v.get('message', '(no DBC)' if no_dbc else '(unknown id)')}"
                        + (f"  DLC mismatch: {bad}" if bad else ""))
     s = info.stats
     out.append(f"  lost frames (counter gaps): {s.total('lost_frames')}"

@@ -538,3 +538,14 @@ def test_a_windows_1252_dbc_is_read_as_such_and_a_message_defined_twice_differen
         load_vehicle_config(twice)
     (twice.parent / "wft_old.dbc").write_text((twice.parent / "wft.dbc").read_text())  # the same: harmless
     assert load_vehicle_config(twice).database("can0").get_message_by_name("WFT_RL_Force")
+
+
+def test_info_names_a_bus_without_a_dbc_as_such_not_as_unknown_ids(sim_log, tmp_path):
+    """A bus the configuration has no DBC for listed every id as "(unknown id)" above "unknown-id frames: 0"."""
+    from wheelsoil.daq.cli import format_info
+
+    rec = tmp_path / "can2.mcap"
+    _import(sim_log, rec, channel_map={"can1": "can2"})
+    text = format_info(read_recording_info(rec))
+    assert "bus can2:" in text and "no DBC configured for it" in text and "(unknown id)" not in text
+    assert "(no DBC)" in text and "unknown-id frames: 0" in text
