@@ -163,15 +163,16 @@ class VehicleConfig:
             return float(ct) * 1e-3, "DBC GenMsgCycleTime"
         return None, "unknown"
 
-    def counter_specs(self) -> list[tuple[str, int, bool, int, int]]:
-        """Sample counters to watch for gaps: (bus, frame id, is_extended, byte, modulo).
+    def counter_specs(self) -> list[tuple[str, int, bool, int, int, int]]:
+        """Sample counters to watch for gaps: (bus, frame id, is_extended, byte, modulo, shift).
 
-        From the ``wft_counter_*`` signals: each must be an unsigned little-endian
-        signal that starts on a byte boundary and is at most 8 bits long (the
-        logger reads one byte per frame and masks it); modulo = 2**length.
+        From the ``wft_counter_*`` signals: each must be an unsigned signal of at most 8 bits that lies in
+        one byte (either byte order: the logger reads that byte per frame, shifts it right by ``shift``
+        and masks it); modulo = 2**length.
 
         Raises:
-            ValueError: a counter signal that is not byte-aligned (names it).
+            ValueError: a counter signal that is signed, longer than 8 bits or spans two bytes (names it
+                and the configuration).
         """
         specs = []
         for key, ref in sorted(self.signals.items()):
@@ -179,12 +180,17 @@ class VehicleConfig:
                 continue
             msg = self.database(ref.bus).get_message_by_name(ref.message)
             sig = msg.get_signal_by_name(ref.signal)
-            if sig.start % 8 or sig.length > 8 or sig.byte_order != "little_endian" or sig.is_signed:
+            # the lowest bit's place in its byte: Intel counts up from the start bit, Motorola's start
+            # bit is the most significant one (DBC sawtooth numbering)
+            low = sig.start % 8 if sig.byte_order == "little_endian" else sig.start % 8 - (sig.length - 1)
+            if sig.is_signed or sig.length > 8 or low < 0 or low + sig.length > 8:
                 raise ValueError(
-                    f"{self.source}: [signals.{key}] counter {ref.message}.{ref.signal} must be an "
-                    "unsigned little-endian signal of <= 8 bits starting on a byte boundary")
+                    f"{self.source or 'the recording attached vehicle configuration'}: [signals.{key}] counter "
+                    f"{ref.message}.{ref.signal} must be an unsigned signal of <= 8 bits within one byte (it is "
+                    f"{'signed, ' if sig.is_signed else ''}{sig.length} bits from bit {sig.start}, "
+                    f"{sig.byte_order.replace('_', '-')})")
             specs.append((ref.bus, msg.frame_id, bool(msg.is_extended_frame), sig.start // 8,
-                          1 << sig.length))
+                          1 << sig.length, low))
         return specs
 
 

@@ -116,7 +116,7 @@ class StatsAccumulator:
     def __init__(self, config=None):
         self.stats = FrameStats()
         self._known: dict[str, dict[int, int]] = {}   # bus -> {key: dbc length}
-        self._counters: dict[tuple[str, int], tuple[str, int, int]] = {}
+        self._counters: dict[tuple[str, int], tuple[str, int, int, int]] = {}
         self._last_counter: dict[tuple[str, int], tuple[int, int]] = {}   # (counter, t_ns)
         self._period_ns: dict[tuple[str, int], float] = {}
         self._stride: dict[tuple[str, int], int] = {}   # the counter's step per frame, once known
@@ -131,9 +131,9 @@ class StatsAccumulator:
                        for m in db.messages if getattr(m, "cycle_time", None) and m.cycle_time > 0}
                 if cyc:
                     self._cycles[bus] = cyc
-            for bus, fid, ext, byte, mod in config.counter_specs():
+            for bus, fid, ext, byte, mod, shift in config.counter_specs():
                 name = self.stats.names[bus][(fid, ext)]
-                self._counters[(bus, _key(fid, ext))] = (name, byte, mod)
+                self._counters[(bus, _key(fid, ext))] = (name, byte, mod, shift)
                 self._cycles.get(bus, {}).pop(_key(fid, ext), None)
 
     def update(self, b: FrameBatch) -> None:
@@ -171,7 +171,7 @@ class StatsAccumulator:
                 for k, c in zip(bk.tolist(), bc.tolist()):
                     d[_unkey(k)] = d.get(_unkey(k), 0) + c
         ts = None
-        for (cbus, k), (name, byte, mod) in self._counters.items():
+        for (cbus, k), (name, byte, mod, shift) in self._counters.items():
             if cbus != bus:
                 continue
             sel = (keys == k) & (dlc > byte) & ~rem[good]
@@ -180,7 +180,7 @@ class StatsAccumulator:
             if ts is None:
                 ts = b.timestamp_ns[good]
             data = b.data[good][sel]
-            c = (data[:, byte].astype(np.int64)) % mod
+            c = (data[:, byte].astype(np.int64) >> shift) % mod
             t = ts[sel]
             prev = self._last_counter.get((bus, k))
             if prev is not None:

@@ -1391,7 +1391,10 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
     if streams:
         ref_msg = force_msg if force_msg in streams else next(iter(streams))
         try:
-            ws = assemble_wft_samples(streams, reference=ref_msg)
+            cref = next(sig[k] for k in ("wft_counter_force", "wft_counter_moment", "wft_counter_angle")
+                        if sig[k].message == ref_msg)
+            bits = cfg.database(cref.bus).get_message_by_name(cref.message).get_signal_by_name(cref.signal).length
+            ws = assemble_wft_samples(streams, reference=ref_msg, modulo=1 << min(int(bits), 62))
         except ValueError as exc:
             ws = None
             warns.append(f"WFT counters unusable ({exc}): load, drawbar pull and torque not computed")

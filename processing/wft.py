@@ -67,7 +67,8 @@ def unwrap_counter(timestamp_ns: np.ndarray, counter: np.ndarray, *, modulo: int
     time-vs-index line of the frames before it, and a *counter jump* (a
     corrupted counter, no time lost) if they keep it only with the step the
     clock says; jumps are replaced by the clock's step and counted in
-    ``jumps``. Raises ``ValueError`` for fewer than 2 frames or no usable period.
+    ``jumps``. Raises ``ValueError`` for fewer than 2 frames, no usable period, or a counter that keeps
+    its value in most frames (not a per-sample counter: a DBC reading another field).
     """
     ts = np.asarray(timestamp_ns, dtype=np.int64)
     c = np.asarray(counter).astype(np.int64) % modulo
@@ -75,6 +76,9 @@ def unwrap_counter(timestamp_ns: np.ndarray, counter: np.ndarray, *, modulo: int
         raise ValueError("need at least 2 frames to unwrap a counter")
     dt = np.diff(ts) * 1e-9
     d = np.diff(c) % modulo
+    if d.size >= 16 and np.mean(d == 0) > 0.9:  # a sample counter advances with (nearly) every frame sent
+        raise ValueError(f"the counter keeps its value in {100 * np.mean(d == 0):.0f} % of the frames while time "
+                         "passes: not a per-sample counter (its bit position or length in the DBC?)")
     if period_s is None:
         if not np.any(d == 1):
             raise ValueError("counter never advances by one: cannot estimate the sample period")

@@ -22,7 +22,7 @@ def test_shipped_config_maps_every_quantity():
     assert cfg.signals["wft_angle"].scale_to_si == pytest.approx(math.pi / 180)
     assert cfg.signals["gnss_forward_velocity"].message == "RT_SB_INS_Vel_Body_Axes"
     # counters: byte positions from the DBC (Counter at bit 48 / 48 / 16)
-    specs = {fid: byte for _, fid, _, byte, _ in cfg.counter_specs()}
+    specs = {fid: byte for _, fid, _, byte, *_ in cfg.counter_specs()}
     assert specs == {0x120: 6, 0x121: 6, 0x122: 2}
     names = cfg.message_names("can1")
     assert names[(0x9588322, True)] == "RT_SB_INS_Vel_Body_Axes"

@@ -549,3 +549,25 @@ def test_info_names_a_bus_without_a_dbc_as_such_not_as_unknown_ids(sim_log, tmp_
     text = format_info(read_recording_info(rec))
     assert "bus can2:" in text and "no DBC configured for it" in text and "(unknown id)" not in text
     assert "(no DBC)" in text and "unknown-id frames: 0" in text
+
+
+def test_a_counter_of_one_byte_in_either_byte_order_is_read_and_one_in_the_wrong_bits_is_refused(sim_log, tmp_path):
+    """A Motorola 8-bit counter in one byte was refused by info (little-endian only) while processing read it;
+    a counter configured on the upper nibble of the real one (4 bits) was unwrapped modulo 256 and gave loads of
+    -14..+12 kN in valid rows."""
+    from wheelsoil.daq import load_vehicle_config
+    from wheelsoil.processing import process_recording
+
+    moto = _config_copy(tmp_path, "moto", {"wft.dbc": [("SG_ Counter : 48|8@1+", "SG_ Counter : 55|8@0+")]})
+    assert any(spec[3] == 6 and spec[5] == 0 for spec in load_vehicle_config(moto).counter_specs())
+    rec = tmp_path / "moto.mcap"
+    _import(sim_log, rec, config=load_vehicle_config(moto))
+    info = read_recording_info(rec)
+    assert info.stats.total("lost_frames") == 0
+    assert process_recording(sim_log, config=moto).signals["valid"].sum() == \
+        process_recording(sim_log).signals["valid"].sum()
+    nibble = _config_copy(tmp_path, "nibble", {"wft.dbc": [("SG_ Counter : 48|8@1+ (1,0) [0|255]",
+                                                            "SG_ Counter : 52|4@1+ (1,0) [0|15]")]})
+    res = process_recording(sim_log, config=nibble)
+    assert any("keeps its value in" in w and "WFT_RL_Force" in w for w in res.warnings)
+    assert not res.signals["valid"].any()
