@@ -1656,6 +1656,7 @@ def _metrics_section(rep) -> list:
             rows.append([CHANNEL_TITLES.get(c, c)] + [
                 (_chan_fmt(v.get(k), c) if k.endswith(("rmse", "sigma_cell"))
                  else _title(_canon(v.get(k))) if k in ("model", "compared_model") and v.get(k)
+                 else _effect_word(v.get(k)) if k == "effect" and v.get(k)
                  else {True: "yes", False: "no"}[v.get(k)] if isinstance(v.get(k), bool)
                  else num(v.get(k), 2) if isinstance(v.get(k), float)
                  else ("-" if v.get(k) is None else str(v.get(k))))
@@ -1702,7 +1703,8 @@ def _coefficients_section(rep) -> list:
     parts.append("<h3>Flags</h3>")
     if flags:
         parts.append(_table(["model", "parameter", "kind", "detail"],
-                            [[_title(f.get("model")), f.get("parameter") or "-", f.get("kind"), f.get("detail") or ""]
+                            [[_title(f.get("model")), f.get("parameter") or "-",
+                              str(f.get("kind") or "").replace("_", " "), f.get("detail") or ""]
                              for f in flags]))
     else:
         parts.append("<p>No flags: no parameter at a bound, no |correlation| above "

@@ -334,6 +334,21 @@ def test_the_glance_speaks_of_effects_in_words_and_says_what_a_probable_hypothes
     assert "(0.75), counts for a terrain mismatch: what it adds does not improve its predictions of new data" in text
 
 
+def test_the_flags_and_the_per_channel_table_use_words_not_codes(tmp_path):
+    """The flags table's kind column read "at_bound", "ill_conditioned", and the per-channel table's effect
+    "terrain_mismatch"; report.json keeps the codes."""
+    from wheelsoil.model.report import _coefficients_section
+
+    rep = {"models": {"lyasko": {"status": "ok", "parameters": {"m2": {"value": 0.0, "se": 0.01, "flags": ["at_bound"]}}}},
+           "flags": [{"model": "lyasko", "parameter": "m2", "kind": "at_bound", "detail": "m2 = 0 is on a bound"},
+                     {"model": "lyasko", "parameter": None, "kind": "ill_conditioned", "detail": "condition 111"}],
+           "diagnosis": {}}
+    text = html.unescape("".join(_coefficients_section(rep)))
+    flags_table = text[text.index("<h3>Flags</h3>"):text.index("<dl>")]
+    assert "<td>at bound</td>" in flags_table and "<td>ill conditioned</td>" in flags_table
+    assert "at_bound" not in flags_table and "ill_conditioned" not in flags_table
+
+
 def test_structure_tests_are_told_in_words_with_the_p_the_verdict_used():
     """The summary named the tests by their keys ("drawbar_pull_n@x") with Holm-adjusted p-values while the
     structure statements quoted raw p-values against a Bonferroni level for the same tests; report.json now
