@@ -406,6 +406,16 @@ def _front_wheel_refs(config) -> list:
 COUPLED_MAX_DEV = 0.02
 
 
+def _fronts_speed(series: list, r: float) -> np.ndarray:
+    """The front wheels' mean r*omega [m/s] at the first one's times: ``series`` [(times (n_i,), omega
+    (n_i,) [rad/s])], each interpolated to ``series[0]``'s times; ``r`` [m].  NaN where every wheel is lost."""
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # every front wheel lost at a sample: NaN
+        return np.nanmean(np.vstack([np.interp(series[0][0], t, v) for t, v in series]), axis=0) * r
+
+
 def _fronts_coupled(t_front_ns: np.ndarray, v_front: np.ndarray, t_rear_ns: np.ndarray,
                     v_rear: np.ndarray) -> bool:
     """True when the front wheels' r*omega (n,) follows the measured wheel's r*omega (m,)
@@ -1648,9 +1658,7 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
         f_ser = [s_ for s_ in (get(f, measured=True) for f in fronts) if s_ is not None and s_[0].shape[0] >= 3]
         refs = []
         if f_ser and wss_t is not None:
-            with _w.catch_warnings():
-                _w.simplefilter("ignore", RuntimeWarning)
-                fv0 = np.nanmean(np.vstack([np.interp(f_ser[0][0], t_, v_) for t_, v_ in f_ser]), axis=0) * r
+            fv0 = _fronts_speed(f_ser, r)
             if not _fronts_coupled(f_ser[0][0], fv0, wss_t, got[1] * r):
                 refs = [(rel_s(f_ser[0][0]), fv0)]
         g_pre, pre_q = _gnss_far_shift(g_rel, g_v, refs, path, g_msg, warns)
@@ -1691,9 +1699,7 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
             coupled_ = False
             if f_series:
                 ft = f_series[0][0]
-                with _w.catch_warnings():
-                    _w.simplefilter("ignore", RuntimeWarning)  # every front wheel lost at a sample: NaN
-                    fv = np.nanmean(np.vstack([np.interp(ft, s[0], s[1]) for s in f_series]), axis=0) * r
+                fv = _fronts_speed(f_series, r)
                 coupled_ = wss_t is not None and _fronts_coupled(ft, fv, wss_t, got[1] * r)
             front = bool(f_series) and not coupled_
             if front:
