@@ -470,8 +470,6 @@ def _vehicle_config_record(path: Path | None, vehicle=None) -> dict:
     shipped default)."""
     import hashlib
 
-    from wheelsoil.daq.provenance import file_sha256
-
     def sha(b: bytes) -> str:
         return hashlib.sha256(b).hexdigest()
 
@@ -480,12 +478,7 @@ def _vehicle_config_record(path: Path | None, vehicle=None) -> dict:
         from wheelsoil.daq import VehicleConfig, load_vehicle_config
 
         cfg = vehicle if isinstance(vehicle, VehicleConfig) else load_vehicle_config(vehicle)
-        src = Path(cfg.source) if cfg.source else None
-        rec = {"source": f"given: {src if src else 'a VehicleConfig object'}",
-               "sha256": file_sha256(src) if src and src.exists() else None,
-               "dbcs": sorted(({"name": p.name, "sha256": file_sha256(p)} for ps in cfg.buses.values() for p in ps),
-                              key=lambda d: d["name"])}
-        return _wheel_record(rec, cfg)
+        return _wheel_record(_files_record(cfg, f"given: {cfg.source or 'a VehicleConfig object'}"), cfg)
     if path is not None and path.suffix.lower() == ".mcap":
         try:
             from wheelsoil.daq.recording import read_attachments
@@ -510,12 +503,19 @@ def _vehicle_config_record(path: Path | None, vehicle=None) -> dict:
         from wheelsoil.daq import load_vehicle_config
 
         cfg = load_vehicle_config()
-        src = Path(cfg.source) if cfg.source else None
-        rec.update({"source": f"shipped default {src.name if src else 'vehicle.toml'}",
-                    "sha256": file_sha256(src) if src and src.exists() else None,
-                    "dbcs": sorted(({"name": p.name, "sha256": file_sha256(p)}
-                                    for ps in cfg.buses.values() for p in ps), key=lambda d: d["name"])})
+        rec.update(_files_record(cfg, f"shipped default {Path(cfg.source).name if cfg.source else 'vehicle.toml'}"))
     return _wheel_record(rec, cfg)
+
+
+def _files_record(cfg, source: str) -> dict:
+    """``{"source", "sha256", "dbcs"}`` of a configuration read from files: the sha256 of its vehicle.toml (None
+    without one) and of each DBC file, by name."""
+    from wheelsoil.daq.provenance import file_sha256
+
+    src = Path(cfg.source) if cfg.source else None
+    return {"source": source, "sha256": file_sha256(src) if src and src.exists() else None,
+            "dbcs": sorted(({"name": p.name, "sha256": file_sha256(p)} for ps in cfg.buses.values() for p in ps),
+                           key=lambda d: d["name"])}
 
 
 def _wheel_record(rec: dict, cfg) -> dict:
