@@ -320,6 +320,30 @@ def _at_range_limit(cfg, ref, v: np.ndarray) -> np.ndarray:
     return out
 
 
+def _other_mux_value(message, decoded: dict[str, np.ndarray], names: list[str]) -> tuple[str, np.ndarray]:
+    """Which frames of a decoded message carry another multiplexer value than one of the signals
+    ``names`` needs (a multiplexed signal is absent there, not cut short).
+
+    ``message`` is the cantools message, ``decoded`` its decoded signals (name -> (n,) float64,
+    multiplexers included). Returns a phrase naming the multiplexer values seen and needed, and an
+    (n,) bool mask; ("", all False) when no named signal is multiplexed. Source: the DBC's
+    multiplexing (``M`` / ``mN`` in ``SG_``), as cantools reads it."""
+    n = len(next(iter(decoded.values()))) if decoded else 0
+    mask, said = np.zeros(n, dtype=bool), {}
+    for name in dict.fromkeys(names):
+        s = message.get_signal_by_name(name)
+        if not s.multiplexer_ids or s.multiplexer_signal not in decoded:
+            continue
+        value = decoded[s.multiplexer_signal]
+        other = np.isfinite(value) & ~np.isin(np.trunc(value), s.multiplexer_ids)
+        if other.any():
+            mask |= other
+            seen = ", ".join(f"{v:g}" for v in np.unique(value[other])[:5])
+            need = ", ".join(str(i) for i in sorted(s.multiplexer_ids))
+            said.setdefault(f"{s.multiplexer_signal} = {seen}, not the {need} that", []).append(name)
+    return "; ".join(f"{k} {', '.join(v)} need{'s' if len(v) == 1 else ''}" for k, v in said.items()), mask
+
+
 def _recorded_wheel(read_report) -> tuple[float, float] | None:
     """The wheel (radius, width) [m] a recording's ``wheelsoil.recording`` metadata states (the writer's
     copy of its configuration), from a reader's report; None when it states none or an implausible one."""
@@ -1390,10 +1414,22 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
         whole = np.isfinite(counter)
         for v in columns.values():
             whole &= np.isfinite(v)
-        if not whole.all():  # a frame too short for its signals (DLC mismatch) decodes to NaN there
-            warns.append(f"WFT: {int((~whole).sum())} {cref.message} frame(s) on {cref.bus} without a value in the "
-                         "counter or a signal (payload shorter than the DBC's layout: DLC mismatch) dropped as lost "
-                         "samples")
+        if not whole.all():
+            # NaN where the frame carries another multiplexer value than a signal's, else where the payload is
+            # too short for the signal (a DLC mismatch)
+            other_mux = _other_mux_value(cfg.database(cref.bus).get_message_by_name(cref.message), m.signals,
+                                         [cref.signal] + [sig[c].signal for c in cols if c in columns])
+            for what, bad in ((other_mux[0], ~whole & other_mux[1]), (None, ~whole & ~other_mux[1])):
+                if not bad.any():
+                    continue
+                warns.append(f"WFT: {int(bad.sum())} {cref.message} frame(s) on {cref.bus} without a value in the "
+                             + (f"counter or a signal (they carry {what}) dropped as lost samples" if what else
+                                "counter or a signal (payload shorter than the DBC's layout: DLC mismatch) dropped "
+                                "as lost samples"))
+            if not whole.any() and other_mux[1].all():
+                warns.append(f"WFT: no {cref.message} frame on {cref.bus} carries the multiplexer value of the "
+                             f"configured signals ({other_mux[0]}): check the vehicle configuration's signals "
+                             "against the DBC")
             ts, counter, columns = ts[whole], counter[whole], {k: v[whole] for k, v in columns.items()}
         if counter.size >= 2:
             streams[cref.message] = (ts, counter, columns)

@@ -212,6 +212,50 @@ def test_short_wft_frames_are_dropped_not_decoded_into_forces(tmp_path, short_tr
     err = b.signals["drawbar_pull_n"].to_numpy()[ok] - a.signals["drawbar_pull_n"].to_numpy()[ok]
     assert np.sqrt(np.mean(err**2)) < 3 * FORCE_NOISE_N
 
+
+def test_wft_frames_of_another_multiplexer_value_are_not_called_short(tmp_path, short_truth):
+    """A DBC whose force message is multiplexed (the forces in frames whose Status byte is 0): frames
+    carrying another value lose their forces as lost samples, and the warning names the multiplexer
+    and its values, not a DLC mismatch (their payload is whole); none carrying it is said as such."""
+    from daq_helpers import copy_default_vehicle
+
+    from wheelsoil.daq import load_vehicle_config
+    from wheelsoil.daq.convert import export_recording
+
+    toml = copy_default_vehicle(tmp_path)
+    dbc = tmp_path / "wft.dbc"
+    text = dbc.read_text()
+    for a, b in ((" SG_ Fx_w : 0|16", " SG_ Fx_w m0 : 0|16"), (" SG_ Fz_w : 32|16", " SG_ Fz_w m0 : 32|16"),
+                 (" SG_ Status : 56|8@1+ (1,0) [0|255] \"\" DAQ\n\nBO_ 289",
+                  " SG_ Status M : 56|8@1+ (1,0) [0|255] \"\" DAQ\n\nBO_ 289")):
+        assert a in text
+        text = text.replace(a, b, 1)
+    dbc.write_text(text)
+    cfg = load_vehicle_config(toml)
+    info = write_recording(tmp_path / "r.mcap", short_truth, latency_s=0.1)
+    export_recording(info["path"], tmp_path / "r.log")
+    lines = (tmp_path / "r.log").read_text().splitlines()
+    force = [i for i, ln in enumerate(lines) if " 120#" in ln]
+    assert all(lines[i].split("#", 1)[1][14:16] == "00" for i in force)  # the Status byte: 0 in every frame
+    for i in force[::7]:
+        head, data = lines[i].split("#", 1)
+        lines[i] = f"{head}#{data[:14]}03{data[16:]}"
+    (tmp_path / "mux.log").write_text("\n".join(lines) + "\n")
+    res = process_recording(tmp_path / "mux.log", config=cfg)
+    said = [w for w in res.warnings if "WFT_RL_Force" in w and "lost samples" in w]
+    assert any(f"{len(force[::7])} WFT_RL_Force" in w and "Status = 3, not the 0 that Fx_w, Fz_w need" in w
+               for w in said), said
+    assert not any("DLC mismatch" in w for w in said), said
+    assert res.signals["valid"].mean() > 0.5
+    for i in force:
+        head, data = lines[i].split("#", 1)
+        lines[i] = f"{head}#{data[:14]}01{data[16:]}"
+    (tmp_path / "none.log").write_text("\n".join(lines) + "\n")
+    res = process_recording(tmp_path / "none.log", config=cfg)
+    assert any("no WFT_RL_Force frame on can0 carries the multiplexer value" in w for w in res.warnings), \
+        res.warnings
+
+
 def test_long_wft_frames_are_not_decoded_and_29_bit_twins_are_named(tmp_path, short_truth):
     """A frame on a WFT id with a payload longer than its DBC message (12 bytes where the DBC says
     8: a CAN FD variant with another layout) is not decoded into forces but lost, with a warning;
