@@ -290,10 +290,16 @@ def _run_csv_case(gen: Path, name: str, case: str, seed: int, params: dict, out:
     return {"name": name, "fronts": "log" if fit_args[0].endswith(data[1:]) else "table", "truth": f"{case} {truth['params'] or ''}".strip(),
             "listed": truth["family"] == "in", "effect": d["effect"], "model": d.get("model"),
             "confidence": d.get("confidence"), "score": score,
-            "form": str(d.get("model")).split("+")[0] == form if score == "right" and form else None,
+            "form": _form(d.get("model")) == form if score == "right" and form else None,
             "latency_true_s": (truth.get("params") or {}).get("gnss_latency_s"), "latency_s": q.get("gnss_latency_s"),
             "latency_method": lat.get("method"), "latency_reliable": lat.get("reliable"),
             "terrain_beyond": _terrain_beyond(d)}
+
+
+def _form(model) -> str:
+    """The slip-sinkage form of a fitted model's name (``ding_stress+terrain`` -> ``ding``: Eq. 13 in either
+    reading)."""
+    return str(model).split("+")[0].replace("ding_stress", "ding")
 
 
 def _terrain_beyond(d: dict) -> list | None:
@@ -325,7 +331,7 @@ def fit_and_score(name: str, truth: dict, out: Path, fronts: str, log: Path | No
     return {"name": name, "fronts": fronts, "truth": f"{model} {truth['params'] or ''}".strip(),
             "listed": ok != "unexplained",
             "effect": d["effect"], "model": d.get("model"), "confidence": d.get("confidence"), "score": score,
-            "form": d.get("model") == model if score == "right" and ok == "slip_sinkage" else None,
+            "form": _form(d.get("model")) == _form(model) if score == "right" and ok == "slip_sinkage" else None,
             "latency_true_s": truth["gnss_latency_s"], "latency_s": q.get("gnss_latency_s"),
             "latency_method": lat.get("method"), "latency_reliable": lat.get("reliable"), "terrain_beyond": _terrain_beyond(d)}
 

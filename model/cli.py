@@ -150,7 +150,9 @@ def register(subparsers) -> None:
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     p.add_argument("--terrain", required=True, help="built-in terrain slug (clay, sand, dry-sand, ...) or a TOML file")
-    p.add_argument("--model", default="wong", help="wong | vasilev | lyasko | ding (default wong)")
+    p.add_argument("--model", default="wong",
+                   help="wong | vasilev | lyasko | ding | ding_stress (Eq. 13 with N in the stress only) "
+                        "(default wong)")
     p.add_argument("--param", action="append", metavar="NAME=VALUE",
                    help="model parameter, repeatable (e.g. --param m1=0.1 --param m2=0.05); default 0")
     p.add_argument("--load", required=True, help="vertical load W [N], one value or comma-separated per slip")

@@ -12,7 +12,8 @@ need no change.
 The hypotheses (paper numbering for Eqs.; Wong = *Theory of Ground Vehicles*, 4th ed.):
 
 * ``wong``: the paper's model, Eqs. (1)-(10), lab terrain.
-* ``vasilev``, ``lyasko``, ``ding``: slip sinkage, Eqs. (11)-(13)
+* ``vasilev``, ``lyasko``, ``ding``: slip sinkage, Eqs. (11)-(13); ``ding_stress``: Eq. (13)'s other
+  reading, N in the stress (Eq. 2) only, z0 with the lab n
   (:mod:`wheelsoil.model.slip_sinkage`).
 * ``terrain``: terrain mismatch.  The identifiable subset of the lab terrain,
   k_eq = kc/b + kphi (one wheel width cannot separate kc and kphi), n, c,
@@ -425,11 +426,21 @@ class Lyasko(_SlipSinkage):
 
 
 class Ding(_SlipSinkage):
-    """Ding: N = n + n1 s in Eqs. (2) and (10) (paper Eq. 13)."""
+    """Ding: N = n + n1 s in Eqs. (2) and (10) (paper Eq. 13).  Its two readings share one form's
+    prior mass (``prior_group``)."""
 
     name = core = "ding"
     title = "Ding"
     source = "Ding et al. (2010); paper Eq. (13)"
+    prior_group = "ding"
+
+
+class DingStress(Ding):
+    """Ding's other reading: N = n + n1 s in Eq. (2) only, z0 with the lab n (paper Eq. 13;
+    :class:`wheelsoil.model.slip_sinkage.DingStress`)."""
+
+    name = core = "ding_stress"
+    title = "Ding, N in the stress only"
 
 
 class TerrainMismatch(Wong):
@@ -558,6 +569,16 @@ class DingTerrain(Ding):
     name, title = "ding+terrain", "Ding + terrain re-fitted"
     terrain_block = True
     nested = ("terrain", "ding")
+    prior_group = "ding+terrain"
+
+
+class DingStressTerrain(DingStress):
+    """Ding's other reading (N in the stress only) with the terrain re-fitted against its priors."""
+
+    name, title = "ding_stress+terrain", "Ding, N in the stress only + terrain re-fitted"
+    terrain_block = True
+    nested = ("terrain", "ding_stress")
+    prior_group = "ding+terrain"
 
 
 def kernel_has_stress() -> bool:
@@ -1483,9 +1504,9 @@ class SmallAngleSinkage(Hypothesis):
 #: The registry: name -> hypothesis.  Add a cause: one class above and one entry here.
 HYPOTHESES: dict[str, Hypothesis] = {
     h.name: h
-    for h in (Wong(), Vasilev(), Lyasko(), Ding(), TerrainMismatch(), *(_terrain_one(n) for n in TERRAIN_NAMES),
+    for h in (Wong(), Vasilev(), Lyasko(), Ding(), DingStress(), TerrainMismatch(), *(_terrain_one(n) for n in TERRAIN_NAMES),
               *(_terrain_test(t, v) for t, v in LAB_TESTS.items()), *(_terrain_test(None, v) for v in TEST_PAIRS + SHEAR_PAIRS),
-              VasilevTerrain(), LyaskoTerrain(), DingTerrain(),
+              VasilevTerrain(), LyaskoTerrain(), DingTerrain(), DingStressTerrain(),
               WongReece(), WongReeceLoad(), WongReeceTerrain(), DriftLinear(), DriftStep(), *(_drift_one(n) for n in TERRAIN_NAMES),
               *(_drift_one(n, step=True) for n in TERRAIN_NAMES), DrawbarResistance(), DrawbarDrift(), ZeroDrift(),
               WheelRadius(), SpeedGain(), TyreRadius(), WheelWidth(), SensorGain(), SensorGainTerrain(), AngleOffset(),

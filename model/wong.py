@@ -392,6 +392,7 @@ def wong_forces(
     sinkage: str = "eq10",
     z_fn: ZFn | None = None,
     n_fn: NFn | None = None,
+    n_in_z0: bool = True,
     stress=None,
     exit_ratio=None,
     tau_scale=None,
@@ -405,7 +406,9 @@ def wong_forces(
     ``"balance"`` solve Eq. (7)(z0, s) = W per sample (the exact vertical
     balance at the sample's slip, with the chosen stress distribution; Eq. (10)
     differs from it by several percent for n < 0.8). ``n_fn(slip) -> N``
-    replaces the sinkage exponent in both Eq. (2) and Eq. (10) (Ding, Eq. 13);
+    replaces the sinkage exponent in both Eq. (2) and Eq. (10) (Ding, Eq. 13),
+    or with ``n_in_z0=False`` in Eq. (2) only, the static sinkage z0 (Eq. 10
+    or the balance) taken with the terrain's n (the other reading of Eq. 13);
     ``z_fn(z0, slip) -> z`` maps the static sinkage to the sinkage used in
     Eqs. (1)-(9) (Vasil'ev Eq. 11, Lyasko Eq. 12). In balance mode the
     transform is applied to the balanced z0, so the model's W equals the input
@@ -498,10 +501,11 @@ def wong_forces(
         n = np.broadcast_to(np.asarray(n_fn(s), dtype=float), w.shape).copy()
         _check(~np.isfinite(n) | (n <= 0) | (n >= 3), "sinkage_exponent", n,
                "sinkage exponent N must be in (0, 3) (Eqs. 2, 10)")
-    z0 = sinkage_eq10(terrain, wheel, w, n)
+    n_z0 = n if n_in_z0 else np.full(len(w), terrain.n)
+    z0 = sinkage_eq10(terrain, wheel, w, n_z0)
     if sinkage == "balance":
-        z_start = z0 if ratio is None else z0 * _small_angle_load_factor(ratio, n) ** (-1.0 / (n + 0.5))
-        z0 = _balance_sinkage(terrain, wheel, w, s, n, z_start, ratio, exit_ratio, tau_scale, shear_power)
+        z_start = z0 if ratio is None else z0 * _small_angle_load_factor(ratio, n_z0) ** (-1.0 / (n_z0 + 0.5))
+        z0 = _balance_sinkage(terrain, wheel, w, s, n_z0, z_start, ratio, exit_ratio, tau_scale, shear_power)
     z = z0 if z_fn is None else np.broadcast_to(np.asarray(z_fn(z0, s), dtype=float), w.shape).copy()
     if not np.all((z >= 0) & (z < r)):  # NaN fails both: then name the first bad element
         _check(~np.isfinite(z), "sinkage_m", z, "sinkage is not finite")

@@ -108,6 +108,16 @@ def test_time_series_with_slip_sinkage_names_it_and_its_form():
     assert out["channels"]["drawbar_pull_n"]["improves"] is True
 
 
+def test_ding_read_with_n_in_the_stress_only_is_slip_sinkage():
+    """Eq. (13)'s other reading (N in Eq. 2 only, Eq. 10's sinkage at the lab n), as an independent
+    generator wrote it: the effect is slip sinkage, the form Ding's."""
+    df = synthetic_data(SAND, W, "ding_stress", {"n1": 0.3}, duration_s=60.0, load_n=13000.0, seed=2)
+    d = diagnose(df, SAND, W)
+    out = _invariants(d)
+    assert d.effect == "slip_sinkage" and d.model.startswith("ding"), d.summary
+    assert sum(v for k, v in out["probabilities"].items() if k.startswith("ding_stress")) > 0.9
+
+
 @pytest.mark.parametrize("kind", ["table", "timeseries"])
 def test_lab_exponent_off_without_slip_sinkage_is_not_slip_sinkage(kind):
     """Why-bullet: n + 0.1 and no slip sinkage gave 'slip_sinkage' (Ding) at high confidence."""

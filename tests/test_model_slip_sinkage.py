@@ -16,17 +16,17 @@ S = np.array([0.0, 0.2, 0.5, 0.9])
 
 
 def test_registry_and_parameters():
-    assert list(MODELS) == ["wong", "vasilev", "lyasko", "ding"]
+    assert list(MODELS) == ["wong", "vasilev", "lyasko", "ding", "ding_stress"]
     assert get_model("wong").params == ()
     assert [p.name for p in get_model("lyasko").params] == ["m1", "m2"]
     assert [p.name for p in get_model("vasilev").params] == ["H"]
-    assert [p.name for p in get_model("ding").params] == ["n1"]
+    assert [p.name for p in get_model("ding").params] == [p.name for p in get_model("ding_stress").params] == ["n1"]
     for model in MODELS.values():
         assert isinstance(model, SinkageModel) and model.source
         for p in model.params:
             assert isinstance(p, Param) and p.lower <= p.default <= p.upper and p.unit and p.doc
     assert get_model("lyasko").params[1].upper < 1  # m2 * s < 1 for every s < 1
-    with pytest.raises(ValueError, match="unknown model 'reece'.*wong, vasilev, lyasko, ding"):
+    with pytest.raises(ValueError, match="unknown model 'reece'.*wong, vasilev, lyasko, ding, ding_stress"):
         get_model("reece")
 
 
@@ -57,6 +57,22 @@ def test_ding_exponent_in_eq2_and_eq10():
     for i in range(len(S)):
         ref = wong_forces(CLAY.replace(n=float(big_n[i])), DEFAULT_WHEEL, W[i : i + 1], S[i : i + 1])
         assert f.drawbar_pull_n[i] == pytest.approx(ref.drawbar_pull_n[0], rel=1e-12)
+
+
+@pytest.mark.parametrize("sinkage", ["eq10", "balance"])
+def test_ding_other_reading_exponent_in_eq2_only(sinkage):
+    """Eq. (13)'s other reading: the static sinkage is Wong's (the lab n), the stress takes N."""
+    f = get_model("ding_stress").predict(CLAY, DEFAULT_WHEEL, W, S, {"n1": 0.35}, sinkage=sinkage)
+    z0 = wong_forces(CLAY, DEFAULT_WHEEL, W, S, sinkage=sinkage).sinkage_m
+    np.testing.assert_allclose(f.sinkage_m, z0, rtol=1e-13)
+    big_n = CLAY.n + 0.35 * S
+    for i in range(len(S)):  # Eq. (2) with N at Wong's sinkage, sample by sample
+        ref = wong_forces(CLAY.replace(n=float(big_n[i])), DEFAULT_WHEEL, W[i : i + 1], S[i : i + 1],
+                          z_fn=lambda z, s, z0=z0[i]: np.full_like(z, z0))
+        assert f.drawbar_pull_n[i] == pytest.approx(ref.drawbar_pull_n[0], rel=1e-12)
+        assert f.torque_nm[i] == pytest.approx(ref.torque_nm[0], rel=1e-12)
+    # at a sinkage under 1 m a larger N lowers the stress: the model carries less than the load as slip grows
+    assert np.all(np.diff(f.load_model_n[1:] / W[1:]) < 0)
 
 
 @settings(max_examples=30, deadline=None)
