@@ -1,6 +1,6 @@
-"""The diagnosis on runs of nine independent generators (``benchmarks/foreign/`` to ``foreign9/``).
+"""The diagnosis on runs of ten independent generators (``benchmarks/foreign/`` to ``foreign10/``).
 
-    python benchmarks/bench_foreign.py [--generator foreign|foreign2 [--stress|--round2]|foreign3|...|foreign9 [--round2]]
+    python benchmarks/bench_foreign.py [--generator foreign|foreign2 [--stress|--round2]|foreign3|...|foreign10 [--round2]]
                                        [--only a1,v15] [--keep DIR]
 
 Each generator was written from the hardware contract, the DBC files and the paper alone, by a
@@ -46,7 +46,10 @@ pass after pass, sinkage measured), fitted the same way; ``foreign8`` (``round1.
 soils and a 0.52 x 0.36 m wheel, fitted directly from the log with the arguments its truth file gives;
 ``foreign9`` (``round1.json``, seeds 1201-1230; ``--round2`` 1231-1260, written by the project): vehicle CAN logs of field runs pulling a dynamometer vehicle
 whose operator sets the slip, a 0.455 x 0.33 m wheel, a transducer rotating with it (1/rev and 2/rev
-crosstalk), a soil varying along the track, GNSS outages, lost frames and spikes, fitted the same way.
+crosstalk), a soil varying along the track, GNSS outages, lost frames and spikes, fitted the same way;
+``foreign10`` (``round1.json``, seeds 1301-1330; ``--round2`` 1331-1360, both written by its author before any run
+was generated): a 4x4 tractor climbing and descending a hill in passes, a 0.585 x 0.40 m wheel, its own clay loam
+and dry sand, the GNSS speed horizontal on the grade, logs in candump, ASC, BLF and TRC, fitted the same way.
 Prints one row per case (verdict, latency found against the truth, its method and reliability) and the
 totals, and the wall time.
 """
@@ -74,6 +77,7 @@ GEN6 = Path(__file__).resolve().parent / "foreign6" / "gen.py"
 GEN7 = Path(__file__).resolve().parent / "foreign7" / "gen.py"
 GEN8 = Path(__file__).resolve().parent / "foreign8" / "gen.py"
 GEN9 = Path(__file__).resolve().parent / "foreign9" / "gen.py"
+GEN10 = Path(__file__).resolve().parent / "foreign10" / "gen.py"
 
 #: name, generator case, fronts, seed, latency [s], effect options
 CASES = [
@@ -147,7 +151,8 @@ ROUND2 = [
 #: sizes, every cause on no list at two sizes) by the project after the first was scored and before any of
 #: these was run; ``foreign5/round1.json`` (801-830) by its author before any run was scored, its
 #: ``round2.json`` (831-860) by the project after the first was scored and before any of these was run
-ROUNDS = {(gen.parent.name, k): gen.parent / f"round{k}.json" for gen in (GEN3, GEN4, GEN5, GEN6, GEN7, GEN8, GEN9) for k in (1, 2)}
+ROUNDS = {(gen.parent.name, k): gen.parent / f"round{k}.json" for gen in (GEN3, GEN4, GEN5, GEN6, GEN7, GEN8, GEN9, GEN10)
+          for k in (1, 2)}
 
 
 def round_runs(generator: str, k: int) -> list[dict]:
@@ -263,6 +268,12 @@ def run_case9(name: str, case: str, seed: int, params: dict, out: Path) -> dict:
     return _run_csv_case(GEN9, name, case, seed, params, out)
 
 
+def run_case10(name: str, case: str, seed: int, params: dict, out: Path) -> dict:
+    """Generate one run of the eleventh generator (``foreign10``: a 4x4 tractor's hill climbs and descents in
+    passes, its own soils and 0.585 m wheel) and fit the log as its truth file says, as :func:`run_case8` does."""
+    return _run_csv_case(GEN10, name, case, seed, params, out)
+
+
 def _run_csv_case(gen: Path, name: str, case: str, seed: int, params: dict, out: Path) -> dict:
     """Generate one data file of ``gen`` (a CSV table or time series, or a CAN log) and fit it with its truth's
     ``fit_args`` (the data file moved to ``out``, a relative terrain file taken from the project's root)."""
@@ -338,14 +349,15 @@ def fit_and_score(name: str, truth: dict, out: Path, fronts: str, log: Path | No
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--generator", choices=tuple(f"foreign{k}" for k in ("", 2, 3, 4, 5, 6, 7, 8, 9)),
+    ap.add_argument("--generator", choices=tuple(f"foreign{k}" for k in ("", 2, 3, 4, 5, 6, 7, 8, 9, 10)),
                     default="foreign",
                     help="which independent generator's cases (default: foreign, 14 cases; foreign2: 36; foreign3: "
                          "its first round, 30 runs on the paper's clay from a towed vehicle, logs in ASC, BLF and "
                          "candump format fitted directly; foreign4: 30 runs of its own soil and wheel; foreign5: 30 runs of a "
                          "loamy sand, a load car towed behind, damaged logs; foreign6: 30 single-wheel testbed tables; "
                          "foreign7: 28 single-wheel rig time series; foreign8: 30 vehicle CAN logs of a tow test; "
-                         "foreign9: 30 vehicle CAN logs of field runs against a dynamometer vehicle per round)")
+                         "foreign9: 30 vehicle CAN logs of field runs against a dynamometer vehicle per round; foreign10: 30 "
+                         "CAN logs of a 4x4 tractor's hill climbs per round)")
     ap.add_argument("--stress", action="store_true",
                     help="with --generator foreign2: 24 runs of eight of its cases as short runs (4 cycles), with 3x "
                          "the sensor noise and with 3x the soil variability, instead of its 36 cases")
@@ -357,7 +369,7 @@ def main() -> None:
                          "(foreign5/round2.json); with foreign6: 30 tables on seeds 931-960 (foreign6/round2.json); with "
                          "foreign7: 28 rig time series on seeds 1031-1058 (foreign7/round2.json); with foreign8: 30 "
                          "logs on seeds 1131-1160 (foreign8/round2.json); with foreign9: 30 logs on seeds 1231-1260 "
-                         "(foreign9/round2.json, written by the project)")
+                         "(foreign9/round2.json, written by the project); with foreign10: 30 logs on seeds 1331-1360")
     ap.add_argument("--only", default="", help="comma list of case names (default: all)")
     ap.add_argument("--keep", type=Path, default=None, help="keep logs, recordings and reports here")
     args = ap.parse_args()
@@ -375,7 +387,7 @@ def main() -> None:
     elif args.generator in ("foreign3", "foreign4", "foreign5"):
         cases = [(r["name"], r["case"], r["seed"], r["params"], r["format"])
                  for r in round_runs(args.generator, 2 if args.round2 else 1)]
-    elif args.generator in ("foreign6", "foreign7", "foreign8", "foreign9"):
+    elif args.generator in ("foreign6", "foreign7", "foreign8", "foreign9", "foreign10"):
         cases = [(r["name"], r["case"], r["seed"], r["params"]) for r in round_runs(args.generator, 2 if args.round2 else 1)]
     else:
         cases = STRESS if args.stress else ROUND2 if args.round2 else CASES2
@@ -392,6 +404,7 @@ def main() -> None:
                 run_case7(*c, base) if args.generator == "foreign7" else \
                 run_case8(*c, base) if args.generator == "foreign8" else \
                 run_case9(*c, base) if args.generator == "foreign9" else \
+                run_case10(*c, base) if args.generator == "foreign10" else \
                 run_case2(*c[:5], base, *c[5:])
         except subprocess.CalledProcessError as e:  # the generator refused (e.g. a run the vehicle cannot drive)
             print(f"{c[0]:<{w}} generator failed: {e.stderr.decode(errors='replace').strip().splitlines()[-1:]}")

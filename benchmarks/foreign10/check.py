@@ -233,7 +233,9 @@ def main():
     for k, case in enumerate(gen.CASES):
         p = {"soil": list(gen.SOILS)[k % 2]}
         if case == "brittle_shear":
-            p["hill_starts"] = False
+            p.update(hill_starts=False, soil="dry_sand")
+        if case == "wong_reece":
+            p["soil"] = "clay_loam"
         jobs.append(("case", case, None, (case, 1501 + k, f"case_{case}", os.path.join(tmp, "cases"), p)))
     # 4. refusal
     jobs.append(("refuse", None, None, ("none", 1601, "refuse", os.path.join(tmp, "ref"), {"grade_max": 0.6})))

@@ -51,7 +51,7 @@ DEFAULTS = {
     "ss_lyasko": {"m1": 0.8, "m2": 0.15},
     "ss_ding": {"n1": 0.4},
     "mismatch": {"shift_sd": {"k_eq": 3.0}},
-    "wong_reece": {"a1": 0.35, "a2": 0.30},
+    "wong_reece": {"a1": 0.30, "a2": 0.20},
     "drift_passes": {"per_pass": {"k_eq_rel": 0.35, "c_rel": 0.15, "K_rel": -0.20, "phi_deg": 1.0}},
     "drift_wetpatch": {"x0": 52.0, "x1": 102.0,
                        "change": {"k_eq_rel": -0.40, "c_rel": -0.45, "phi_deg": -4.0, "n": 0.06,
@@ -63,7 +63,7 @@ DEFAULTS = {
     "wss_teeth": {"teeth_true": 48, "teeth_config": 50},
     "reece_pressure": {"keq_ratio": 1.8, "kc_share": 0.5, "gamma_kn_m3": 15.5},
     "speed_sinkage": {"kappa_s_per_m": 0.12},
-    "brittle_shear": {"Kr": 0.55, "Kw_over_K": 2.0},
+    "brittle_shear": {"Kr": 0.75, "Kw_over_K": 2.0},
 }
 
 # "none" is also acceptable for out-of-family runs whose effect is below these
