@@ -99,6 +99,16 @@ WFT_RIPPLE_REL = 0.03
 #: times less certain than the run's typical one, and an INS integrating through a GNSS outage
 #: drifts while its Validity flag still says 1.  Such frames are left out as lost, said in a warning.
 GNSS_ACCURACY_DEGRADED = 4.0
+#: The GNSS speed on a grade: the receiver's 2D speed and the INS's forward velocity are horizontal
+#: (the DBC's comments), while slip (Eq. 6) needs the speed along the ground the wheel rolls on,
+#: V_h / cos(grade). The 3D speed over the 2D one is 1 / cos(grade); it is taken where the 2D speed
+#: is at least GRADE_MIN_SPEED_MPS (the vertical velocity's noise sigma_z adds sigma_z^2 / (2 V^2) to
+#: the ratio: 2e-4 at 0.02 m/s and 1 m/s), as a running median over GRADE_WINDOW_S, and applied only
+#: when it reaches GRADE_MIN_RATIO somewhere (a 10 % grade; below it slip moves by less than 0.005,
+#: and three times that noise, 1.8e-3 at 1 m/s, stays under it).
+GRADE_MIN_SPEED_MPS = 1.0
+GRADE_WINDOW_S = 2.0
+GRADE_MIN_RATIO = 1.005
 #: GNSS latency search range [s] (hardware.md: typically 20-200 ms); an estimate within 4 ms of
 #: either end is an edge hit (unreliable).
 LATENCY_MAX_S = 0.5
@@ -342,6 +352,34 @@ def _other_mux_value(message, decoded: dict[str, np.ndarray], names: list[str]) 
             need = ", ".join(str(i) for i in sorted(s.multiplexer_ids))
             said.setdefault(f"{s.multiplexer_signal} = {seen}, not the {need} that", []).append(name)
     return "; ".join(f"{k} {', '.join(v)} need{'s' if len(v) == 1 else ''}" for k, v in said.items()), mask
+
+
+def _grade_factor(t2: np.ndarray, v2: np.ndarray, t3: np.ndarray, v3: np.ndarray, period_s: float,
+                  t_out: np.ndarray) -> np.ndarray | None:
+    """1 / cos(grade) at the times ``t_out`` [s] (M,), from the GNSS receiver's horizontal (2D) and 3D
+    ground speeds (``t2``, ``v2``, ``t3``, ``v3``: (N,) times [s] and speeds [m/s] of one message,
+    ``period_s`` its period): the running median over :data:`GRADE_WINDOW_S` of v3 / v2 where
+    v2 >= :data:`GRADE_MIN_SPEED_MPS`, clipped to [1, sqrt(2)] (3D < 2D is rounding; beyond 45 deg no
+    vehicle drives), held between such samples. None when fewer than a window of such samples exist or
+    the factor stays under :data:`GRADE_MIN_RATIO` (level ground: nothing to correct).
+    Source: the RT SpeedBox DBC's comments (2D horizontal, 3D including the vertical component);
+    Eq. (6) with V along the ground."""
+    from scipy.ndimage import median_filter
+
+    if t2.shape != t3.shape or not np.allclose(t2, t3, atol=0.5 * period_s):
+        t3_on_2 = np.interp(t2, t3, v3, left=np.nan, right=np.nan)
+    else:
+        t3_on_2 = v3
+    with np.errstate(invalid="ignore", divide="ignore"):
+        ok = np.isfinite(v2) & np.isfinite(t3_on_2) & (v2 >= GRADE_MIN_SPEED_MPS)
+        ratio = np.clip(t3_on_2[ok] / v2[ok], 1.0, math.sqrt(2.0))
+    window = max(3, int(round(GRADE_WINDOW_S / period_s)) | 1)
+    if ratio.size < window:
+        return None
+    smooth = median_filter(ratio, size=window, mode="nearest")
+    if smooth.max() < GRADE_MIN_RATIO:
+        return None
+    return np.interp(t_out, t2[ok], smooth)
 
 
 def _recorded_wheel(read_report) -> tuple[float, float] | None:
@@ -1237,6 +1275,8 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
     refs = {k: sig[k] for k in ("wft_fx_w", "wft_fz_w", "wft_my", "wft_angle", "wft_counter_force",
                                 "wft_counter_moment", "wft_counter_angle", "wheel_speed",
                                 "gnss_speed", "gnss_forward_velocity", "gnss_time_week", "gnss_time_tow")}
+    if "gnss_speed_3d" in sig:  # optional: the grade's correction of the horizontal GNSS speed
+        refs["gnss_speed_3d"] = sig["gnss_speed_3d"]
     select: dict[str, set[str]] = {}
     for ref in list(refs.values()) + fronts:
         select.setdefault(ref.message, set()).add(ref.signal)
@@ -1689,6 +1729,22 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
         rep, g_period = _time_gaps(g_msg, g_t, *cfg.cycle_time_s(g_bus, g_msg), parts=tb_parts.get(g_msg))
         lost_frames[g_msg] = rep
         g_rel = rel_s(g_t)
+        g3 = get("gnss_speed_3d") if "gnss_speed_3d" in sig else None
+        if g3 is not None and g_spd is not None:  # V along the ground on a grade (Eq. 6)
+            k = _grade_factor(rel_s(g_spd[0]), g_spd[1], rel_s(g3[0]), g3[1], g_period, g_rel)
+            if k is not None:
+                g_v = g_v * k
+                grade = float(np.degrees(np.arccos(1.0 / k.max())))
+                quality["grade"] = {"max_deg": grade, "max_factor": float(k.max()),
+                                    "share_corrected": float(np.mean(k >= GRADE_MIN_RATIO))}
+                warns.append(f"GNSS speed on a grade: {label(g_key)} is horizontal; the run climbs or descends "
+                             f"up to {grade:.1f} deg ({100 * math.tan(math.radians(grade)):.0f} %), found from "
+                             f"{label('gnss_speed_3d')} over {label('gnss_speed')}: V is taken along the ground "
+                             f"(x 1/cos(grade), up to x{k.max():.4f}) for slip (Eq. 6). The transducer's zero takes "
+                             "out the wheel's weight on level ground only: on the grade up to m_w g sin(grade) = "
+                             f"{m_w * 9.81 * math.sin(math.radians(grade)):.0f} N of it stays in Fx, against the "
+                             "drawbar pull climbing and with it descending (which of the two, the GNSS speeds do "
+                             "not tell), and is not taken out")
         # the first shift needs free-rolling wheels: a driven wheel's speed leads the vehicle's by its slip
         # (a 4x4's sweeps matched 0.9 s late)
         f_ser = [s_ for s_ in (get(f, measured=True) for f in fronts) if s_ is not None and s_[0].shape[0] >= 3]

@@ -13,6 +13,7 @@ bad-input tests.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -129,7 +130,7 @@ def write_recording(path, truth: Truth, *, latency_s: float = 0.1, seed: int = 0
                     burst_s: float = 0.0, fronts_coupled: bool = False, at_max: dict | None = None,
                     fx_w_gain: float = 1.0, fx_w_offset_n: float = 0.0, angle_jumps=(),
                     gnss_outages=(), wheel_speed_lag_s: float = 0.0, rl_lag_s: float = 0.0,
-                    wheel_speed_pitch_rad: float = 0.0) -> dict:
+                    wheel_speed_pitch_rad: float = 0.0, grade: float = 0.0) -> dict:
     """Encode ``truth`` as frames and write an MCAP recording.
 
     ``drop_wft_bursts``: that many runs of 1..12 lost WFT samples;
@@ -140,6 +141,8 @@ def write_recording(path, truth: Truth, *, latency_s: float = 0.1, seed: int = 0
     The WFT measures what the wheel assembly transmits (hardware.md):
     ``Fx = Dp - m_w dV/dt``, ``My = T + I_w domega/dt`` with ``wheel_mass_kg``,
     ``wheel_inertia_kgm2`` (0 for none); ``truth`` holds the soil's Dp and T.
+    ``grade``: the track's grade (rise over run): truth's speed is along the ground, the GNSS 2D
+    speed and the INS forward velocity horizontal (x cos), the 3D speed along the ground;
     ``config`` the VehicleConfig attached (default: the shipped one);
     ``ts_edit(bus, ts_ns) -> ts_ns`` edits a bus's int64 timestamps (in
     file order) before writing, for time-base tests (or returns ``(ts_ns,
@@ -262,7 +265,8 @@ def write_recording(path, truth: Truth, *, latency_s: float = 0.1, seed: int = 0
             for t0, t1, drift in gnss_outages:
                 if t0 <= tf < t1:
                     vel, acc = vel + drift * (tf - t0), 40
-            can1.append((rx, m_s, m_s.encode({"GPS_Speed_2D": abs(vel), "GPS_Speed_3D": abs(vel),
+            vel, vel_3d = vel * math.cos(math.atan(grade)), vel
+            can1.append((rx, m_s, m_s.encode({"GPS_Speed_2D": abs(vel), "GPS_Speed_3D": abs(vel_3d),
                                                "Accuracy_GPS_Speed": acc, "Validity_GPS_Speed_2D": 1,
                                                "Validity_GPS_Speed_3D": 1})))
             can1.append((rx + 2e-4, m_v, m_v.encode({"INS_Vel_Forwards_2D": vel, "INS_Vel_Sideways_2D": 0.0,

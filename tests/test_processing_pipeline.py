@@ -57,6 +57,39 @@ def test_slip_rms_on_accel_phases(processed):
     assert np.sqrt(np.mean(err**2)) <= 0.01
 
 
+def test_a_grade_takes_the_speed_along_the_ground_from_the_3d_speed(tmp_path):
+    """On an 18 % grade the GNSS 2D speed and the INS velocity are horizontal: V along the ground is
+    found from the 3D speed over the 2D one, so slip matches the truth as on level ground (without it
+    slip would read 1 - cos(atan 0.18) = 1.6 % of (1 - s) high), and the warning names the grade and
+    the wheel's weight along the slope left in Fx."""
+    truth = truth_profile(3)
+    info = write_recording(tmp_path / "r.mcap", truth, latency_s=0.1, seed=4, grade=0.18)
+    res = process_recording(info["path"])
+    s = res.signals
+    m = s["valid"].to_numpy() & (s["phase"] == "accel").to_numpy()
+    err = s["slip"].to_numpy()[m] - _truth_on(res, truth, "slip")[m]
+    assert abs(np.mean(err)) < 0.003 and np.sqrt(np.mean(err**2)) <= 0.01
+    assert res.quality["grade"]["max_factor"] == pytest.approx(1 / np.cos(np.arctan(0.18)), abs=2e-3)
+    said = [w for w in res.warnings if w.startswith("GNSS speed on a grade")]
+    assert len(said) == 1 and "10.2 deg (18 %)" in said[0] and "m_w g sin(grade) = 139 N" in said[0], said
+
+
+def test_level_ground_with_a_noisy_vertical_speed_is_not_corrected():
+    """The vertical velocity's noise lifts the 3D speed over the 2D one by sigma^2 / (2 V^2): at three
+    times a receiver's 0.02 m/s, nothing is corrected on level ground."""
+    from wheelsoil.processing.pipeline import _grade_factor
+
+    rng = np.random.default_rng(0)
+    t = np.arange(0, 120, 0.05)
+    v2 = 1.0 + 0.8 * np.abs(np.sin(t / 9))
+    v3 = np.hypot(v2, rng.normal(0, 0.06, t.size))
+    assert _grade_factor(t, v2, t, v3, 0.05, t) is None
+    v3 = np.where(t > 60, v2 / np.cos(np.arctan(0.12)), v3)  # a 12 % climb in the second minute
+    k = _grade_factor(t, v2, t, v3, 0.05, t)
+    assert k is not None and np.allclose(k[t > 62], 1 / np.cos(np.arctan(0.12)), rtol=1e-9)
+    assert np.all(k[t < 58] < 1.005)
+
+
 def test_forces_within_sensor_noise(processed):
     _, truth, _, res = processed
     s = res.signals
