@@ -1163,7 +1163,8 @@ def _sinkage_contradicts(data: FitData, f: HypFit, sink_ev: dict | None) -> tupl
     cells' slope of sinkage on slip at a given load, :func:`_slope_test`): ``(measured slope, its
     standard error, the model's slope, p)`` [m per unit slip] when the measured sinkage does not grow
     with slip (``sink_ev["significant"]`` False) and grows less than ``f``'s by a one-sided t-test at
-    ``ALPHA`` (the units' degrees of freedom), else None.  Slip sinkage is a sinkage growing with slip
+    ``ALPHA`` (the units' degrees of freedom), or ``f``'s sinkage does not grow at all (Ding's other
+    reading, N in the stress only: p is then the measured growth's own one-sided p), else None.  Slip sinkage is a sinkage growing with slip
     (Eqs. 11-13); a fit that puts it in the forces while the measured sinkage, fitted too, does not show
     it has found something else the forces share with it (a load channel reading low made a Vasil'ev +
     terrain fit on a testbed table whose measured sinkage was flat).  A measured sinkage that does grow,
@@ -1178,7 +1179,11 @@ def _sinkage_contradicts(data: FitData, f: HypFit, sink_ev: dict | None) -> tupl
     mod = _slope_test(data.cells.slip, np.asarray(f.cell_pred["sinkage_m"], float), covariate=data.cells.load_n)["slope"]
     if not (np.isfinite(meas) and np.isfinite(se) and se > 0 and np.isfinite(mod)):
         return None
-    p = float(stats.t.cdf((meas - mod) / se, max(int(sink_ev.get("units", 3)) - 3, 1)))
+    dof = max(int(sink_ev.get("units", 3)) - 3, 1)
+    if not f.hypothesis.sinkage_grows:  # a form whose sinkage does not grow (Ding's other reading): the
+        # measurement must show one
+        return float(meas), float(se), float(mod), float(stats.t.sf(meas / se, dof))
+    p = float(stats.t.cdf((meas - mod) / se, dof))
     return (float(meas), float(se), float(mod), p) if p < ALPHA else None
 
 
@@ -1658,10 +1663,13 @@ def diagnose(
                            + _tests_text(remain) + ")")
         elif contra := _sinkage_contradicts(data, fits[best], sink_ev):
             effect, why = "unexplained", "sinkage_contradicts"
-            reasons.append(f"the measured sinkage does not grow with slip as {TITLES[best]} says it does "
-                           f"(measured {1e3 * contra[0]:.3g} +/- {1e3 * contra[1]:.2g} mm per unit slip at a given "
-                           f"load, the model's {1e3 * contra[2]:.3g} mm; one-sided p = {contra[3]:.2g}): a sinkage "
-                           "growing with slip is what slip sinkage is, and the measurement of it contradicts it here")
+            measured = (f"measured {1e3 * contra[0]:.3g} +/- {1e3 * contra[1]:.2g} mm per unit slip at a given load, "
+                        f"the model's {1e3 * contra[2]:.3g} mm; one-sided p = {contra[3]:.2g}")
+            reasons.append(f"the measured sinkage does not grow with slip as {TITLES[best]} says it does ({measured}): "
+                           "a sinkage growing with slip is what slip sinkage is, and the measurement of it contradicts "
+                           "it here" if fits[best].hypothesis.sinkage_grows else
+                           f"neither the measured sinkage nor {TITLES[best]}'s grows with slip ({measured}): a sinkage "
+                           "growing with slip is what slip sinkage is, and nothing here shows one")
         elif better := _whole_better(data, fits, fits[best]):
             effect, why = "unexplained", "whole_better"
             w = fits[best].hypothesis.whole

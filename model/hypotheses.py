@@ -298,6 +298,9 @@ class Hypothesis:
     lab), the registered hypothesis that frees all five values the same way; the diagnosis names
     the one-value form only when its whole does not predict a measured channel better out of
     sample (the claim "only this value" must hold on new data).  "" for all others.
+    ``sinkage_grows``: for a slip-sinkage form, False when its sinkage does not grow with slip (Ding's other
+    reading puts N in the stress only): on data with measured sinkage it is named only where the
+    measurement shows a growth (:func:`wheelsoil.model.diagnosis._sinkage_contradicts`).
     ``sinks_with_slip``: a hypothesis of another effect than slip sinkage whose sinkage grows with slip;
     in the measured sinkage channel's own verdict the diagnosis counts it as a look-alike of slip sinkage.
     ``prior_group``: hypotheses of one effect with the same non-empty group share the prior mass of one
@@ -319,6 +322,7 @@ class Hypothesis:
     nested: ClassVar[tuple[str, ...]] = ()
     whole: ClassVar[str] = ""
     sinks_with_slip: ClassVar[bool] = False
+    sinkage_grows: ClassVar[bool] = True
     prior_group: ClassVar[str] = ""
     catch_all: ClassVar[bool] = False
     #: tried only when its ``whole`` has the most evidence of the hypotheses registered before it: the data show
@@ -441,6 +445,7 @@ class DingStress(Ding):
 
     name = core = "ding_stress"
     title = "Ding, N in the stress only"
+    sinkage_grows = False
 
 
 class TerrainMismatch(Wong):

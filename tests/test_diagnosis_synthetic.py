@@ -249,8 +249,9 @@ def test_a_slip_sinkage_fit_whose_sinkage_growth_the_measurement_contradicts_is_
     z = z0 + 0.001 * rng.standard_normal(slip.size)
     ev = _slope_test(slip, z, covariate=load)
 
-    def fit(effect, growth):
-        return SimpleNamespace(effect=effect, cell_pred={"sinkage_m": z0 + growth * slip})
+    def fit(effect, growth, grows=True):
+        return SimpleNamespace(effect=effect, cell_pred={"sinkage_m": z0 + growth * slip},
+                               hypothesis=SimpleNamespace(sinkage_grows=grows))
 
     hit = _sinkage_contradicts(data, fit("slip_sinkage", 0.008), ev)
     assert hit is not None and hit[3] < 0.01 and abs(hit[2] - 0.008) < 1e-3 and abs(hit[0]) < 3 * hit[1]
@@ -266,6 +267,12 @@ def test_a_slip_sinkage_fit_whose_sinkage_growth_the_measurement_contradicts_is_
     assert _sinkage_contradicts(data, fit("slip_sinkage", 0.040), evg) is None
     evg["significant"] = False  # the same slopes, the growth not shown: contradicted
     assert _sinkage_contradicts(data, fit("slip_sinkage", 0.040), evg) is not None
+    # a form whose sinkage does not grow (Ding's other reading) is slip sinkage only where the measurement
+    # shows a growth: flat against flat is contradicted (nothing shows one), a shown growth is not
+    flat = _sinkage_contradicts(data, fit("slip_sinkage", 0.0, grows=False), ev)
+    assert flat is not None and flat[3] == pytest.approx(ev["p_positive"], rel=1e-6) and flat[3] >= 0.01
+    evg["significant"] = True
+    assert _sinkage_contradicts(data, fit("slip_sinkage", 0.0, grows=False), evg) is None
 
 
 def test_consistency_is_reported_for_every_model():
