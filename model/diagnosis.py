@@ -1164,8 +1164,8 @@ def _sinkage_contradicts(data: FitData, f: HypFit, sink_ev: dict | None) -> tupl
     standard error, the model's slope, p)`` [m per unit slip] when the measured sinkage does not grow
     with slip (``sink_ev["significant"]`` False) and grows less than ``f``'s by a one-sided t-test at
     ``ALPHA`` (the units' degrees of freedom), or ``f``'s sinkage does not grow at all (Ding's other
-    reading, N in the stress only: p is then the measured growth's own one-sided p), else None.  Slip sinkage is a sinkage growing with slip
-    (Eqs. 11-13); a fit that puts it in the forces while the measured sinkage, fitted too, does not show
+    reading, N in the stress only: p is then the measured growth's own one-sided p), else None.
+    Slip sinkage is a sinkage growing with slip (Eqs. 11-13); a fit that puts it in the forces while the measured sinkage, fitted too, does not show
     it has found something else the forces share with it (a load channel reading low made a Vasil'ev +
     terrain fit on a testbed table whose measured sinkage was flat).  A measured sinkage that does grow,
     less steeply than the fitted form's, shows slip sinkage: the form's misfit is then a question of

@@ -1735,16 +1735,15 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
             if k is not None:
                 g_v = g_v * k
                 grade = float(np.degrees(np.arccos(1.0 / k.max())))
-                quality["grade"] = {"max_deg": grade, "max_factor": float(k.max()),
-                                    "share_corrected": float(np.mean(k >= GRADE_MIN_RATIO))}
+                quality["grade"] = {"max_deg": grade, "max_factor": float(k.max())}
                 warns.append(f"GNSS speed on a grade: {label(g_key)} is horizontal; the run climbs or descends "
                              f"up to {grade:.1f} deg ({100 * math.tan(math.radians(grade)):.0f} %), found from "
                              f"{label('gnss_speed_3d')} over {label('gnss_speed')}: V is taken along the ground "
-                             f"(x 1/cos(grade), up to x{k.max():.4f}) for slip (Eq. 6). The transducer's zero takes "
-                             "out the wheel's weight on level ground only: on the grade up to m_w g sin(grade) = "
-                             f"{m_w * 9.81 * math.sin(math.radians(grade)):.0f} N of it stays in Fx, against the "
-                             "drawbar pull climbing and with it descending (which of the two, the GNSS speeds do "
-                             "not tell), and is not taken out")
+                             f"(x 1/cos(grade), up to x{k.max():.4f}) for slip (Eq. 6). If the transducer's weight "
+                             "compensation assumes level ground (hardware.md does not say), up to m_w g sin(grade) = "
+                             f"{m_w * 9.81 * math.sin(math.radians(grade)):.0f} N of the wheel's weight stays in Fx, "
+                             "against the drawbar pull climbing and with it descending (which of the two, no message "
+                             "tells): it is not taken out")
         # the first shift needs free-rolling wheels: a driven wheel's speed leads the vehicle's by its slip
         # (a 4x4's sweeps matched 0.9 s late)
         f_ser = [s_ for s_ in (get(f, measured=True) for f in fronts) if s_ is not None and s_[0].shape[0] >= 3]
