@@ -2025,11 +2025,18 @@ def _not_better_than_nested(data, fits, f: HypFit, target) -> list:
     took Lyasko's sinkage error from a relevant level to the noise, the soil a fraction of the lab's
     uncertainty off, while the drawbar pull, the target, gained nothing more.  Not for a re-fit of more
     lab values against fewer: a two-value re-fit whose values both lay within the lab's uncertainty then
-    named a bin soil within it, another generator's `none`, a terrain mismatch.)"""
+    named a bin soil within it, another generator's `none`, a terrain mismatch.)
+
+    A nested ``g`` whose terrain conflicts with the lab prior (:func:`_prior_conflict`) is not asked: it
+    is no credible explanation, so that it predicts new data as well does not make ``f``'s added part
+    idle (on an independent generator's Vasil'ev runs, Vasil'ev + terrain, the most probable with its soil
+    well within the lab's uncertainty, was held back by the five-value re-fit, which predicted as well
+    only with a soil at a prior chi-square of 56 on 5 values; counted as that re-fit's terrain mismatch, it
+    also kept the supported Vasil'ev from being named)."""
     out = []
     for n in f.hypothesis.nested:
         g = fits.get(n)
-        if g is None or not g.success or g.cv is None:
+        if g is None or not g.success or g.cv is None or _prior_conflict(g):
             continue
         pr = _paired(data, g, f)
         if any(r["worsens"] for r in pr.values()):
