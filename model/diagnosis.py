@@ -2027,16 +2027,19 @@ def _not_better_than_nested(data, fits, f: HypFit, target) -> list:
     lab values against fewer: a two-value re-fit whose values both lay within the lab's uncertainty then
     named a bin soil within it, another generator's `none`, a terrain mismatch.)
 
-    A nested ``g`` whose terrain conflicts with the lab prior (:func:`_prior_conflict`) is not asked: it
-    is no credible explanation, so that it predicts new data as well does not make ``f``'s added part
-    idle (on an independent generator's Vasil'ev runs, Vasil'ev + terrain, the most probable with its soil
-    well within the lab's uncertainty, was held back by the five-value re-fit, which predicted as well
-    only with a soil at a prior chi-square of 56 on 5 values; counted as that re-fit's terrain mismatch, it
-    also kept the supported Vasil'ev from being named)."""
+    A nested ``g`` whose terrain conflicts with the lab prior (:func:`_prior_conflict`) is not asked when
+    ``f``'s terrain does not: ``g`` is then no credible explanation, and that it predicts new data as well
+    does not make ``f``'s added part idle. (On an independent generator's Vasil'ev run, Vasil'ev + terrain,
+    the most probable and its soil well within the lab's uncertainty, was held back by the five-value
+    re-fit, which predicted as well only with a soil at a prior chi-square of 56 on 5 values; counted as
+    that re-fit's terrain mismatch, it also kept the supported Vasil'ev from being named.  When ``f``'s
+    terrain conflicts too, its evidence is that of a soil far from the lab's, as ``g``'s: on another
+    generator's k_eq x0.45, a stress shift + terrain at a prior chi-square of 21.5 was the most probable,
+    and counted as the terrain mismatch it is.)"""
     out = []
     for n in f.hypothesis.nested:
         g = fits.get(n)
-        if g is None or not g.success or g.cv is None or _prior_conflict(g):
+        if g is None or not g.success or g.cv is None or (_prior_conflict(g) and not _prior_conflict(f)):
             continue
         pr = _paired(data, g, f)
         if any(r["worsens"] for r in pr.values()):

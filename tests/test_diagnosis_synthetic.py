@@ -926,21 +926,26 @@ def test_a_refit_within_one_lab_sd_names_no_mismatch():
     assert "places no lab value beyond one lab standard deviation" in d.summary
 
 
-@pytest.mark.parametrize("chi2_prior, held_back", [(56.0, False), (4.0, True)], ids=["soil-in-conflict", "soil-credible"])
-def test_a_nested_refit_with_a_soil_in_conflict_with_the_lab_holds_nothing_back(monkeypatch, chi2_prior, held_back):
+@pytest.mark.parametrize("chi2_refit, chi2_cause, held_back", [(56.0, 4.0, False), (4.0, 4.0, True), (56.0, 21.5, True)],
+                         ids=["refit-in-conflict", "both-credible", "both-in-conflict"])
+def test_a_nested_refit_with_a_soil_in_conflict_with_the_lab_holds_back_only_a_credible_cause(
+        monkeypatch, chi2_refit, chi2_cause, held_back):
     """A cause + terrain that predicts new data no better than the five-value re-fit it contains is held back
-    by it only when that re-fit is a credible explanation: with its soil beyond the lab prior (a prior
-    chi-square of 56 on 5 values, an independent generator's Vasil'ev run) it is not, and the out-of-sample
-    tie says nothing against the cause (the paired test is stubbed to a tie; the fit objects carry what the
-    rule reads)."""
+    by it unless that re-fit's soil lies beyond the lab prior while the cause's does not (a prior chi-square
+    of 56 against 4 on 5 values, an independent generator's Vasil'ev run): the re-fit is then no credible
+    explanation, and the out-of-sample tie says nothing against the cause.  With both soils beyond the prior
+    (21.5: another generator's k_eq x0.45, a stress shift + terrain the most probable) the cause's evidence
+    is that of a soil far from the lab's, and it is held back.  (The paired test is stubbed to a tie; the fit
+    objects carry what the rule reads.)"""
     from types import SimpleNamespace
 
     from wheelsoil.model import diagnosis as dg
 
     monkeypatch.setattr(dg, "_paired", lambda data, g, f: {"drawbar_pull_n": {"worsens": False, "improves": False}})
     soil = {p: (0.0, 1.0) for p in ("k_eq", "n", "c", "phi", "K")}
-    refit = SimpleNamespace(success=True, cv={}, prior=soil, effect="terrain_mismatch", chi2_prior=chi2_prior)
-    cause = SimpleNamespace(hypothesis=SimpleNamespace(nested=("terrain",), terrain_block=False), effect="slip_sinkage")
-    assert dg._prior_conflict(refit) == (not held_back)
+    refit = SimpleNamespace(success=True, cv={}, prior=soil, effect="terrain_mismatch", chi2_prior=chi2_refit)
+    cause = SimpleNamespace(hypothesis=SimpleNamespace(nested=("terrain",), terrain_block=False), prior=soil,
+                            effect="slip_sinkage", chi2_prior=chi2_cause)
+    assert dg._prior_conflict(refit) == (chi2_refit > 20.52) and dg._prior_conflict(cause) == (chi2_cause > 20.52)
     assert dg._not_better_than_nested(None, {"terrain": refit}, cause, ["drawbar_pull_n"]) == (
         ["terrain"] if held_back else [])
