@@ -66,7 +66,8 @@ decides with this rule (constants below; none was tuned on a benchmark):
    alone: or the error of a channel in which that part's residuals keep a
    relevant error, step 1 on them), and worsens no channel
    (what the extra part adds must pay off on data it was not fitted to, in the target
-   channels, or where the smaller model leaves an error).
+   channels, or where the smaller model leaves an error; a smaller model whose terrain
+   conflicts with the lab values is not asked when H's does not: it is no credible explanation).
    The step drift is tried only when step 1's change-point test finds a step
    along the run; the change point is then fixed where it was found.
 4. **Probabilities.**  Posterior probabilities of all hypotheses tried:
