@@ -228,11 +228,11 @@ def load_dbc_files(paths) -> "object":
             that two files define differently (which one decodes the bus's frames would depend on the
             order), naming both files.
     """
-    import logging
-
     import cantools
 
-    db = cantools.database.Database()
+    messages: list = []
+    nodes: dict = {}
+    last = None
     where: dict = {}  # (frame id, extended) -> (file, layout)
     for p in paths:
         text = read_dbc_text(p)
@@ -243,18 +243,21 @@ def load_dbc_files(paths) -> "object":
             raise ValueError(f"{p}: cannot parse DBC file: {exc}") from None
         for m in one.messages:
             key = (m.frame_id, bool(m.is_extended_frame))
-            if key in where and where[key][1] != _layout(m):
-                raise ValueError(f"{p}: message {m.name} (id 0x{m.frame_id:X}) is also defined, differently, in "
-                                 f"{where[key][0]} on the same bus: which definition decodes its frames would depend "
-                                 "on the order of the files; keep one")
-            where.setdefault(key, (p, _layout(m)))
-        log = logging.getLogger("cantools.database")
-        level, log.level = log.level, logging.ERROR  # an identical message twice: no "Overwriting" noise
-        try:
-            db.add_dbc_string(text)
-        finally:
-            log.level = level
-    return db
+            if key in where:
+                if where[key][1] != _layout(m):
+                    raise ValueError(f"{p}: message {m.name} (id 0x{m.frame_id:X}) is also defined, differently, in "
+                                     f"{where[key][0]} on the same bus: which definition decodes its frames would "
+                                     "depend on the order of the files; keep one")
+                continue  # the same message in two files: one copy decodes it
+            where[key] = (p, _layout(m))
+            messages.append(m)
+        nodes.update({n.name: n for n in one.nodes})
+        last = one
+    # each file parsed once; the files' messages and nodes in one database, the last file's DBC
+    # specifics and buses (as cantools' add_dbc_string merges them)
+    return cantools.database.Database(messages=messages, nodes=list(nodes.values()),
+                                      buses=last.buses if last else None, version=last.version if last else None,
+                                      dbc_specifics=last.dbc if last else None)
 
 
 def load_vehicle_config(path: str | Path | None = None, *, check_dbc: bool = True) -> VehicleConfig:

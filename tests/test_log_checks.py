@@ -537,7 +537,9 @@ def test_a_windows_1252_dbc_is_read_as_such_and_a_message_defined_twice_differen
     with pytest.raises(ValueError, match=r"wft_old.dbc: message WFT_RL_Force \(id 0x120\) is also defined, differently"):
         load_vehicle_config(twice)
     (twice.parent / "wft_old.dbc").write_text((twice.parent / "wft.dbc").read_text())  # the same: harmless
-    assert load_vehicle_config(twice).database("can0").get_message_by_name("WFT_RL_Force")
+    db = load_vehicle_config(twice).database("can0")
+    assert db.get_message_by_name("WFT_RL_Force")
+    assert len(db.messages) == len(cfg.database("can0").messages)  # one copy of each message, not two
 
 
 def test_info_names_a_bus_without_a_dbc_as_such_not_as_unknown_ids(sim_log, tmp_path):
