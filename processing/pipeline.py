@@ -36,7 +36,10 @@ Steps (each in its own module):
    same cutoff, same segments, :func:`.filters.filter_to_grid`), so the
    correction has the same response as the filtered forces (on by default);
 6. slip (Eq. 6) with the wheel radius of the configuration or the one given
-   (the radius the fit then uses), phase, cycle id, ``valid`` (:mod:`.slip`).
+   (the radius the fit then uses), phase, cycle id, ``valid`` (:mod:`.slip`);
+   samples where the wheel speed oscillates faster than the low-pass resolves
+   (the slip's unresolved spread above ``UNSTEADY_SLIP_SD``: stick-slip, wheel
+   hop, a driveline oscillating) are not valid (:func:`unresolved_slip_sd`).
 
 Every problem met on the way is appended to ``ProcessResult.warnings`` with
 what is missing and what was still computed; nothing silently turns into
@@ -75,6 +78,11 @@ RADIUS_RANGE_M = (0.05, 2.0)
 WIDTH_RANGE_M = (0.02, 2.0)
 #: r*omega below this [m/s] leaves the slip undefined (NaN).
 MIN_WHEEL_SPEED_MPS = 0.1
+#: The slip's spread within one filter window that the low-pass does not resolve (:func:`unresolved_slip_sd`)
+#: above which a sample is not valid: three quarters of the fit's slip resolution (a cell spans a slip bin about
+#: 0.067 wide, ``wheelsoil.model.data.N_SLIP_BINS``); there the filtered forces average over slips the cells do
+#: not see, and the slip from the filtered wheel speed is biased by about sd^2 / (1 - s).
+UNSTEADY_SLIP_SD = 0.05
 #: WFT Status bits that invalidate a sample (overload, bridge fault, encoder fault).
 WFT_STATUS_BAD = 0x07
 #: Reference speed deceleration [m/s^2] beyond which front wheels may skid (not used for latency).
@@ -1607,7 +1615,7 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
                      "still computed")
 
     # ---- 3a. wheel speeds -----------------------------------------------------------------
-    omega = domega = nan
+    omega = domega = omega_raw = nan
     ws_ref = sig["wheel_speed"]
     got = get("wheel_speed", measured=True)
     wss_t = wss_rel = None
@@ -1660,6 +1668,9 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
                     got = (wss_t, w_rl)
                     wss_rel = rel_s(wss_t)
         omega, domega = filter_to_grid(wss_rel, w_rl, period, t_grid, cutoff, derivative=True)
+        # the wheel speed as the module reports it (low-passed just below its Nyquist frequency only)
+        omega_raw = filter_to_grid(wss_rel, w_rl, period, t_grid, max(cutoff, 0.4 / period) if period and period > 0
+                                   else cutoff)
 
     # ---- 3a'. inertia: T = My - I_w domega/dt (hardware.md) ------------------------------
     m_w, i_w = float(cfg.wheel_mass_kg), float(cfg.wheel_inertia_kgm2)
@@ -1883,6 +1894,25 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
     phase = classify_phases(t_grid, speed, rw, torque)
     cycle = accel_cycles(t_grid, phase)
     valid = in_range & np.isfinite(load) & np.isfinite(dp) & np.isfinite(torque)
+    sd_s = unresolved_slip_sd(omega_raw, omega, slip, rate_hz, cutoff)
+    unsteady = valid & (sd_s > UNSTEADY_SLIP_SD)
+    if unsteady.any():
+        valid &= ~unsteady
+        spans = segments(unsteady)
+        for a, b in spans[:MAX_EXCLUDED_LISTED]:
+            excluded.append({"t0_s": float(t_grid[a]), "t1_s": float(t_grid[b - 1]),
+                             "reason": f"wheel speed unsteady: the slip spreads by up to {np.max(sd_s[a:b]):.2f} "
+                                       f"(sd) within {1 / cutoff:.2g} s, unresolved by the {cutoff:g} Hz low-pass: "
+                                       "not valid"})
+        quality["unsteady_slip"] = {"seconds": float(np.count_nonzero(unsteady) / rate_hz), "spans": len(spans),
+                                    "max_sd": float(np.max(sd_s[unsteady])), "threshold_sd": UNSTEADY_SLIP_SD}
+        warns.append(f"WHEEL SPEED UNSTEADY: in {np.count_nonzero(unsteady) / rate_hz:.1f} s of the valid samples "
+                     f"({len(spans)} spans) the wheel speed ({label('wheel_speed')}) oscillates faster than the "
+                     f"{cutoff:g} Hz low-pass resolves (stick-slip, wheel hop, a driveline oscillating): the slip "
+                     f"spreads by up to {float(np.max(sd_s[unsteady])):.2f} (sd; limit {UNSTEADY_SLIP_SD}) within "
+                     f"{1 / cutoff:.2g} s, so the filtered forces average over slips that the filtered slip does "
+                     "not show, and that slip is biased; these samples are not valid (not fitted; "
+                     "ProcessResult.excluded lists the spans)")
     moving = np.isfinite(rw) & np.isfinite(speed)
     undefined = moving & (np.abs(rw) < MIN_WHEEL_SPEED_MPS)
     if undefined.any():
@@ -1925,6 +1955,31 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
         latency_reference=lat_ref if latency is not None else "", latency_detail=latency,
         wheel_radius_source=r_source, inertia=inertia_info, excluded=excluded, quality=quality,
     )
+
+
+def unresolved_slip_sd(omega_raw: np.ndarray, omega: np.ndarray, slip: np.ndarray, rate_hz: float,
+                       cutoff_hz: float) -> np.ndarray:
+    """The slip's spread [-] within one filter window that the low-pass does not resolve, per grid sample.
+
+    ``omega_raw`` (N,) the wheel speed [rad/s] as the sensor reports it and ``omega`` (N,) after the
+    ``cutoff_hz`` low-pass, both on the grid of ``rate_hz``; ``slip`` (N,) Eq. (6) from ``omega``.  With
+    s = 1 - V / (r omega), ds/domega = (1 - s) / omega, so the spread is (1 - s) RMS(omega_raw - omega) / omega,
+    the RMS over a centred window of 1 / ``cutoff_hz`` seconds.  Sensor noise gives well under 0.01 at
+    driving speeds; a wheel speed oscillating above the cutoff (stick-slip, wheel hop, a driveline
+    oscillating) gives tenths.  NaN where an input is NaN or omega is 0.  Raises nothing.
+    Source: paper Eq. (6); the filter of :func:`.filters.filter_to_grid`.
+    """
+    e2 = (np.asarray(omega_raw, float) - np.asarray(omega, float)) ** 2
+    ok = np.isfinite(e2)
+    k = max(int(round(rate_hz / cutoff_hz)) | 1, 1) if rate_hz > 0 and cutoff_hz > 0 else 1
+    box = np.ones(k)
+    num = np.convolve(np.where(ok, e2, 0.0), box, mode="same")
+    den = np.convolve(ok.astype(float), box, mode="same")
+    with np.errstate(invalid="ignore", divide="ignore"):
+        rms = np.sqrt(num / den)
+        out = (1.0 - np.asarray(slip, float)) * rms / np.abs(np.asarray(omega, float))
+    out[~ok | ~np.isfinite(out)] = np.nan
+    return out
 
 
 #: Physical limits a decoded run must keep (:func:`_implausible`): a wheel on soil transmits a driving torque

@@ -14,6 +14,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from processing_sim import FORCE_NOISE_N, MOMENT_NOISE_NM, truth_profile, write_recording  # noqa: E402
 
 from wheelsoil.processing import COLUMNS, process_recording  # noqa: E402
+from wheelsoil.processing.pipeline import UNSTEADY_SLIP_SD  # noqa: E402
 
 GPS_OFFSET_S = 1234.5678
 
@@ -72,6 +73,43 @@ def test_a_grade_takes_the_speed_along_the_ground_from_the_3d_speed(tmp_path):
     assert res.quality["grade"]["max_factor"] == pytest.approx(1 / np.cos(np.arctan(0.18)), abs=2e-3)
     said = [w for w in res.warnings if w.startswith("GNSS speed on a grade")]
     assert len(said) == 1 and "10.2 deg (18 %)" in said[0] and "m_w g sin(grade) = 139 N" in said[0], said
+
+
+def test_a_wheel_speed_oscillating_faster_than_the_filter_is_not_fitted(tmp_path):
+    """A driveline oscillating at 12 Hz (the wheel speed +-30 %) for 3 s of an accelerate phase: the 5 Hz
+    low-pass averages it away, so the filtered slip is biased and the forces average over slips it does
+    not show. Those samples are not valid, the spans are listed and a warning says why; the same run
+    without it flags nothing."""
+    truth = truth_profile(3)
+    t_acc = float(truth.t_s[np.flatnonzero(truth.phase == "accel")[len(truth.t_s) // 20]])
+    clean = process_recording(write_recording(tmp_path / "a.mcap", truth, seed=5)["path"])
+    res = process_recording(write_recording(tmp_path / "b.mcap", truth, seed=5,
+                                            chatter=(t_acc, t_acc + 3.0, 0.3, 12.0))["path"])
+    assert "unsteady_slip" not in clean.quality and not any("UNSTEADY" in w for w in clean.warnings)
+    t = res.signals["t_s"].to_numpy()  # on the truth's time axis (as _truth_on reads it)
+    lost = clean.signals["valid"].to_numpy() & ~res.signals["valid"].to_numpy()
+    assert lost.any()
+    inside = (t >= t_acc - 0.3) & (t <= t_acc + 3.3)  # the window, widened by the filter's reach
+    assert not np.any(lost & ~inside), "only the oscillating span is set aside"
+    assert np.count_nonzero(lost) / res.rate_hz > 1.5
+    said = [w for w in res.warnings if w.startswith("WHEEL SPEED UNSTEADY")]
+    assert len(said) == 1 and res.quality["unsteady_slip"]["max_sd"] > UNSTEADY_SLIP_SD
+    assert any(e["reason"].startswith("wheel speed unsteady") for e in res.excluded)
+
+
+def test_the_unresolved_slip_spread_is_the_slip_change_of_the_wheel_speed_the_filter_removes():
+    """(1 - s) RMS(omega_raw - omega) / omega: for an oscillation of amplitude a around omega, a / sqrt(2)."""
+    from wheelsoil.processing.pipeline import unresolved_slip_sd
+
+    t = np.arange(0, 4, 0.01)
+    omega = np.full(t.size, 10.0)
+    slip = np.full(t.size, 0.4)
+    raw = omega * (1 + 0.2 * np.sin(2 * np.pi * 15 * t))
+    sd = unresolved_slip_sd(raw, omega, slip, 100.0, 5.0)
+    assert np.allclose(sd[50:-50], 0.6 * 0.2 / np.sqrt(2), rtol=0.05)
+    assert np.all(unresolved_slip_sd(omega, omega, slip, 100.0, 5.0) == 0)
+    raw[100:110] = np.nan
+    assert np.isnan(unresolved_slip_sd(raw, omega, slip, 100.0, 5.0)[100:110]).all()
 
 
 def test_level_ground_with_a_noisy_vertical_speed_is_not_corrected():
