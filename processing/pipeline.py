@@ -564,16 +564,7 @@ def _wheel_speed_lag(t_w: np.ndarray, angle_rad: np.ndarray, period_w: float, t_
     Raises ``ValueError`` when the angle gives no speed or the two do not overlap (the estimator's
     messages).
     """
-    step = np.angle(np.exp(1j * np.diff(angle_rad)))  # wrapped to (-pi, pi]: one sample turns < half a turn
-    dt = np.diff(t_w)
-    ok = np.isfinite(step) & (dt > 0) & (dt < 1.5 * period_w)
-    if np.count_nonzero(ok) < 100:
-        raise ValueError("fewer than 100 consecutive wheel-angle samples")
-    om = np.where(ok, step / np.where(dt > 0, dt, 1.0), np.nan)
-    if np.nanmedian(om) < 0:  # the angle counting the other way
-        om = -om
-    t_mid = 0.5 * (t_w[1:] + t_w[:-1])
-    ref = filter_to_grid(t_mid, om, period_w, t_mid, LATENCY_REF_CUTOFF_HZ)
+    t_mid, ref = _angle_rate(t_w, angle_rad, period_w)
     const = estimate_latency(t_wss, np.abs(omega_wss) * radius_m, t_mid, ref * radius_m, usable_ref=np.isfinite(ref),
                              min_latency_s=WSS_LAG_RANGE_S[0], max_latency_s=WSS_LAG_RANGE_S[1])
     try:
@@ -583,6 +574,79 @@ def _wheel_speed_lag(t_w: np.ndarray, angle_rad: np.ndarray, period_w: float, t_
     except ValueError as exc:
         tooth = str(exc)
     return const, tooth
+
+
+def _angle_rate(t_w: np.ndarray, angle_rad: np.ndarray, period_w: float) -> tuple[np.ndarray, np.ndarray]:
+    """The wheel's speed [rad/s] from the transducer's wheel angle: ``(t_mid, omega)`` (N - 1,) at the
+    mid-times of consecutive samples ``t_w`` (N,) [s] of ``angle_rad`` (N,) (NaN where lost, wrapping at
+    2 pi), low-passed zero-phase at :data:`LATENCY_REF_CUTOFF_HZ`, positive in the sense the wheel mostly
+    turns.  Raises ``ValueError`` for fewer than 100 consecutive samples."""
+    step = np.angle(np.exp(1j * np.diff(angle_rad)))  # wrapped to (-pi, pi]: one sample turns < half a turn
+    dt = np.diff(t_w)
+    ok = np.isfinite(step) & (dt > 0) & (dt < 1.5 * period_w)
+    if np.count_nonzero(ok) < 100:
+        raise ValueError("fewer than 100 consecutive wheel-angle samples")
+    om = np.where(ok, step / np.where(dt > 0, dt, 1.0), np.nan)
+    if np.nanmedian(om) < 0:  # the angle counting the other way
+        om = -om
+    t_mid = 0.5 * (t_w[1:] + t_w[:-1])
+    return t_mid, filter_to_grid(t_mid, om, period_w, t_mid, LATENCY_REF_CUTOFF_HZ)
+
+
+#: The wheel-speed module's scale against the transducer's wheel-angle rate (:func:`_wheel_speed_scale`):
+#: a median ratio further than ``WHEEL_SCALE_TOL`` from 1 (a tone wheel of up to 200 teeth configured one tooth
+#: off is 0.5 % or more; the ratio's scatter on recordings of one wheel is a few 1e-4) is a scale error of the
+#: module, corrected when the ratios scatter less than ``WHEEL_SCALE_SPREAD`` (robust sd; another wheel's
+#: channel scatters with the slip of the two wheels), over at least ``WHEEL_SCALE_MIN_N`` readings where the
+#: wheel turns faster than ``WHEEL_SCALE_MIN_RADPS``.
+WHEEL_SCALE_TOL = 0.005
+WHEEL_SCALE_SPREAD = 0.02
+WHEEL_SCALE_MIN_N = 200
+WHEEL_SCALE_MIN_RADPS = 1.0
+
+
+def _wheel_speed_scale(t_w: np.ndarray, angle_rad: np.ndarray, period_w: float, t_wss: np.ndarray,
+                       omega_wss: np.ndarray, period_wss: float) -> dict:
+    """The wheel-speed module's speed over the transducer's wheel-angle rate, both of the measured wheel.
+
+    The angle is the transducer's absolute wheel angle (hardware.md ``WFT_RL_Angle``: it wraps once per
+    revolution, so its rate is the wheel's rotation); the module counts tone-wheel teeth against a
+    configured count.  Arrays as :func:`_wheel_speed_lag` (``t_wss``, ``omega_wss`` (M,) after its lag is
+    removed).  Returns ``{"gain", "spread", "n", "applied", "note"}``: the median of the readings' ratio
+    (both low-passed at :data:`LATENCY_REF_CUTOFF_HZ`) where the wheel turns faster than
+    :data:`WHEEL_SCALE_MIN_RADPS`, its robust sd (1.4826 MAD), the readings used, and whether the module's
+    speed is to be divided by the gain (:data:`WHEEL_SCALE_TOL`, :data:`WHEEL_SCALE_SPREAD`, at most
+    ``WHEEL_GAIN_MAX``: beyond it a unit or another wheel, :func:`_implausible`), with why not.  Never raises.
+    """
+    out = {"gain": None, "spread": None, "n": 0, "applied": False, "note": ""}
+    try:
+        t_mid, ref = _angle_rate(t_w, angle_rad, period_w)
+    except ValueError as exc:
+        out["note"] = str(exc)
+        return out
+    ok = np.isfinite(ref)
+    if ok.sum() < 2:
+        out["note"] = "no wheel-angle rate"
+        return out
+    ref_at = np.interp(t_wss, t_mid[ok], ref[ok], left=np.nan, right=np.nan)
+    mod = _module_speed(t_wss, omega_wss, period_wss)
+    use = np.isfinite(ref_at) & np.isfinite(mod) & (ref_at > WHEEL_SCALE_MIN_RADPS)
+    out["n"] = n = int(np.count_nonzero(use))
+    if n < WHEEL_SCALE_MIN_N:
+        out["note"] = f"{n} readings with the wheel faster than {WHEEL_SCALE_MIN_RADPS:g} rad/s"
+        return out
+    ratio = mod[use] / ref_at[use]
+    g = float(np.median(ratio))
+    out["gain"], out["spread"] = g, float(1.4826 * np.median(np.abs(ratio - g)))
+    if abs(g - 1.0) <= WHEEL_SCALE_TOL:
+        out["note"] = f"within {WHEEL_SCALE_TOL:g} of 1"
+    elif not g > 0 or max(g, 1.0 / g) > WHEEL_GAIN_MAX:
+        out["note"] = f"beyond {WHEEL_GAIN_MAX:g}: a unit, a factor or another wheel's channel, not a tooth count"
+    elif out["spread"] > WHEEL_SCALE_SPREAD:
+        out["note"] = f"the ratio scatters by {out['spread']:.3g} (> {WHEEL_SCALE_SPREAD:g}): not one wheel's scale"
+    else:
+        out["applied"] = True
+    return out
 
 
 def _module_speed(t_s: np.ndarray, omega: np.ndarray, period_s: float) -> np.ndarray:
@@ -1667,6 +1731,18 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
                     wss_t, w_rl = _unlag(wss_t, w_rl, wss_lag)
                     got = (wss_t, w_rl)
                     wss_rel = rel_s(wss_t)
+        if wft_angle is not None:  # the module's scale against the transducer's angle (a tooth count)
+            quality["wheel_speed_scale"] = sc = _wheel_speed_scale(*wft_angle, wft_period, wss_rel, w_rl, period)
+            if sc["applied"]:
+                w_rl = w_rl / sc["gain"]
+                got = (wss_t, w_rl)
+                warns.append(f"WHEEL SPEED SCALE CORRECTED: the wheel speed ({label('wheel_speed')}) reads "
+                             f"{sc['gain']:.4f} times the rate of the transducer's wheel angle ({label('wft_angle')}; "
+                             f"median over {sc['n']} readings, scatter {sc['spread']:.2g}), which measures the same "
+                             "wheel's rotation and wraps once per revolution: the module's tone-wheel tooth count or "
+                             f"scale is configured {100 * abs(sc['gain'] - 1):.1f} % off (48 teeth read as 50 is "
+                             "0.96); its speed is divided by that gain for slip (Eq. 6). Check the module's "
+                             "configuration; ProcessResult.quality['wheel_speed_scale']")
         omega, domega = filter_to_grid(wss_rel, w_rl, period, t_grid, cutoff, derivative=True)
         # the wheel speed as the module reports it (low-passed just below its Nyquist frequency only)
         omega_raw = filter_to_grid(wss_rel, w_rl, period, t_grid, max(cutoff, 0.4 / period) if period and period > 0

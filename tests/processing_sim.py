@@ -131,7 +131,7 @@ def write_recording(path, truth: Truth, *, latency_s: float = 0.1, seed: int = 0
                     fx_w_gain: float = 1.0, fx_w_offset_n: float = 0.0, angle_jumps=(),
                     gnss_outages=(), wheel_speed_lag_s: float = 0.0, rl_lag_s: float = 0.0,
                     wheel_speed_pitch_rad: float = 0.0, grade: float = 0.0,
-                    chatter: tuple[float, float, float, float] | None = None) -> dict:
+                    chatter: tuple[float, float, float, float] | None = None, rl_scale: float = 1.0) -> dict:
     """Encode ``truth`` as frames and write an MCAP recording.
 
     ``drop_wft_bursts``: that many runs of 1..12 lost WFT samples;
@@ -167,7 +167,9 @@ def write_recording(path, truth: Truth, *, latency_s: float = 0.1, seed: int = 0
     ``wheel_speed_pitch_rad``: every wheel speed lags ``pitch / omega`` more, at most 0.3 s in all
     (a module timing each wheel over its last tooth interval: one tooth period late); ``chatter``
     ``(t0_s, t1_s, amplitude, frequency_hz)``: the measured wheel's speed oscillates by that relative
-    amplitude at that frequency in the window (a driveline oscillating; the forces do not follow it).
+    amplitude at that frequency in the window (a driveline oscillating; the forces do not follow it);
+    ``rl_scale``: the measured wheel's speed reads that many times its true speed (a tone wheel's tooth
+    count configured off: 48 teeth read as 50 is 0.96).
 
     Returns ``{"path", "lost_samples", "start_ns", "dropped_frames"}``
     (``dropped_frames``: message -> frames removed by ``drop_frames``).
@@ -248,7 +250,7 @@ def write_recording(path, truth: Truth, *, latency_s: float = 0.1, seed: int = 0
             if chatter and chatter[0] <= tw < chatter[1]:
                 om *= 1.0 + chatter[2] * np.sin(2 * np.pi * chatter[3] * tw)
             rpm = lambda w: float(np.clip(abs(w * (1 + rng.normal(0, 0.002))) * 60 / (2 * np.pi), 0, 655))
-            rl = rpm(om)
+            rl = rpm(om) * rl_scale
             if "WheelSpeed_RL" in at_max and at_max["WheelSpeed_RL"][0] <= tw < at_max["WheelSpeed_RL"][1]:
                 rl = m_ws.get_signal_by_name("WheelSpeed_RL").maximum
             can1.append((tw, m_ws, m_ws.encode({"WheelSpeed_FL": rpm(v / truth.radius_m),

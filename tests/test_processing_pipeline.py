@@ -97,6 +97,42 @@ def test_a_wheel_speed_oscillating_faster_than_the_filter_is_not_fitted(tmp_path
     assert any(e["reason"].startswith("wheel speed unsteady") for e in res.excluded)
 
 
+def test_a_wheel_speed_module_with_a_wrong_tooth_count_is_rescaled_to_the_transducer_angle(tmp_path):
+    """The module's tone wheel has 48 teeth, configured as 50: it reads 0.96 of the wheel's speed, and slip
+    (Eq. 6) would read (1 - s) 4 % high. The transducer's wheel angle, which wraps once per revolution,
+    measures the same rotation: the gain is found, the speed divided by it, and slip matches the truth;
+    the same run with the right count is left alone."""
+    truth = truth_profile(3)
+    res = process_recording(write_recording(tmp_path / "r.mcap", truth, seed=6, rl_scale=0.96)["path"])
+    q = res.quality["wheel_speed_scale"]
+    assert q["applied"] and q["gain"] == pytest.approx(0.96, abs=2e-3)
+    said = [w for w in res.warnings if w.startswith("WHEEL SPEED SCALE CORRECTED")]
+    assert len(said) == 1 and "0.96" in said[0]
+    s = res.signals
+    m = s["valid"].to_numpy() & (s["phase"] == "accel").to_numpy()
+    err = s["slip"].to_numpy()[m] - _truth_on(res, truth, "slip")[m]
+    assert abs(np.mean(err)) < 0.003
+    clean = process_recording(write_recording(tmp_path / "c.mcap", truth, seed=6)["path"])
+    assert not clean.quality["wheel_speed_scale"]["applied"]
+    assert not any(w.startswith("WHEEL SPEED SCALE") for w in clean.warnings)
+
+
+def test_another_wheels_speed_is_not_rescaled_to_the_transducer_angle():
+    """A channel of another wheel scatters against the measured wheel's rotation with the two wheels'
+    slips: its median ratio is no tooth count, and nothing is rescaled."""
+    from wheelsoil.processing.pipeline import _wheel_speed_scale
+
+    t_w = np.arange(0, 60, 0.002)
+    omega = 5.0 + 3.0 * np.sin(t_w / 3.0) ** 2
+    angle = np.mod(np.cumsum(omega) * 0.002, 2 * np.pi)
+    t_m = np.arange(0, 60, 0.01)
+    om_m = np.interp(t_m, t_w, omega)
+    assert _wheel_speed_scale(t_w, angle, 0.002, t_m, 0.97 * om_m, 0.01)["applied"]
+    other = om_m * (1 - 0.12 * np.sin(t_m / 2.0) ** 2)  # a wheel slipping differently
+    q = _wheel_speed_scale(t_w, angle, 0.002, t_m, other, 0.01)
+    assert not q["applied"] and "scatters" in q["note"]
+
+
 def test_the_unresolved_slip_spread_is_the_slip_change_of_the_wheel_speed_the_filter_removes():
     """(1 - s) RMS(omega_raw - omega) / omega: for an oscillation of amplitude a around omega, a / sqrt(2)."""
     from wheelsoil.processing.pipeline import unresolved_slip_sd
