@@ -11,7 +11,9 @@ Steps (each in its own module):
 3. clocks: host->GPS time mapping; the wheel-speed module's lag behind the
    transducer's clock, from the WFT's wheel angle (:func:`_wheel_speed_lag`;
    removed from the wheel speeds' times when determined and over 5 ms, so
-   slip belongs to the moment of the forces; a delay that grows as the wheel
+   slip belongs to the moment of the forces; the module's scale against the
+   same angle, corrected beyond ``WHEEL_SCALE_TOL``, :func:`_wheel_speed_scale`;
+   a delay that grows as the wheel
    slows, per reading, the fronts' too; a constant one from the fronts' too
    when that makes the GNSS latency against them agree better with the
    slip-traction estimate); and the GNSS latency (:mod:`.timesync`)
