@@ -543,8 +543,8 @@ def _agree(a: LatencyEstimate, b: LatencyEstimate) -> bool:
     return abs(a.latency_s - b.latency_s) <= LATENCY_AGREE_SIGMAS * math.hypot(a.stderr_s, b.stderr_s)
 
 
-def _wheel_speed_lag(t_w: np.ndarray, angle_rad: np.ndarray, period_w: float, t_wss: np.ndarray,
-                     omega_wss: np.ndarray, radius_m: float, period_wss: float):
+def _wheel_speed_lag(t_mid: np.ndarray, ref: np.ndarray, t_wss: np.ndarray, omega_wss: np.ndarray,
+                     radius_m: float, period_wss: float):
     """How late the wheel-speed module reads the measured wheel against the transducer's clock.
 
     The WFT's wheel angle (500 Hz, hardware.md ``WFT_RL_Angle``) is sampled on the transducer's own
@@ -556,17 +556,15 @@ def _wheel_speed_lag(t_w: np.ndarray, angle_rad: np.ndarray, period_w: float, t_
     (:func:`.timesync.estimate_latency`, the module's r*omega aligned with the angle's, 2 ms grid
     over :data:`WSS_LAG_RANGE_S`).
 
-    ``t_w`` (N,) transducer sample times [s], ``angle_rad`` (N,) wheel angle [rad] (NaN where lost,
-    wrapping at 2 pi), ``period_w`` its sample period [s]; ``t_wss`` (M,) the module's frame times
-    [s], ``omega_wss`` (M,) its speed of the measured wheel [rad/s], ``period_wss`` its period [s];
-    ``radius_m`` r [m]. Returns ``(constant, per_tooth)``: the constant lag, a
+    ``t_mid`` (N,) [s] and ``ref`` (N,) [rad/s]: the wheel's speed from the angle (:func:`_angle_rate`);
+    ``t_wss`` (M,) the module's frame times [s], ``omega_wss`` (M,) its speed of the measured wheel
+    [rad/s], ``period_wss`` its period [s]; ``radius_m`` r [m]. Returns ``(constant, per_tooth)``: the
+    constant lag, a
     :class:`.timesync.LatencyEstimate` (``latency_s`` > 0: the module late), and the delay that grows
     as the wheel slows (a tone wheel timed per tooth: ``lag + pitch/omega``,
     :func:`.timesync.estimate_tooth_lag`), a :class:`.timesync.ToothLag`, or why there is none (str).
-    Raises ``ValueError`` when the angle gives no speed or the two do not overlap (the estimator's
-    messages).
+    Raises ``ValueError`` when the two do not overlap (the estimator's messages).
     """
-    t_mid, ref = _angle_rate(t_w, angle_rad, period_w)
     const = estimate_latency(t_wss, np.abs(omega_wss) * radius_m, t_mid, ref * radius_m, usable_ref=np.isfinite(ref),
                              min_latency_s=WSS_LAG_RANGE_S[0], max_latency_s=WSS_LAG_RANGE_S[1])
     try:
@@ -607,25 +605,21 @@ WHEEL_SCALE_MIN_N = 200
 WHEEL_SCALE_MIN_RADPS = 1.0
 
 
-def _wheel_speed_scale(t_w: np.ndarray, angle_rad: np.ndarray, period_w: float, t_wss: np.ndarray,
-                       omega_wss: np.ndarray, period_wss: float) -> dict:
+def _wheel_speed_scale(t_mid: np.ndarray, ref: np.ndarray, t_wss: np.ndarray, omega_wss: np.ndarray,
+                       period_wss: float) -> dict:
     """The wheel-speed module's speed over the transducer's wheel-angle rate, both of the measured wheel.
 
     The angle is the transducer's absolute wheel angle (hardware.md ``WFT_RL_Angle``: it wraps once per
     revolution, so its rate is the wheel's rotation); the module counts tone-wheel teeth against a
-    configured count.  Arrays as :func:`_wheel_speed_lag` (``t_wss``, ``omega_wss`` (M,) after its lag is
-    removed).  Returns ``{"gain", "spread", "n", "applied", "note"}``: the median of the readings' ratio
+    configured count.  Arrays as :func:`_wheel_speed_lag` (the angle's rate ``t_mid``, ``ref`` from
+    :func:`_angle_rate`; ``t_wss``, ``omega_wss`` (M,) after the module's lag is removed).  Returns
+    ``{"gain", "spread", "n", "applied", "note"}``: the median of the readings' ratio
     (both low-passed at :data:`LATENCY_REF_CUTOFF_HZ`) where the wheel turns faster than
     :data:`WHEEL_SCALE_MIN_RADPS`, its robust sd (1.4826 MAD), the readings used, and whether the module's
     speed is to be divided by the gain (:data:`WHEEL_SCALE_TOL`, :data:`WHEEL_SCALE_SPREAD`, at most
     ``WHEEL_GAIN_MAX``: beyond it a unit or another wheel, :func:`_implausible`), with why not.  Never raises.
     """
     out = {"gain": None, "spread": None, "n": 0, "applied": False, "note": ""}
-    try:
-        t_mid, ref = _angle_rate(t_w, angle_rad, period_w)
-    except ValueError as exc:
-        out["note"] = str(exc)
-        return out
     ok = np.isfinite(ref)
     if ok.sum() < 2:
         out["note"] = "no wheel-angle rate"
@@ -1698,11 +1692,16 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
                                  parts=tb_parts.get(ws_ref.message))
         lost_frames[ws_ref.message] = rep
         wss_rel = rel_s(wss_t)
+        angle_rate = None  # the wheel's speed from the transducer's angle: the module's lag and scale are read on it
         if wft_angle is not None:
             try:
-                lag, tooth = _wheel_speed_lag(*wft_angle, wft_period, wss_rel, w_rl, r, period)
+                angle_rate = _angle_rate(*wft_angle, wft_period)
+                lag, tooth = _wheel_speed_lag(*angle_rate, wss_rel, w_rl, r, period)
             except ValueError as exc:
                 quality["wheel_speed_lag"] = {"estimate_s": None, "applied": False, "note": str(exc)}
+                if angle_rate is None:
+                    quality["wheel_speed_scale"] = {"gain": None, "spread": None, "n": 0, "applied": False,
+                                                    "note": str(exc)}
             else:
                 why = _lag_not_applied(lag)
                 why_t = _tooth_not_applied(tooth, lag)
@@ -1733,8 +1732,8 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
                     wss_t, w_rl = _unlag(wss_t, w_rl, wss_lag)
                     got = (wss_t, w_rl)
                     wss_rel = rel_s(wss_t)
-        if wft_angle is not None:  # the module's scale against the transducer's angle (a tooth count)
-            quality["wheel_speed_scale"] = sc = _wheel_speed_scale(*wft_angle, wft_period, wss_rel, w_rl, period)
+        if angle_rate is not None:  # the module's scale against the transducer's angle (a tooth count)
+            quality["wheel_speed_scale"] = sc = _wheel_speed_scale(*angle_rate, wss_rel, w_rl, period)
             if sc["applied"]:
                 w_rl = w_rl / sc["gain"]
                 got = (wss_t, w_rl)

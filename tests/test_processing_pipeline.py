@@ -120,16 +120,17 @@ def test_a_wheel_speed_module_with_a_wrong_tooth_count_is_rescaled_to_the_transd
 def test_another_wheels_speed_is_not_rescaled_to_the_transducer_angle():
     """A channel of another wheel scatters against the measured wheel's rotation with the two wheels'
     slips: its median ratio is no tooth count, and nothing is rescaled."""
-    from wheelsoil.processing.pipeline import _wheel_speed_scale
+    from wheelsoil.processing.pipeline import _angle_rate, _wheel_speed_scale
 
     t_w = np.arange(0, 60, 0.002)
     omega = 5.0 + 3.0 * np.sin(t_w / 3.0) ** 2
     angle = np.mod(np.cumsum(omega) * 0.002, 2 * np.pi)
     t_m = np.arange(0, 60, 0.01)
     om_m = np.interp(t_m, t_w, omega)
-    assert _wheel_speed_scale(t_w, angle, 0.002, t_m, 0.97 * om_m, 0.01)["applied"]
+    rate = _angle_rate(t_w, angle, 0.002)
+    assert _wheel_speed_scale(*rate, t_m, 0.97 * om_m, 0.01)["applied"]
     other = om_m * (1 - 0.12 * np.sin(t_m / 2.0) ** 2)  # a wheel slipping differently
-    q = _wheel_speed_scale(t_w, angle, 0.002, t_m, other, 0.01)
+    q = _wheel_speed_scale(*rate, t_m, other, 0.01)
     assert not q["applied"] and "scatters" in q["note"]
 
 
