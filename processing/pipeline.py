@@ -67,7 +67,7 @@ from .timebase import (MAX_GRID_ROWS, cycle_loss, find_clock_steps, find_time_ou
 from .timesync import (CLOCK_DISTINCT_RATIO, CLOCK_GRID_S, CLOCK_MIN_CORR, CLOCK_PEAK_SEPARATION_S, TOOTH_LAG_MIN_Z,
                        LatencyEstimate, ToothLag, estimate_clock_offset, estimate_latency, estimate_latency_traction,
                        estimate_tooth_lag, fit_gps_time_mapping)
-from .wft import angle_jumps, assemble_wft_samples, remove_ripple, rotate_to_hub, rotation_ripple
+from .wft import angle_jumps, assemble_wft_samples, frame_spikes, remove_ripple, rotate_to_hub, rotation_ripple
 
 __all__ = ["ProcessResult", "process_recording", "COLUMNS", "MAX_FILL_SAMPLES"]
 
@@ -1600,6 +1600,19 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
                         warns.append(f"WFT: {label(k)} at the DBC's range limit in {int(at.sum())} samples "
                                      "(the transducer or its encoding clipped; Status did not flag it): those "
                                      "samples are treated as lost, like an overload")
+            frames: dict[str, dict] = {}  # the force and moment channels by the frame (message) carrying them
+            for k in ("wft_fx_w", "wft_fz_w", "wft_my"):
+                if k in cols:
+                    frames.setdefault(f"{sig[k].message} ({sig[k].bus})", {})[k] = np.where(bad, np.nan, cols[k])
+            spikes = {f: m for f, m in frame_spikes(frames).items() if m.any()}
+            if spikes:  # a glitch of one frame, not the wheel: a lost sample
+                quality["wft_spikes"] = {f: int(m.sum()) for f, m in spikes.items()}
+                for m in spikes.values():
+                    bad |= m
+                warns.append("WFT: samples far off their neighbours in one frame while the other frames' channels "
+                             "stay on theirs (" + ", ".join(f"{n} of {f}" for f, n in quality["wft_spikes"].items())
+                             + "): a glitch of that frame (bus or electrical), not the wheel, whose forces and moment "
+                             "change together; those samples are treated as lost")
             t_w = rel_s(ws.timestamp_ns)
             my = np.where(bad, np.nan, cols["wft_my"]) if "wft_my" in cols else None
             if all(k in cols for k in ("wft_fx_w", "wft_fz_w", "wft_angle")):

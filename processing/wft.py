@@ -25,7 +25,7 @@ from scipy import stats
 
 from wheelsoil.daq.stats import counter_stride
 
-__all__ = ["unwrap_counter", "rotate_to_hub", "angle_jumps", "WftSamples", "assemble_wft_samples", "GapReport",
+__all__ = ["unwrap_counter", "rotate_to_hub", "angle_jumps", "frame_spikes", "WftSamples", "assemble_wft_samples", "GapReport",
            "rotation_ripple", "remove_ripple"]
 
 #: A wheel-angle jump within one sample at least this large [rad] cannot be the wheel's motion (see
@@ -34,6 +34,14 @@ __all__ = ["unwrap_counter", "rotate_to_hub", "angle_jumps", "WftSamples", "asse
 ANGLE_JUMP_MIN_RAD = float(np.radians(0.5))
 #: ... and at least this many robust standard deviations of the per-sample turn's scatter.
 ANGLE_JUMP_SIGMA = 10.0
+#: A transducer sample at least this many times its channel's noise off its running median
+#: (:func:`frame_spikes`) ...
+SPIKE_SIGMA = 10.0
+#: ... and at least this share of the channel's size (99th percentile of its magnitude) off is a spike:
+#: 10 % of the load is about 1 kN on the vehicle's rear wheel, some 50 times its force noise.
+SPIKE_MIN_REL = 0.10
+#: ... and at least this many times the roughness of its neighbourhood without it.
+SPIKE_ROUGH = 4.0
 #: The wheel-angle-locked ripple (:func:`rotation_ripple`) is fitted where the wheel turns at least
 #: this fast [rev/s] (a revolution then lasts 3.3 s at most, short against a run) ...
 RIPPLE_MIN_REV_S = 0.3
@@ -196,6 +204,73 @@ def angle_jumps(angle_rad: np.ndarray, *, half_window: int = 10, max_gap: int = 
     for row, j in jumps:
         shift[row:] += j
     return a - shift, jumps
+
+
+def _departures(values: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
+    """Each sample less the mean of its two neighbours (NaN where it or one of them is lost), the level
+    from which that departure is a lone spike (:func:`frame_spikes`), per sample (inf where the
+    neighbourhood is lost or too few samples are valid), and the channel's noise-and-size part of it."""
+    x = np.asarray(values, dtype=float)
+    m = x.size
+    dev = np.full(m, np.nan)
+    limit = np.full(m, np.inf)
+    if m < 7:
+        return dev, limit, np.inf
+    dev[1:-1] = x[1:-1] - 0.5 * (x[:-2] + x[2:])
+    d2 = np.diff(x, 2)  # d2[k] centred on sample k + 1
+    good = np.isfinite(d2)
+    if good.sum() < 100:
+        return dev, limit, np.inf
+    sigma = 1.4826 * float(np.median(np.abs(d2[good]))) / np.sqrt(6.0)  # white noise: var(d2) = 6 var
+    size = float(np.percentile(np.abs(x[np.isfinite(x)]), 99))
+    # the neighbourhood's own roughness, sample i left out: its two neighbours' difference and the steps
+    # leading to them (a fast oscillation, whose peaks are single samples too, is steep there; the
+    # samples around a glitch lie level or on a gentle slope)
+    rough = np.full(m, np.inf)
+    step = np.abs(np.diff(x))  # step[k] = |x[k+1] - x[k]|
+    rough[2:-2] = np.fmax(np.abs(x[3:-1] - x[1:-3]), np.fmax(step[:-3], step[3:]))
+    rough[~np.isfinite(rough)] = np.inf
+    base = max(SPIKE_SIGMA * sigma, SPIKE_MIN_REL * size)
+    limit = np.maximum(base, SPIKE_ROUGH * rough) if base > 0 else limit
+    return dev, limit, base if base > 0 else np.inf
+
+
+def frame_spikes(frames: dict[str, dict[str, np.ndarray]]) -> dict[str, np.ndarray]:
+    """Lone samples of a transducer frame far off their neighbours: a glitch of that frame.
+
+    The wheel assembly cannot change what it transmits within one sample by much of the load and back:
+    its mass, the tyre and the transducer's own bandwidth smooth it, and what does change that fast (a
+    driveline shock, the wheel breaking loose) moves the forces and the moment together, which travel in
+    different frames.  A frame corrupted on the bus or an EMI burst in one bridge's amplifier moves one
+    sample of one frame.  A channel's sample is a spike when it departs from the mean of its two
+    neighbours by at least :data:`SPIKE_SIGMA` times the channel's noise (from the median absolute second
+    difference), :data:`SPIKE_MIN_REL` of its size (99th percentile of its magnitude) and
+    :data:`SPIKE_ROUGH` times the roughness of its neighbourhood without it (a channel oscillating from
+    sample to sample is not smooth enough to tell a glitch in), and it is a spike of its frame when no
+    channel of another frame departs by a quarter of its noise-and-size level at that sample.  Left in, a 2-5 kN
+    single-frame spike passes the 5 Hz low-pass as a 25-86 N bump in the force for half a second (an
+    independent generator's EMI spikes).
+
+    ``frames``: frame (message) name -> {channel name: (M,) values per sample index [N or N m], NaN where
+    lost}, every array of one length M.  Returns frame name -> bool mask (M,), True where that frame is a
+    spike.  A channel with fewer than 100 valid second differences finds none.  Source: a robust outlier
+    test on departures from the neighbours (Hampel 1974; Pearson et al. 2016), per frame.
+    """
+    out, loud = {}, {}
+    for name, chans in frames.items():
+        hit = np.zeros(len(next(iter(chans.values()))), dtype=bool)
+        near = hit.copy()
+        for v in chans.values():
+            dev, limit, base = _departures(v)
+            a = np.abs(np.nan_to_num(dev))
+            hit |= a >= limit
+            near |= a >= base / 4
+        out[name], loud[name] = hit, near
+    for name in out:
+        for other, near in loud.items():
+            if other != name:
+                out[name] = out[name] & ~near
+    return out
 
 
 def rotation_ripple(fx: np.ndarray, fz: np.ndarray, angle_rad: np.ndarray, t_s: np.ndarray, *,

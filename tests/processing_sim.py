@@ -131,7 +131,8 @@ def write_recording(path, truth: Truth, *, latency_s: float = 0.1, seed: int = 0
                     fx_w_gain: float = 1.0, fx_w_offset_n: float = 0.0, angle_jumps=(),
                     gnss_outages=(), wheel_speed_lag_s: float = 0.0, rl_lag_s: float = 0.0,
                     wheel_speed_pitch_rad: float = 0.0, grade: float = 0.0,
-                    chatter: tuple[float, float, float, float] | None = None, rl_scale: float = 1.0) -> dict:
+                    chatter: tuple[float, float, float, float] | None = None, rl_scale: float = 1.0,
+                    fx_w_spikes=()) -> dict:
     """Encode ``truth`` as frames and write an MCAP recording.
 
     ``drop_wft_bursts``: that many runs of 1..12 lost WFT samples;
@@ -169,7 +170,8 @@ def write_recording(path, truth: Truth, *, latency_s: float = 0.1, seed: int = 0
     ``(t0_s, t1_s, amplitude, frequency_hz)``: the measured wheel's speed oscillates by that relative
     amplitude at that frequency in the window (a driveline oscillating; the forces do not follow it);
     ``rl_scale``: the measured wheel's speed reads that many times its true speed (a tone wheel's tooth
-    count configured off: 48 teeth read as 50 is 0.96).
+    count configured off: 48 teeth read as 50 is 0.96); ``fx_w_spikes`` ``[(t_s, size_n), ...]``: the
+    Fx_w sample at t_s reads size_n more (an electrical glitch in one frame).
 
     Returns ``{"path", "lost_samples", "start_ns", "dropped_frames"}``
     (``dropped_frames``: message -> frames removed by ``drop_frames``).
@@ -192,6 +194,8 @@ def write_recording(path, truth: Truth, *, latency_s: float = 0.1, seed: int = 0
     my_hub = truth.torque_nm + wheel_inertia_kgm2 * np.gradient(truth.omega_radps, t)
     fx_w = fx_hub * ca - truth.load_n * sa + rng.normal(0, FORCE_NOISE_N, n)
     fx_w = fx_w * fx_w_gain + fx_w_offset_n
+    for t_spike, size in fx_w_spikes:
+        fx_w[int(np.searchsorted(t, t_spike))] += size
     angle_rep = angle.copy()
     for t0, deg in angle_jumps:
         angle_rep[t >= t0] += np.radians(deg)
