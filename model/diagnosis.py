@@ -291,7 +291,7 @@ LAB_SD_LEVEL = 0.6827  #: a named mismatch whose data estimates lie within the r
 #: stated uncertainty gives at this level (one sigma; :func:`_lab_departure`) is named at "low" confidence at
 #: most: a point estimate just past one lab sd with a standard error of a lab sd or more shows the soil off the
 #: lab only weakly (the four wrong mismatches named on the independent generators' kept runs lay 1.05-2.2 sd
-#: off with standard errors of 1.3-2.6 sd; so did nine right ones: no threshold parts them)
+#: off with standard errors of 1.3-2.6 sd; so did eight right ones: no threshold parts them)
 WALD_Z = 2.0  #: an effect parameter differs from its null value when |value - null| > WALD_Z se
 LOAD_RATIO_TOL = 1.25  #: model W / measured W outside [1/1.25, 1.25] in a slip bin: inconsistent
 #: (Eq. 10's own small-angle error reaches ~20 % on library soils, wheelsoil.model.wong)

@@ -34,7 +34,7 @@ __all__ = ["unwrap_counter", "rotate_to_hub", "angle_jumps", "frame_spikes", "Wf
 ANGLE_JUMP_MIN_RAD = float(np.radians(0.5))
 #: ... and at least this many robust standard deviations of the per-sample turn's scatter.
 ANGLE_JUMP_SIGMA = 10.0
-#: A transducer sample at least this many times its channel's noise off its running median
+#: A transducer sample at least this many times its channel's noise off the mean of its two neighbours
 #: (:func:`frame_spikes`) ...
 SPIKE_SIGMA = 10.0
 #: ... and at least this share of the channel's size (99th percentile of its magnitude) off is a spike:
