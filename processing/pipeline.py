@@ -619,7 +619,7 @@ def _wheel_speed_scale(t_mid: np.ndarray, ref: np.ndarray, t_wss: np.ndarray, om
     speed is to be divided by the gain (:data:`WHEEL_SCALE_TOL`, :data:`WHEEL_SCALE_SPREAD`, at most
     ``WHEEL_GAIN_MAX``: beyond it a unit or another wheel, :func:`_implausible`), with why not.  Never raises.
     """
-    out = {"gain": None, "spread": None, "n": 0, "applied": False, "note": ""}
+    out = _scale_not_found("")
     ok = np.isfinite(ref)
     if ok.sum() < 2:
         out["note"] = "no wheel-angle rate"
@@ -643,6 +643,11 @@ def _wheel_speed_scale(t_mid: np.ndarray, ref: np.ndarray, t_wss: np.ndarray, om
     else:
         out["applied"] = True
     return out
+
+
+def _scale_not_found(note: str) -> dict:
+    """:func:`_wheel_speed_scale`'s result when no scale is measured, saying why (``note``)."""
+    return {"gain": None, "spread": None, "n": 0, "applied": False, "note": note}
 
 
 def _module_speed(t_s: np.ndarray, omega: np.ndarray, period_s: float) -> np.ndarray:
@@ -1713,8 +1718,7 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
             except ValueError as exc:
                 quality["wheel_speed_lag"] = {"estimate_s": None, "applied": False, "note": str(exc)}
                 if angle_rate is None:
-                    quality["wheel_speed_scale"] = {"gain": None, "spread": None, "n": 0, "applied": False,
-                                                    "note": str(exc)}
+                    quality["wheel_speed_scale"] = _scale_not_found(str(exc))
             else:
                 why = _lag_not_applied(lag)
                 why_t = _tooth_not_applied(tooth, lag)

@@ -252,8 +252,9 @@ def frame_spikes(frames: dict[str, dict[str, np.ndarray]]) -> dict[str, np.ndarr
     independent generator's EMI spikes).
 
     ``frames``: frame (message) name -> {channel name: (M,) values per sample index [N or N m], NaN where
-    lost}, every array of one length M.  Returns frame name -> bool mask (M,), True where that frame is a
-    spike.  A channel with fewer than 100 valid second differences finds none.  Source: a robust outlier
+    lost}, at least one channel per frame, every array of one length M.  Returns frame name -> bool mask
+    (M,), True where that frame is a spike; never raises.  A channel with fewer than 100 valid second
+    differences finds none.  Source: a robust outlier
     test on departures from the neighbours (Hampel 1974; Pearson et al. 2016), per frame.
     """
     out, loud = {}, {}
