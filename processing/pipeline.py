@@ -14,9 +14,9 @@ Steps (each in its own module):
    slip belongs to the moment of the forces; the module's scale against the
    same angle, corrected beyond ``WHEEL_SCALE_TOL``, :func:`_wheel_speed_scale`;
    a delay that grows as the wheel
-   slows, per reading, the fronts' too; a constant one from the fronts' too
-   when that makes the GNSS latency against them agree better with the
-   slip-traction estimate); and the GNSS latency (:mod:`.timesync`)
+   slows, per reading; from the fronts' too (at their own speed) when that
+   makes the GNSS latency against them agree better with the slip-traction
+   estimate); and the GNSS latency (:mod:`.timesync`)
    from up to three estimators: the free-rolling front wheels' r*omega (or,
    when none is logged or the 4x4 drives them, the measured wheel where it
    transmits no torque: coasting, another axle braking), the measured wheel's
@@ -1877,13 +1877,13 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
             errs["traction"] = "needs the measured wheel's speed, torque and load"
         f_raw = [(f, s) for f, s in ((f, get(f, measured=True)) for f in fronts)
                  if s is not None and s[0].shape[0] >= 3]
-        # the module's lag was measured on the measured wheel: its front channels share a constant one
-        # (a common delay: a gateway, the frame's cycle) or not (a filter in one sensor); both are tried
-        # when the fronts are in the module's message, and the one whose GNSS latency agrees better with
-        # the slip-traction estimate (which needs no front wheel) is kept. A per-tooth delay is how the
-        # module times every wheel: the fronts' readings move back by it at their own speed.
+        # the module's lag was measured on the measured wheel: its front channels share it (a common
+        # delay: a gateway, the frame's cycle, a module timing every wheel per tooth, each reading then
+        # moved back at its own wheel's speed) or not (a filter in one sensor, fronts read by another
+        # module); both are tried when the fronts are in the module's message, and the one whose GNSS
+        # latency agrees better with the slip-traction estimate (which needs no front wheel) is kept
         fronts_in = wss_lag is not None and any(f.message == ws_ref.message for f, _ in f_raw)
-        shared = [wss_lag] + ([None] if fronts_in and isinstance(wss_lag, float) else [])
+        shared = [wss_lag] + ([None] if fronts_in else [])
 
         def wheel_reference(shift):
             """The wheel-reference latency with the fronts in the module's message moved back by ``shift`` (the
@@ -1922,30 +1922,33 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
                     est_ = str(exc)
             return est_, coupled_, front, label_
 
-        tr0 = cands.get("traction")
-
-        def off_traction(est_) -> float:  # how far from the slip-traction estimate (inf: not comparable)
-            ok = isinstance(est_, LatencyEstimate) and tr0 is not None and not tr0.note
-            return abs(est_.latency_s - tr0.latency_s) if ok else math.inf
-
-        # the shift whose estimate agrees best (on a tie the first: the module's lag)
-        shift, est, coupled, front_ref, wheel_ref_label = min(
-            ((sh, *wheel_reference(sh)) for sh in shared), key=lambda t: off_traction(t[1]))
-        if fronts_in:
-            quality["wheel_speed_lag"]["fronts_shifted"] = shift is not None
-            if shift is None:
-                warns.append("the front wheels' speeds are not as late as the measured wheel's (the GNSS latency "
-                             "against them agrees with the slip-traction estimate only unshifted): only the "
-                             "measured wheel's times were moved back")
-        if isinstance(est, LatencyEstimate):
-            cands["wheel_reference"] = est
-        else:
-            errs["wheel_reference"] = est
         alt = _force_latency(g_rel, g_v, g_period, t_grid, fx_f, min(cutoff, 0.4 / g_period))
         if alt is not None:
             cands["dynamics"] = alt
         else:
             errs["dynamics"] = "needs the measured Fx and the GNSS speed"
+        # the judge of the fronts' shift: the slip-traction estimate, else (at its search range's edge, or
+        # none) the dynamics one, whose bias of some ms is small beside a tooth period or a module's lag
+        judge = next((c for c in (cands.get("traction"), alt) if c is not None and not c.note), None)
+
+        def off_judge(est_) -> float:  # how far from the judge (inf: not comparable)
+            ok = isinstance(est_, LatencyEstimate) and judge is not None
+            return abs(est_.latency_s - judge.latency_s) if ok else math.inf
+
+        # the shift whose estimate agrees best (on a tie the first: the module's lag)
+        shift, est, coupled, front_ref, wheel_ref_label = min(
+            ((sh, *wheel_reference(sh)) for sh in shared), key=lambda t: off_judge(t[1]))
+        if fronts_in:
+            quality["wheel_speed_lag"]["fronts_shifted"] = shift is not None
+            if shift is None:
+                warns.append("the front wheels' speeds are not as late as the measured wheel's (the GNSS latency "
+                             "against them agrees better unshifted with the slip-traction estimate, or the "
+                             "dynamics one when there is none): only the "
+                             "measured wheel's times were moved back")
+        if isinstance(est, LatencyEstimate):
+            cands["wheel_reference"] = est
+        else:
+            errs["wheel_reference"] = est
         if g_pre:  # the estimates measured from the first shift: each the whole delay
             cands = {k: dataclasses.replace(c, latency_s=c.latency_s + g_pre) for k, c in cands.items()}
             g_rel = g_rel + g_pre

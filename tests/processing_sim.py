@@ -130,7 +130,7 @@ def write_recording(path, truth: Truth, *, latency_s: float = 0.1, seed: int = 0
                     burst_s: float = 0.0, fronts_coupled: bool = False, at_max: dict | None = None,
                     fx_w_gain: float = 1.0, fx_w_offset_n: float = 0.0, angle_jumps=(),
                     gnss_outages=(), wheel_speed_lag_s: float = 0.0, rl_lag_s: float = 0.0,
-                    wheel_speed_pitch_rad: float = 0.0, grade: float = 0.0,
+                    wheel_speed_pitch_rad: float = 0.0, fronts_undelayed: bool = False, grade: float = 0.0,
                     chatter: tuple[float, float, float, float] | None = None, rl_scale: float = 1.0,
                     fx_w_spikes=()) -> dict:
     """Encode ``truth`` as frames and write an MCAP recording.
@@ -166,7 +166,8 @@ def write_recording(path, truth: Truth, *, latency_s: float = 0.1, seed: int = 0
     wheel speed is the speed that long before its frame (a module that reads late); ``rl_lag_s``:
     the measured (left-rear) wheel's channel alone lags that much more (a filter in its sensor);
     ``wheel_speed_pitch_rad``: every wheel speed lags ``pitch / omega`` more, at most 0.3 s in all
-    (a module timing each wheel over its last tooth interval: one tooth period late); ``chatter``
+    (a module timing each wheel over its last tooth interval: one tooth period late); ``fronts_undelayed``:
+    the front wheels' speeds carry neither delay (read by another module, in the same message); ``chatter``
     ``(t0_s, t1_s, amplitude, frequency_hz)``: the measured wheel's speed oscillates by that relative
     amplitude at that frequency in the window (a driveline oscillating; the forces do not follow it);
     ``rl_scale``: the measured wheel's speed reads that many times its true speed (a tone wheel's tooth
@@ -245,6 +246,8 @@ def write_recording(path, truth: Truth, *, latency_s: float = 0.1, seed: int = 0
 
             v = np.interp(tw - wheel_speed_lag_s, t, truth.speed_mps)
             v = np.interp(tw - wheel_speed_lag_s - late(v / truth.radius_m), t, truth.speed_mps)
+            if fronts_undelayed:
+                v = np.interp(tw, t, truth.speed_mps)
             om = np.interp(tw - wheel_speed_lag_s - rl_lag_s, t, truth.omega_radps)
             om = np.interp(tw - wheel_speed_lag_s - rl_lag_s - late(om), t, truth.omega_radps)
             if fronts_coupled:
