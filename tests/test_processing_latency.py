@@ -170,16 +170,25 @@ def test_a_module_timed_per_tooth_is_found_and_removed(truth, tmp_path, monkeypa
     assert abs(const.gnss_latency_s - 0.08) > err + 0.005
 
 
-def test_a_per_tooth_delay_of_the_measured_wheel_alone_leaves_the_fronts(truth, tmp_path):
+@pytest.mark.parametrize("judge", ["traction", "dynamics"])
+def test_a_per_tooth_delay_of_the_measured_wheel_alone_leaves_the_fronts(truth, tmp_path, monkeypatch, judge):
     """The measured wheel timed per tooth (48 teeth) while the fronts, in the same message, carry no
     delay (another module reads them): moving the fronts back by their own tooth period too would
     put the GNSS latency against them tens of ms late, in disagreement with the slip-traction
-    estimate; unshifted they agree, so only the measured wheel's readings move back."""
+    estimate; unshifted they agree, so only the measured wheel's readings move back. Without a
+    slip-traction estimate (its fit failing) the dynamics estimate judges the same way."""
+    import wheelsoil.processing.pipeline as pp
+
+    if judge == "dynamics":
+        def no_traction(*a, **k):
+            raise ValueError("switched off by the test")
+        monkeypatch.setattr(pp, "estimate_latency_traction", no_traction)
     info = write_recording(tmp_path / "teeth_rear.mcap", truth, latency_s=0.08, wheel_speed_lag_s=0.005,
                            wheel_speed_pitch_rad=2 * np.pi / 48, fronts_undelayed=True, seed=7)
     res = process_recording(info["path"])
     q = res.quality["wheel_speed_lag"]
     assert q["per_tooth"]["applied"] and not q["fronts_shifted"], q
+    assert (res.quality["latency"]["candidates"]["traction"]["estimate_s"] is None) == (judge == "dynamics")
     assert any("not as late as the measured wheel's" in w for w in res.warnings)
     assert res.gnss_latency_s == pytest.approx(0.08, abs=0.005)
 
