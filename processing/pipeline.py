@@ -14,9 +14,10 @@ Steps (each in its own module):
    slip belongs to the moment of the forces; the module's scale against the
    same angle, corrected beyond ``WHEEL_SCALE_TOL``, :func:`_wheel_speed_scale`;
    a delay that grows as the wheel
-   slows, per reading; from the fronts' too (at their own speed) when that
-   makes the GNSS latency against them agree better with the slip-traction
-   estimate); and the GNSS latency (:mod:`.timesync`)
+   slows, per reading; from the fronts' too: a constant one when that makes
+   the GNSS latency against them agree better with the slip-traction
+   estimate, a per-tooth one unless their own delay against the GNSS speed
+   does not grow as they slow, :func:`_fronts_pitch`); and the GNSS latency (:mod:`.timesync`)
    from up to three estimators: the free-rolling front wheels' r*omega (or,
    when none is logged or the 4x4 drives them, the measured wheel where it
    transmits no torque: coasting, another axle braking), the measured wheel's
@@ -666,6 +667,47 @@ def _tooth_not_applied(tooth, const: LatencyEstimate) -> str:
         return (f"pitch {tooth.pitch_rad:.3g} +- {tooth.stderr_pitch_rad:.2g} rad: not {TOOTH_LAG_MIN_Z:g} "
                 "standard errors above zero (the delay does not grow as the wheel slows)")
     return _lag_imprecise(tooth.stderr_lag_s, tooth.gain)
+
+
+def _fronts_pitch(series: list, rel_s, g_rel: np.ndarray, g_v: np.ndarray, g_period: float, radius_m: float,
+                  tooth) -> dict:
+    """Whether the front wheels' channels share the measured wheel's per-tooth delay ``tooth`` (a
+    :class:`.timesync.ToothLag`).
+
+    Each front's speed is fitted against the GNSS speed (low-passed at :data:`LATENCY_REF_CUTOFF_HZ`,
+    over the radius ``radius_m`` [m]) with :func:`.timesync.estimate_tooth_lag`: the GNSS latency is
+    constant, so the fitted pitch is the fronts' own (their constant delay and the latency are one
+    lag, searched over +-0.6 s). ``series`` [(times (n_i,) [ns], omega (n_i,) [rad/s])] of the fronts in
+    the module's message; ``rel_s`` maps ns to the run's seconds; ``g_rel`` (m,) [s], ``g_v`` (m,)
+    [m/s] the GNSS speed, ``g_period`` its period [s]. Returns ``{"pitch_rad", "stderr_pitch_rad", "n",
+    "shared", "note"}`` (inverse-variance mean over the fronts): ``shared`` True when the pitch is
+    nearer the measured wheel's than zero, False when nearer zero, None (undecided: the default, shared)
+    when the two are not :data:`TOOTH_LAG_MIN_Z` combined standard errors apart or no front could be
+    fitted (``note`` says why). Source: as :class:`.timesync.ToothLag`."""
+    fits, why = [], []
+    try:
+        ref = filter_to_grid(g_rel, g_v, g_period, g_rel, LATENCY_REF_CUTOFF_HZ) / radius_m
+    except ValueError as exc:
+        ref, why = None, [str(exc)]
+    for t_ns, omega in series if ref is not None else ():
+        t = rel_s(t_ns)
+        try:
+            fits.append(estimate_tooth_lag(t, omega, _module_speed(t, omega, _time_gaps("front", t_ns)[1]), g_rel,
+                                           ref, start_lag_s=0.0, min_lag_s=-0.6, max_lag_s=0.6,
+                                           min_omega_radps=0.3 / radius_m))
+        except ValueError as exc:
+            why.append(str(exc))
+    fits = [f for f in fits if f.stderr_pitch_rad > 0 and math.isfinite(f.stderr_pitch_rad)]
+    if not fits:
+        return {"pitch_rad": None, "stderr_pitch_rad": None, "n": 0, "shared": None,
+                "note": "; ".join(why) or "no front wheel fitted"}
+    w = np.array([f.stderr_pitch_rad ** -2 for f in fits])
+    p = float(np.sum(w * [f.pitch_rad for f in fits]) / np.sum(w))
+    se = float(np.sum(w) ** -0.5)
+    apart = tooth.pitch_rad > TOOTH_LAG_MIN_Z * math.hypot(se, tooth.stderr_pitch_rad)
+    shared = (abs(p - tooth.pitch_rad) < abs(p)) if apart else None
+    return {"pitch_rad": p, "stderr_pitch_rad": se, "n": int(sum(f.n for f in fits)), "shared": shared,
+            "note": "" if apart else "the fronts' pitch cannot tell the measured wheel's from zero"}
 
 
 def _unlag(t_ns: np.ndarray, omega: np.ndarray, lag) -> tuple[np.ndarray, np.ndarray]:
@@ -1878,12 +1920,19 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
         f_raw = [(f, s) for f, s in ((f, get(f, measured=True)) for f in fronts)
                  if s is not None and s[0].shape[0] >= 3]
         # the module's lag was measured on the measured wheel: its front channels share it (a common
-        # delay: a gateway, the frame's cycle, a module timing every wheel per tooth, each reading then
-        # moved back at its own wheel's speed) or not (a filter in one sensor, fronts read by another
-        # module); both are tried when the fronts are in the module's message, and the one whose GNSS
-        # latency agrees better with the slip-traction estimate (which needs no front wheel) is kept
+        # delay: a gateway, the frame's cycle, a module timing every wheel per tooth) or not (a filter in
+        # one sensor, fronts read by another module). A constant lag: both are tried when the fronts are
+        # in the module's message, and the one whose GNSS latency agrees better with the slip-traction
+        # estimate (which needs no front wheel) is kept. A per-tooth delay: the fronts' own delay against
+        # the GNSS speed says whether it grows as they slow by the measured wheel's pitch or not at all
+        # (:func:`_fronts_pitch`); each reading then moves back at its own wheel's speed.
         fronts_in = wss_lag is not None and any(f.message == ws_ref.message for f, _ in f_raw)
-        shared = [wss_lag] + ([None] if fronts_in else [])
+        shared = [wss_lag] + ([None] if fronts_in and isinstance(wss_lag, float) else [])
+        if fronts_in and isinstance(wss_lag, ToothLag):
+            quality["wheel_speed_lag"]["fronts_pitch"] = fp = _fronts_pitch(
+                [s for f, s in f_raw if f.message == ws_ref.message], rel_s, g_rel, g_v, g_period, r, wss_lag)
+            if fp["shared"] is False:
+                shared = [None]
 
         def wheel_reference(shift):
             """The wheel-reference latency with the fronts in the module's message moved back by ``shift`` (the
@@ -1922,33 +1971,34 @@ def process_recording(path, *, config=None, rate_hz: float = 100.0, cutoff_hz: f
                     est_ = str(exc)
             return est_, coupled_, front, label_
 
+        tr0 = cands.get("traction")
+
+        def off_traction(est_) -> float:  # how far from the slip-traction estimate (inf: not comparable)
+            ok = isinstance(est_, LatencyEstimate) and tr0 is not None and not tr0.note
+            return abs(est_.latency_s - tr0.latency_s) if ok else math.inf
+
+        # the shift whose estimate agrees best (on a tie the first: the module's lag)
+        shift, est, coupled, front_ref, wheel_ref_label = min(
+            ((sh, *wheel_reference(sh)) for sh in shared), key=lambda t: off_traction(t[1]))
+        if fronts_in:
+            quality["wheel_speed_lag"]["fronts_shifted"] = shift is not None
+            if shift is None:
+                warns.append("the front wheels' speeds are not as late as the measured wheel's ("
+                             + (f"their delay against the GNSS speed grows by {fp['pitch_rad']:.3g} +- "
+                                f"{fp['stderr_pitch_rad']:.2g} rad / omega as they slow, the measured wheel's by "
+                                f"{wss_lag.pitch_rad:.3g} rad / omega" if isinstance(wss_lag, ToothLag) else
+                                "the GNSS latency against them agrees with the slip-traction estimate only "
+                                "unshifted")
+                             + "): only the measured wheel's times were moved back")
+        if isinstance(est, LatencyEstimate):
+            cands["wheel_reference"] = est
+        else:
+            errs["wheel_reference"] = est
         alt = _force_latency(g_rel, g_v, g_period, t_grid, fx_f, min(cutoff, 0.4 / g_period))
         if alt is not None:
             cands["dynamics"] = alt
         else:
             errs["dynamics"] = "needs the measured Fx and the GNSS speed"
-        # the judge of the fronts' shift: the slip-traction estimate, else (at its search range's edge, or
-        # none) the dynamics one, whose bias of some ms is small beside a tooth period or a module's lag
-        judge = next((c for c in (cands.get("traction"), alt) if c is not None and not c.note), None)
-
-        def off_judge(est_) -> float:  # how far from the judge (inf: not comparable)
-            ok = isinstance(est_, LatencyEstimate) and judge is not None
-            return abs(est_.latency_s - judge.latency_s) if ok else math.inf
-
-        # the shift whose estimate agrees best (on a tie the first: the module's lag)
-        shift, est, coupled, front_ref, wheel_ref_label = min(
-            ((sh, *wheel_reference(sh)) for sh in shared), key=lambda t: off_judge(t[1]))
-        if fronts_in:
-            quality["wheel_speed_lag"]["fronts_shifted"] = shift is not None
-            if shift is None:
-                warns.append("the front wheels' speeds are not as late as the measured wheel's (the GNSS latency "
-                             "against them agrees better unshifted with the slip-traction estimate, or the "
-                             "dynamics one when there is none): only the "
-                             "measured wheel's times were moved back")
-        if isinstance(est, LatencyEstimate):
-            cands["wheel_reference"] = est
-        else:
-            errs["wheel_reference"] = est
         if g_pre:  # the estimates measured from the first shift: each the whole delay
             cands = {k: dataclasses.replace(c, latency_s=c.latency_s + g_pre) for k, c in cands.items()}
             g_rel = g_rel + g_pre
