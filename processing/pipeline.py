@@ -208,7 +208,7 @@ class ProcessResult:
     frames per message (None = unknown), grid size, and ``quality["latency"]``:
     ``estimate_s`` (applied, None if none), ``stderr_s`` (total: statistical and
     systematic), ``method`` (``wheel_reference`` | ``traction`` |
-    ``traction+dynamics`` | None), ``reliable`` bool (False: slip and what is built
+    ``traction+dynamics`` | ``wheel_reference+dynamics`` | None), ``reliable`` bool (False: slip and what is built
     on it are less certain), ``reasons`` (why not reliable), ``fronts_driven``,
     ``candidates`` {name: {estimate_s, stderr_s, stderr_stat_s, systematic_s,
     usable, note, n, method}}, ``search_range_s`` (see :func:`_choose_latency`).
@@ -774,11 +774,12 @@ def _choose_latency(cands: dict, errs: dict, *, coupled: bool, wheel_ref_label: 
     disagreeing slip-traction estimate unusable instead. The choice: the wheel reference if
     usable and precise (total standard error at most :data:`LATENCY_RELIABLE_SE_S`; a coasting
     wheel whose deceleration hardly
-    changes tells little), else the inverse-variance mean of agreeing traction and
-    dynamics estimates, else the usable one with the smaller standard error, else
+    changes tells little), or usable without a traction estimate (joined, when imprecise, by an
+    agreeing dynamics estimate: their inverse-variance mean), else the inverse-variance mean of
+    agreeing traction and dynamics estimates, else the usable one with the smaller standard error, else
     (flagged) the best finite one;
     the dynamics estimate alone is never applied (its bias is known, it only confirms
-    or joins the traction one): then no latency is applied.
+    or joins another): then no latency is applied.
     ``reliable`` needs a total standard error of at most
     :data:`LATENCY_RELIABLE_SE_S`, no edge hit, agreement (within
     :data:`LATENCY_AGREE_SIGMAS` combined standard errors) with every other usable
@@ -841,14 +842,20 @@ def _choose_latency(cands: dict, errs: dict, *, coupled: bool, wheel_ref_label: 
             wr = None
     chosen: LatencyEstimate | None = None
     method = ""
+
+    def with_dynamics(a: LatencyEstimate, name: str) -> LatencyEstimate:  # the inverse-variance mean of a and dy
+        w1, w2 = a.stderr_s ** -2, dy.stderr_s ** -2
+        return LatencyEstimate((w1 * a.latency_s + w2 * dy.latency_s) / (w1 + w2), (w1 + w2) ** -0.5, 1.0, 0.0,
+                               a.residual_rms_mps, a.n + dy.n,
+                               f"inverse-variance mean of the {name} and dynamics estimates")
+
     if wr is not None and (wr.stderr_s <= LATENCY_RELIABLE_SE_S or tr is None):
         chosen, method = wr, "wheel_reference"
+        if wr.stderr_s > LATENCY_RELIABLE_SE_S and dy is not None and _agree(wr, dy):
+            # an imprecise lone wheel reference (a coasting wheel's few samples) joined by the dynamics one
+            chosen, method = with_dynamics(wr, "wheel-reference"), "wheel_reference+dynamics"
     elif tr is not None and dy is not None and _agree(tr, dy):
-        w1, w2 = tr.stderr_s ** -2, dy.stderr_s ** -2
-        tau = (w1 * tr.latency_s + w2 * dy.latency_s) / (w1 + w2)
-        chosen = LatencyEstimate(tau, (w1 + w2) ** -0.5, 1.0, 0.0, tr.residual_rms_mps, tr.n + dy.n,
-                                 "inverse-variance mean of the traction and dynamics estimates")
-        method = "traction+dynamics"
+        chosen, method = with_dynamics(tr, "traction"), "traction+dynamics"
     elif set(usable) - {"dynamics"}:
         alone = {k: c for k, c in usable.items() if k != "dynamics"}
         method = min(alone, key=lambda k: alone[k].stderr_s)
@@ -884,7 +891,8 @@ def _choose_latency(cands: dict, errs: dict, *, coupled: bool, wheel_ref_label: 
          "candidates": info, "search_range_s": [LATENCY_MIN_S, LATENCY_MAX_S]}
     label = {"wheel_reference": wheel_ref_label, "traction": _LATENCY_METHODS["traction"],
              "dynamics": _LATENCY_METHODS["dynamics"],
-             "traction+dynamics": _LATENCY_METHODS["traction"] + " and " + _LATENCY_METHODS["dynamics"]}.get(method, "")
+             "traction+dynamics": _LATENCY_METHODS["traction"] + " and " + _LATENCY_METHODS["dynamics"],
+             "wheel_reference+dynamics": wheel_ref_label + " and " + _LATENCY_METHODS["dynamics"]}.get(method, "")
     cand_txt = "; ".join(f"{k}: " + ("none" if v["estimate_s"] is None else
                                      f"{v['estimate_s'] * 1e3:.1f} +- {v['stderr_s'] * 1e3:.1f} ms")
                          + ("" if v["usable"] else f" (not used: {v['note']})") for k, v in info.items())

@@ -120,6 +120,28 @@ def test_choice_keeps_the_coasting_measured_wheel_against_the_traction_estimate(
     assert q["method"] == "traction+dynamics" and not q["candidates"]["wheel_reference"]["usable"]
 
 
+def test_an_imprecise_lone_wheel_reference_is_joined_by_the_dynamics_estimate():
+    """An independent generator's tractor (its fronts driven, the traction estimate at the search
+    range's edge): the coasting measured wheel gave 387 +/- 139 ms from 43 samples (true 104 ms), the
+    dynamics estimate 94 +/- 73 ms. They agree within their errors, and their inverse-variance mean is
+    applied, flagged unreliable; a precise wheel reference is applied as it is, and one that disagrees
+    with the dynamics estimate is not averaged with it."""
+    cands = {"wheel_reference": _est(0.387, 0.1386), "dynamics": _est(0.094, 0.069)}
+    errs = {"traction": "latency at the edge of the search range"}
+    lat, label, q, warns = _choose_latency(cands, errs, coupled=True, wheel_ref_label="measured wheel", fronts=False)
+    w1, w2 = q["candidates"]["wheel_reference"]["stderr_s"] ** -2, q["candidates"]["dynamics"]["stderr_s"] ** -2
+    assert q["method"] == "wheel_reference+dynamics" and not q["reliable"]
+    assert lat.latency_s == pytest.approx((w1 * 0.387 + w2 * 0.094) / (w1 + w2))
+    assert lat.stderr_s == pytest.approx((w1 + w2) ** -0.5) and "measured wheel and" in label
+    assert any("GNSS LATENCY UNRELIABLE" in w for w in warns)
+    precise = dict(cands, wheel_reference=_est(0.11, 0.004))
+    lat, _, q, _ = _choose_latency(precise, errs, coupled=True, wheel_ref_label="measured wheel", fronts=False)
+    assert q["method"] == "wheel_reference" and lat.latency_s == pytest.approx(0.11)
+    far = dict(cands, dynamics=_est(0.05, 0.01))
+    lat, _, q, _ = _choose_latency(far, errs, coupled=True, wheel_ref_label="measured wheel", fronts=False)
+    assert q["method"] == "wheel_reference" and lat.latency_s == pytest.approx(0.387)
+
+
 def test_a_wheel_reference_that_rolls_freely_outranks_a_disagreeing_traction_estimate():
     """Free-rolling front wheels (GNSS V = 1.000 r*omega + 0.000, residual 0.02 m/s: the GNSS noise) on
     an independent generator's runs, where the slip-traction estimate was 110-340 ms off: before, the
