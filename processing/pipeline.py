@@ -123,6 +123,9 @@ GRADE_MIN_RATIO = 1.005
 #: GNSS latency search range [s] (hardware.md: typically 20-200 ms); an estimate within 4 ms of
 #: either end is an edge hit (unreliable).
 LATENCY_MAX_S = 0.5
+#: The receiver latency hardware.md calls typical [s]: it breaks a disagreement between the slip-traction
+#: and dynamics estimates when only the dynamics one lies within it (:func:`_choose_latency`).
+LATENCY_TYPICAL_S = (0.02, 0.2)
 #: Lower end [s] of the search for the wheel-reference and slip-traction estimates: they measure
 #: the GNSS speed's delay *relative to the wheel-speed readings*, which is what slip (Eq. 6) needs,
 #: and a wheel-speed module can itself read late (a tone wheel reporting its last tooth period:
@@ -778,8 +781,9 @@ def _choose_latency(cands: dict, errs: dict, *, coupled: bool, wheel_ref_label: 
     agreeing dynamics estimate: their inverse-variance mean), else the inverse-variance mean of
     agreeing traction and dynamics estimates, else the usable one with the smaller standard error, else
     (flagged) the best finite one;
-    the dynamics estimate alone is never applied (its bias is known, it only confirms
-    or joins another): then no latency is applied.
+    the dynamics estimate alone is applied only against a disagreeing slip-traction estimate outside
+    the receiver's typical latency (:data:`LATENCY_TYPICAL_S`) when it lies within it (its bias is
+    known, it otherwise only confirms or joins another); else no latency is applied.
     ``reliable`` needs a total standard error of at most
     :data:`LATENCY_RELIABLE_SE_S`, no edge hit, agreement (within
     :data:`LATENCY_AGREE_SIGMAS` combined standard errors) with every other usable
@@ -860,6 +864,19 @@ def _choose_latency(cands: dict, errs: dict, *, coupled: bool, wheel_ref_label: 
         alone = {k: c for k, c in usable.items() if k != "dynamics"}
         method = min(alone, key=lambda k: alone[k].stderr_s)
         chosen = alone[method]
+
+        def typical(c: LatencyEstimate) -> bool:
+            return LATENCY_TYPICAL_S[0] <= c.latency_s <= LATENCY_TYPICAL_S[1]
+
+        if method == "traction" and dy is not None and not typical(tr) and typical(dy):
+            # traction and dynamics disagree (else combined above), and only dynamics lies where a receiver's
+            # latency typically does: an effect that breaks the static torque-slip curve moves the traction
+            # estimate by hundreds of ms (an independent generator: 389 and 464 ms where the truth is 77
+            # and 54 ms, the dynamics estimate 77 and 44 ms)
+            chosen, method = dy, "dynamics"
+            reasons.append(f"the slip-traction estimate ({tr.latency_s * 1e3:.1f} ms) lies outside a receiver's "
+                           f"typical {LATENCY_TYPICAL_S[0] * 1e3:g}-{LATENCY_TYPICAL_S[1] * 1e3:g} ms (hardware.md) "
+                           "and the dynamics estimate within it: the dynamics one (biased by some ms) is applied")
     elif cands:  # nothing usable: the best-supported one, flagged, if not at the edge
         fin = {k: c for k, c in cands.items() if not c.note and math.isfinite(c.stderr_s)
                and not (k == "wheel_reference" and fronts and coupled) and k != "dynamics"}

@@ -120,6 +120,23 @@ def test_choice_keeps_the_coasting_measured_wheel_against_the_traction_estimate(
     assert q["method"] == "traction+dynamics" and not q["candidates"]["wheel_reference"]["usable"]
 
 
+def test_a_traction_estimate_beyond_a_receivers_typical_latency_yields_to_the_dynamics_one():
+    """An independent generator's tractor runs (a soil mismatch, a speed-dependent sinkage): the
+    slip-traction estimate 389 and 464 ms, the dynamics one 77 and 44 ms (true 77 and 54 ms). They
+    disagree; only the dynamics one lies within hardware.md's typical 20-200 ms, so it is applied,
+    flagged unreliable. Both outside (or the traction one inside, as in
+    test_choice_flags_disagreement_loudly): the traction one, as before."""
+    cands = {"traction": _est(0.389, 0.002), "dynamics": _est(0.077, 0.07)}
+    errs = {"wheel_reference": "no free-rolling wheel speed to compare with"}
+    lat, label, q, warns = _choose_latency(cands, errs, coupled=True, wheel_ref_label="", fronts=False)
+    assert q["method"] == "dynamics" and lat.latency_s == pytest.approx(0.077) and not q["reliable"]
+    assert any("typical" in r for r in q["reasons"]) and any("disagrees with traction" in r for r in q["reasons"])
+    assert "vehicle dynamics" in label and any("GNSS LATENCY UNRELIABLE" in w for w in warns)
+    lat, _, q, _ = _choose_latency(dict(cands, dynamics=_est(0.25, 0.02)), errs, coupled=True, wheel_ref_label="",
+                                   fronts=False)
+    assert q["method"] == "traction" and lat.latency_s == pytest.approx(0.389)
+
+
 def test_an_imprecise_lone_wheel_reference_is_joined_by_the_dynamics_estimate():
     """An independent generator's tractor (its fronts driven, the traction estimate at the search
     range's edge): the coasting measured wheel gave 387 +/- 139 ms from 43 samples (true 104 ms), the
