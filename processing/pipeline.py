@@ -864,18 +864,15 @@ def _choose_latency(cands: dict, errs: dict, *, coupled: bool, wheel_ref_label: 
         alone = {k: c for k, c in usable.items() if k != "dynamics"}
         method = min(alone, key=lambda k: alone[k].stderr_s)
         chosen = alone[method]
-
-        def typical(c: LatencyEstimate) -> bool:
-            return LATENCY_TYPICAL_S[0] <= c.latency_s <= LATENCY_TYPICAL_S[1]
-
-        if method == "traction" and dy is not None and not typical(tr) and typical(dy):
+        lo, hi = LATENCY_TYPICAL_S
+        if method == "traction" and dy is not None and not lo <= tr.latency_s <= hi and lo <= dy.latency_s <= hi:
             # traction and dynamics disagree (else combined above), and only dynamics lies where a receiver's
             # latency typically does: an effect that breaks the static torque-slip curve moves the traction
             # estimate by hundreds of ms (an independent generator: 389 and 464 ms where the truth is 77
             # and 54 ms, the dynamics estimate 77 and 44 ms)
             chosen, method = dy, "dynamics"
             reasons.append(f"the slip-traction estimate ({tr.latency_s * 1e3:.1f} ms) lies outside a receiver's "
-                           f"typical {LATENCY_TYPICAL_S[0] * 1e3:g}-{LATENCY_TYPICAL_S[1] * 1e3:g} ms (hardware.md) "
+                           f"typical {lo * 1e3:g}-{hi * 1e3:g} ms (hardware.md) "
                            "and the dynamics estimate within it: the dynamics one (biased by some ms) is applied")
     elif cands:  # nothing usable: the best-supported one, flagged, if not at the edge
         fin = {k: c for k, c in cands.items() if not c.note and math.isfinite(c.stderr_s)
