@@ -425,7 +425,8 @@ def main() -> None:
                 run_case11(*c, base) if args.generator == "foreign11" else \
                 run_case2(*c[:5], base, *c[5:])
         except subprocess.CalledProcessError as e:  # the generator refused (e.g. a run the vehicle cannot drive)
-            print(f"{c[0]:<{w}} generator failed: {e.stderr.decode(errors='replace').strip().splitlines()[-1:]}")
+            said = (e.stderr or b"").decode(errors="replace").strip() or (e.stdout or b"").decode(errors="replace").strip()
+            print(f"{c[0]:<{w}} generator failed: {said.splitlines()[-1] if said else f'exit status {e.returncode}'}")
             continue
         rows.append(r)
         lat = "n/a" if r["latency_s"] is None else f"{1e3 * r['latency_s']:.0f}"
