@@ -120,7 +120,7 @@ def _fd_jacobian(fun_w, x, r0, lo, hi, d):
         xh = x.copy()
         xh[i] += h
         col = (fun_w(xh) - r0) / h
-        if not np.all(np.isfinite(col)) and x[i] - h >= lo[i]:  # outside the model's domain: step back
+        if not np.isfinite(col).all() and x[i] - h >= lo[i]:  # outside the model's domain: step back
             xh[i] = x[i] - h
             col = (fun_w(xh) - r0) / -h
         J[:, i] = col
@@ -278,10 +278,10 @@ def gauss_newton(
                 for _ in range(6):  # infeasible trial (model undefined there): halve the step
                     x_new = np.clip(x + d * du, lo, hi)
                     r_new = fun_w(x_new)
-                    if np.all(np.isfinite(r_new)):
+                    if np.isfinite(r_new).all():
                         break
                     du *= 0.5
-                cost_new = 0.5 * float(r_new @ r_new) if np.all(np.isfinite(r_new)) else np.inf
+                cost_new = 0.5 * float(r_new @ r_new) if np.isfinite(r_new).all() else np.inf
                 if cost_new <= cost:
                     accepted = True
                     break

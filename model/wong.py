@@ -155,7 +155,7 @@ def _as_samples(load_n, slip) -> tuple[np.ndarray, np.ndarray]:
             raise ValueError(f"load_n and slip must be 1-D arrays of samples, got shape {w.shape}")
         w = np.atleast_1d(w).astype(float, copy=True)
         s = np.atleast_1d(s).astype(float, copy=True)
-    if np.all((w > 0) & (w < np.inf) & (s >= 0) & (s < 1)):  # the common case: one pass, nothing to name
+    if ((w > 0) & (w < np.inf) & (s >= 0) & (s < 1)).all():  # the common case: one pass, nothing to name
         return w, s
     _check(~np.isfinite(w), "load_n", w, "load W must be a finite number (NaN/inf given)")
     _check(~np.isfinite(s), "slip", s, "slip s must be a finite number (NaN/inf given)")
@@ -164,6 +164,15 @@ def _as_samples(load_n, slip) -> tuple[np.ndarray, np.ndarray]:
            "driving-wheel model; filter those samples out")
     _check(s >= 1, "slip", s, "slip s must be < 1")
     return w, s
+
+
+def _shaped(value, shape: tuple) -> np.ndarray:
+    """``value`` as a float array of ``shape``: itself when it already is one (the fitter's case, where
+    ``np.broadcast_to`` would cost more than the arithmetic it feeds), else a broadcast view.  Raises
+    ValueError where numpy cannot broadcast it."""
+    if type(value) is np.ndarray and value.dtype == np.float64 and value.shape == shape:
+        return value
+    return np.broadcast_to(np.asarray(value, dtype=float), shape)
 
 
 def sinkage_eq10(terrain: Terrain, wheel: Wheel, load_n, n=None) -> np.ndarray:
@@ -202,7 +211,7 @@ def _integrals(terrain: Terrain, wheel: Wheel, z, s, n, load_only: bool = False,
     w_out = np.empty(size)
     dp_out = None if load_only else np.empty(size)
     t_out = None if load_only else np.empty(size)
-    n = np.broadcast_to(np.asarray(n, dtype=float), (size,))
+    n = _shaped(n, (size,))
     for lo in range(0, size, _BLOCK):
         sl = slice(lo, lo + _BLOCK)
         t1 = theta1[sl, None]
@@ -284,7 +293,7 @@ def _balance_sinkage(terrain, wheel, w, s, n, z_start, ratio=None, exit_ratio=No
     """
     r = wheel.radius
     size = len(w)
-    n = np.broadcast_to(np.asarray(n, dtype=float), (size,)).copy()
+    n = _shaped(n, (size,)).copy()
     x_top = math.log(r * (1.0 - 1e-9))
     x_hi = np.full(size, x_top)
     too_large = np.zeros(size, dtype=bool)
@@ -498,7 +507,7 @@ def wong_forces(
     if n_fn is None:
         n = np.full(len(w), terrain.n)
     else:
-        n = np.broadcast_to(np.asarray(n_fn(s), dtype=float), w.shape).copy()
+        n = _shaped(n_fn(s), w.shape).copy()
         _check(~np.isfinite(n) | (n <= 0) | (n >= 3), "sinkage_exponent", n,
                "sinkage exponent N must be in (0, 3) (Eqs. 2, 10)")
     n_z0 = n if n_in_z0 else np.full(len(w), terrain.n)
@@ -506,8 +515,8 @@ def wong_forces(
     if sinkage == "balance":
         z_start = z0 if ratio is None else z0 * _small_angle_load_factor(ratio, n_z0) ** (-1.0 / (n_z0 + 0.5))
         z0 = _balance_sinkage(terrain, wheel, w, s, n_z0, z_start, ratio, exit_ratio, tau_scale, shear_power)
-    z = z0 if z_fn is None else np.broadcast_to(np.asarray(z_fn(z0, s), dtype=float), w.shape).copy()
-    if not np.all((z >= 0) & (z < r)):  # NaN fails both: then name the first bad element
+    z = z0 if z_fn is None else _shaped(z_fn(z0, s), w.shape).copy()
+    if not ((z >= 0) & (z < r)).all():  # NaN fails both: then name the first bad element
         _check(~np.isfinite(z), "sinkage_m", z, "sinkage is not finite")
         _check(z < 0, "sinkage_m", z, "sinkage must be >= 0 m")
         _check(z >= r, "sinkage_m", z, f"sinkage must be < wheel radius r = {r} m "
