@@ -10,7 +10,9 @@ term is taken at a first optimum, held fixed, and one Gauss-Newton step moves th
 what it changes), plus one residual
 ``(theta - prior mean) / prior sd`` per parameter with a lab prior (the
 MAP estimate under Gaussian priors; Bishop, *PRML* §3.3).  The solver is
-:func:`wheelsoil.model.solver.gauss_newton`.
+:func:`wheelsoil.model.solver.gauss_newton`, from the lab values (or from ``start``: the diagnosis
+restarts a fit whose objective :func:`lower_at` finds lower at the values of a hypothesis that
+contains it, or that it contains, than at its own optimum: a local optimum of a non-convex problem).
 
 Standard errors (all in :attr:`HypFit.stderr`):
 
@@ -40,6 +42,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -49,7 +52,7 @@ from .hypotheses import Context, Hypothesis
 from .solver import FitResult, gauss_newton
 from .wong import WheelForces
 
-__all__ = ["HypFit", "fit_hypothesis", "cross_validate", "cell_forces", "predict_cells", "inv_psd", "FIT_FTOL"]
+__all__ = ["HypFit", "fit_hypothesis", "lower_at", "meaningful", "cross_validate", "cell_forces", "predict_cells", "inv_psd", "FIT_FTOL"]
 
 FIT_FTOL = 1e-8  #: relative cost change that ends a fit (statistically negligible)
 FIT_MAX_ITER = 500  #: Gauss-Newton iteration limit of a fit (the ten-parameter drifts need ~200-250;
@@ -190,6 +193,15 @@ class _Problem:
         # ``spread``: channel -> (C,) the cells' slip-spread terms, held fixed (:func:`_spread_terms`)
         self.spread = 0.0 if spread is None else np.concatenate([spread[c] for c in self.chans])[self.ok]
 
+    def vector(self, values: Mapping[str, float]) -> np.ndarray:
+        """Name -> value (SI) -> solver vector, clipped into the bounds; the start values for the
+        names ``values`` lacks."""
+        x = self.x0.copy()
+        for i, nme in enumerate(self.names):
+            if nme in values and np.isfinite(values[nme]) and (values[nme] > 0 or not self.log[i]):
+                x[i] = math.log(values[nme]) if self.log[i] else float(values[nme])
+        return np.clip(x, self.lo, self.hi)
+
     def values(self, u) -> dict:
         """Solver vector -> name -> value (SI)."""
         x = np.array(u, dtype=float)
@@ -302,17 +314,25 @@ def inv_psd(A: np.ndarray) -> np.ndarray:
 
 
 def fit_hypothesis(hyp: Hypothesis, ctx: Context, cells: Cells, *, max_iter: int = FIT_MAX_ITER,
-                   eps: float = 1e-6, terrain_uncertainty: bool = True) -> HypFit:
+                   eps: float = 1e-6, terrain_uncertainty: bool = True, start: Mapping[str, float] | None = None,
+                   spread: dict | None = None) -> HypFit:
     """Fit ``hyp`` to ``cells`` (module doc).  Returns :class:`HypFit`.
 
     ``terrain_uncertainty``: add the lab terrain's prior variance to the
     standard errors of a hypothesis that holds the terrain fixed.
+    ``start``: parameter name -> value (SI) to start from instead of the defaults (the lab values);
+    names the hypothesis does not have are ignored, values are clipped into the bounds.
+    ``spread``: channel -> (C,) the cells' slip-spread terms to hold in a first fit (those of a fit
+    elsewhere, ``HypFit.spread``), refreshed at its optimum for a second; None: fitted without them,
+    then one step for them (module doc).
     Raises ValueError when the hypothesis cannot be evaluated at its start.
     """
-    prob = _Problem(hyp, ctx, cells)
+    held = spread is not None
+    prob = _Problem(hyp, ctx, cells, spread)
+    if start:
+        prob.x0 = prob.vector(start)
     k = len(prob.names)
     notes: list[str] = []
-    spread = None
     if k == 0:
         spread = _spread_terms(hyp, ctx, cells, {})
         prob = _Problem(hyp, ctx, cells, spread)
@@ -329,7 +349,15 @@ def fit_hypothesis(hyp: Hypothesis, ctx: Context, cells: Cells, *, max_iter: int
         if not np.all(np.isfinite(r0)):
             raise ValueError(f"{hyp.title}: the model cannot be evaluated at its start values")
         res = prob.solve(max_iter=max_iter, eps=eps)
-        if np.all(np.isfinite(res.x)) and np.all(np.isfinite(res.jac)):
+        if held and np.all(np.isfinite(res.x)):
+            # the held terms are those of another point: once more with the terms of this optimum
+            try:
+                spread = _spread_terms(hyp, ctx, cells, prob.values(res.x))
+                prob = _Problem(hyp, ctx, cells, spread)
+                res = prob.solve(x0=res.x, max_iter=max_iter, eps=eps)
+            except ValueError:
+                pass
+        elif np.all(np.isfinite(res.x)) and np.all(np.isfinite(res.jac)):
             try:
                 spread = _spread_terms(hyp, ctx, cells, prob.values(res.x))
             except ValueError:
@@ -487,6 +515,26 @@ def _lab_terrain_variance(prob: _Problem, u, Jd, ctx: Context) -> np.ndarray:
     Jt = np.column_stack(cols)
     S = -inv_psd(Jd.T @ Jd) @ (Jd.T @ Jt)
     return np.sum(S**2 * np.square(sds)[None, :], axis=1)
+
+
+def lower_at(fit: HypFit, ctx: Context, cells: Cells, start: Mapping[str, float]) -> bool:
+    """True when ``fit``'s penalised objective (data and lab prior, with its slip-spread terms) is lower
+    at ``start`` (its parameters taken from ``start`` where named) than at its optimum by more than
+    :func:`meaningful`: the fit stopped in a local optimum, and a refit from ``start``
+    (:func:`fit_hypothesis`) may find a better one.  False for a fit without parameters or one whose
+    objective cannot be evaluated at ``start``."""
+    if not fit.k or fit.result is None:
+        return False
+    prob = _Problem(fit.hypothesis, ctx, cells, fit.spread)
+    r = prob.fun(prob.vector(start))
+    cost = float(r @ r) if np.all(np.isfinite(r)) else np.inf
+    return fit.chi2_data + fit.chi2_prior - cost > meaningful(fit)
+
+
+def meaningful(fit: HypFit) -> float:
+    """The least fall of ``fit``'s penalised chi-square that is more than numerical noise or an
+    overdispersed model's scatter: one unit, or the reduced chi-square where that is larger."""
+    return max(1.0, fit.chi2_data / max(fit.dof, 1))
 
 
 def cross_validate(fit: HypFit, ctx: Context, cells: Cells, group_kind: str = "") -> HypFit:

@@ -116,3 +116,32 @@ def test_a_fit_and_its_fold_refits_model_the_cells_slip_spread():
     # far closer to the full fit's (spread included) than the spread term itself
     i = int(np.argmax(np.abs(fit.spread["drawbar_pull_n"])))
     assert abs(held[i] - fit.cell_pred["drawbar_pull_n"][i]) < 0.5 * abs(fit.spread["drawbar_pull_n"][i])
+
+
+def test_a_fit_stopped_short_of_its_optimum_is_refitted_from_a_model_that_contains_it():
+    """A terrain re-fit that stopped where its objective is higher than at the values of a fitted
+    hypothesis containing it (Vasil'ev + terrain, whose H is null on these data) is refitted from
+    those values and replaced, with a note; between fits at their optima nothing moves."""
+    from wheelsoil.model import DEFAULT_WHEEL, load_terrain
+    from wheelsoil.model.crossval import FIT_MAX_ITER, cross_validate, fit_hypothesis, meaningful
+    from wheelsoil.model.data import prepare_data, synthetic_data
+    from wheelsoil.model.diagnosis import _escape_local_optima
+    from wheelsoil.model.hypotheses import HYPOTHESES, Context, lab_prior
+
+    clay = load_terrain("clay")
+    truth = clay.replace(phi=clay.phi + 0.05, n=clay.n + 0.05)
+    df = synthetic_data(clay, DEFAULT_WHEEL, kind="timeseries", duration_s=60.0, noise_dp_n=20.0, noise_t_nm=10.0,
+                        terrain_truth=truth, load_n=13000.0, seed=3)
+    data = prepare_data(df)
+    ctx = Context(clay, DEFAULT_WHEEL, prior=lab_prior(clay, DEFAULT_WHEEL))
+    fit = lambda name, **kw: cross_validate(fit_hypothesis(HYPOTHESES[name], ctx, data.cells, **kw), ctx, data.cells)
+    stuck = fit("terrain", max_iter=1)
+    fits = {"terrain": stuck, "vasilev+terrain": fit("vasilev+terrain")}
+    _escape_local_optima(fits, "vasilev+terrain", ctx, data, FIT_MAX_ITER)
+    new = fits["terrain"]
+    assert new is not stuck and new.cv is not None
+    assert (stuck.chi2_data + stuck.chi2_prior) - (new.chi2_data + new.chi2_prior) > meaningful(stuck)
+    assert any("local optimum" in n for n in new.notes)
+    settled = dict(fits)
+    _escape_local_optima(settled, "vasilev+terrain", ctx, data, FIT_MAX_ITER)
+    assert all(settled[k] is fits[k] for k in fits)
