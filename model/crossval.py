@@ -52,7 +52,8 @@ from .hypotheses import Context, Hypothesis
 from .solver import FitResult, gauss_newton
 from .wong import WheelForces
 
-__all__ = ["HypFit", "fit_hypothesis", "lower_at", "meaningful", "cross_validate", "cell_forces", "predict_cells", "inv_psd", "FIT_FTOL"]
+__all__ = ["HypFit", "fit_hypothesis", "lower_at", "meaningful", "cross_validate", "cell_forces", "predict_cells",
+           "inv_psd", "FIT_FTOL"]
 
 FIT_FTOL = 1e-8  #: relative cost change that ends a fit (statistically negligible)
 FIT_MAX_ITER = 500  #: Gauss-Newton iteration limit of a fit (the ten-parameter drifts need ~200-250;
