@@ -1,6 +1,6 @@
-"""The diagnosis on runs of eleven independent generators (``benchmarks/foreign/`` to ``foreign11/``).
+"""The diagnosis on runs of twelve independent generators (``benchmarks/foreign/`` to ``foreign12/``).
 
-    python benchmarks/bench_foreign.py [--generator foreign|foreign2 [--stress|--round2]|foreign3|...|foreign11 [--round2]]
+    python benchmarks/bench_foreign.py [--generator foreign|foreign2 [--stress|--round2]|foreign3|...|foreign11 [--round2]|foreign12]
                                        [--only a1,v15] [--keep DIR]
 
 Each generator was written from the hardware contract, the DBC files and the paper alone, by a
@@ -56,6 +56,9 @@ no list that no earlier generator used (a leaking tyre, a root mat, a shear-rate
 building up on the tyre, a hard pan, a transducer heating up), fitted the same way; it also accepts
 ``unexplained`` in family, which is scored as a miss there as for the others; its ``--round2`` (1431-1460, written
 by the project after round 1 was scored, ``foreign11/make_round2.py``): the same cases on the other soil and wheel.
+``foreign12`` (``round1.json``, seeds 1501-1530, written by its author before any run was generated): a thirteenth,
+written blind by a helper session (``foreign12/README.md``): a 4x4 truck pulling a weight-transfer sled until it
+stalls, its own loess and dune sand, seven causes on no list; fitted the same way.
 Prints one row per case (verdict, latency found against the truth, its method and reliability) and the
 totals, and the wall time.
 """
@@ -85,6 +88,7 @@ GEN8 = Path(__file__).resolve().parent / "foreign8" / "gen.py"
 GEN9 = Path(__file__).resolve().parent / "foreign9" / "gen.py"
 GEN10 = Path(__file__).resolve().parent / "foreign10" / "gen.py"
 GEN11 = Path(__file__).resolve().parent / "foreign11" / "gen.py"
+GEN12 = Path(__file__).resolve().parent / "foreign12" / "gen.py"
 
 #: name, generator case, fronts, seed, latency [s], effect options
 CASES = [
@@ -158,7 +162,7 @@ ROUND2 = [
 #: sizes, every cause on no list at two sizes) by the project after the first was scored and before any of
 #: these was run; ``foreign5/round1.json`` (801-830) by its author before any run was scored, its
 #: ``round2.json`` (831-860) by the project after the first was scored and before any of these was run
-ROUNDS = {(gen.parent.name, k): gen.parent / f"round{k}.json" for gen in (GEN3, GEN4, GEN5, GEN6, GEN7, GEN8, GEN9, GEN10, GEN11)
+ROUNDS = {(gen.parent.name, k): gen.parent / f"round{k}.json" for gen in (GEN3, GEN4, GEN5, GEN6, GEN7, GEN8, GEN9, GEN10, GEN11, GEN12)
           for k in (1, 2)}
 
 
@@ -281,6 +285,12 @@ def run_case10(name: str, case: str, seed: int, params: dict, out: Path) -> dict
     return _run_csv_case(GEN10, name, case, seed, params, out)
 
 
+def run_case12(name: str, case: str, seed: int, params: dict, out: Path) -> dict:
+    """Generate one run of the thirteenth generator (``foreign12``, written blind by a helper session: see its
+    README) and fit the log as its truth file says, as :func:`run_case8` does."""
+    return _run_csv_case(GEN12, name, case, seed, params, out)
+
+
 def run_case11(name: str, case: str, seed: int, params: dict, out: Path) -> dict:
     """Generate one run of the twelfth generator (``foreign11``, written blind by a helper session: see its
     README) and fit the log as its truth file says, as :func:`run_case8` does."""
@@ -364,7 +374,7 @@ def fit_and_score(name: str, truth: dict, out: Path, fronts: str, log: Path | No
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--generator", choices=tuple(f"foreign{k}" for k in ("", 2, 3, 4, 5, 6, 7, 8, 9, 10, 11)),
+    ap.add_argument("--generator", choices=tuple(f"foreign{k}" for k in ("", 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12)),
                     default="foreign",
                     help="which independent generator's cases (default: foreign, 14 cases; foreign2: 36; foreign3: "
                          "its first round, 30 runs on the paper's clay from a towed vehicle, logs in ASC, BLF and "
@@ -373,7 +383,8 @@ def main() -> None:
                          "foreign7: 28 single-wheel rig time series; foreign8: 30 vehicle CAN logs of a tow test; "
                          "foreign9: 30 vehicle CAN logs of field runs against a dynamometer vehicle per round; foreign10: 30 "
                          "CAN logs of a 4x4 tractor's hill climbs per round; foreign11: 30 CAN logs of a twelfth, "
-                         "written blind (foreign11/README.md))")
+                         "written blind (foreign11/README.md); foreign12: 30 CAN logs of a thirteenth, a truck's sled pulls, "
+                         "written blind (foreign12/README.md))")
     ap.add_argument("--stress", action="store_true",
                     help="with --generator foreign2: 24 runs of eight of its cases as short runs (4 cycles), with 3x "
                          "the sensor noise and with 3x the soil variability, instead of its 36 cases")
@@ -390,7 +401,7 @@ def main() -> None:
     ap.add_argument("--only", default="", help="comma list of case names (default: all)")
     ap.add_argument("--keep", type=Path, default=None, help="keep logs, recordings and reports here")
     args = ap.parse_args()
-    if args.stress and args.generator != "foreign2" or args.round2 and args.generator == "foreign":
+    if args.stress and args.generator != "foreign2" or args.round2 and args.generator in ("foreign", "foreign12"):
         ap.error("--stress needs --generator foreign2, --round2 one of foreign2 to foreign11")
     if args.stress and args.round2:
         ap.error("choose one of --stress and --round2")
@@ -404,7 +415,7 @@ def main() -> None:
     elif args.generator in ("foreign3", "foreign4", "foreign5"):
         cases = [(r["name"], r["case"], r["seed"], r["params"], r["format"])
                  for r in round_runs(args.generator, 2 if args.round2 else 1)]
-    elif args.generator in ("foreign6", "foreign7", "foreign8", "foreign9", "foreign10", "foreign11"):
+    elif args.generator in ("foreign6", "foreign7", "foreign8", "foreign9", "foreign10", "foreign11", "foreign12"):
         cases = [(r["name"], r["case"], r["seed"], r["params"]) for r in round_runs(args.generator, 2 if args.round2 else 1)]
     else:
         cases = STRESS if args.stress else ROUND2 if args.round2 else CASES2
@@ -423,6 +434,7 @@ def main() -> None:
                 run_case9(*c, base) if args.generator == "foreign9" else \
                 run_case10(*c, base) if args.generator == "foreign10" else \
                 run_case11(*c, base) if args.generator == "foreign11" else \
+                run_case12(*c, base) if args.generator == "foreign12" else \
                 run_case2(*c[:5], base, *c[5:])
         except subprocess.CalledProcessError as e:  # the generator refused (e.g. a run the vehicle cannot drive)
             said = (e.stderr or b"").decode(errors="replace").strip() or (e.stdout or b"").decode(errors="replace").strip()
