@@ -89,6 +89,8 @@ GEN9 = Path(__file__).resolve().parent / "foreign9" / "gen.py"
 GEN10 = Path(__file__).resolve().parent / "foreign10" / "gen.py"
 GEN11 = Path(__file__).resolve().parent / "foreign11" / "gen.py"
 GEN12 = Path(__file__).resolve().parent / "foreign12" / "gen.py"
+#: the generators whose truth file carries its own ``fit_args`` (:func:`_run_csv_case`)
+CSV_GENERATORS = {gen.parent.name: gen for gen in (GEN6, GEN7, GEN8, GEN9, GEN10, GEN11, GEN12)}
 
 #: name, generator case, fronts, seed, latency [s], effect options
 CASES = [
@@ -258,12 +260,6 @@ def run_case6(name: str, case: str, seed: int, params: dict, out: Path) -> dict:
     return _run_csv_case(GEN6, name, case, seed, params, out)
 
 
-def run_case7(name: str, case: str, seed: int, params: dict, out: Path) -> dict:
-    """Generate one run of the eighth generator (``foreign7``: single-wheel soil-bin rig *time series*, logged
-    through slip sweeps and steps pass after pass, with measured sinkage) and fit the CSV as its truth file
-    says, as :func:`run_case6` does."""
-    return _run_csv_case(GEN7, name, case, seed, params, out)
-
 
 def run_case8(name: str, case: str, seed: int, params: dict, out: Path) -> dict:
     """Generate one run of the ninth generator (``foreign8``: vehicle CAN logs of a tow test against a brake
@@ -279,22 +275,7 @@ def run_case9(name: str, case: str, seed: int, params: dict, out: Path) -> dict:
     return _run_csv_case(GEN9, name, case, seed, params, out)
 
 
-def run_case10(name: str, case: str, seed: int, params: dict, out: Path) -> dict:
-    """Generate one run of the eleventh generator (``foreign10``: a 4x4 tractor's hill climbs and descents in
-    passes, its own soils and 0.585 m wheel) and fit the log as its truth file says, as :func:`run_case8` does."""
-    return _run_csv_case(GEN10, name, case, seed, params, out)
 
-
-def run_case12(name: str, case: str, seed: int, params: dict, out: Path) -> dict:
-    """Generate one run of the thirteenth generator (``foreign12``, written blind by a helper session: see its
-    README) and fit the log as its truth file says, as :func:`run_case8` does."""
-    return _run_csv_case(GEN12, name, case, seed, params, out)
-
-
-def run_case11(name: str, case: str, seed: int, params: dict, out: Path) -> dict:
-    """Generate one run of the twelfth generator (``foreign11``, written blind by a helper session: see its
-    README) and fit the log as its truth file says, as :func:`run_case8` does."""
-    return _run_csv_case(GEN11, name, case, seed, params, out)
 
 
 def _run_csv_case(gen: Path, name: str, case: str, seed: int, params: dict, out: Path) -> dict:
@@ -415,7 +396,7 @@ def main() -> None:
     elif args.generator in ("foreign3", "foreign4", "foreign5"):
         cases = [(r["name"], r["case"], r["seed"], r["params"], r["format"])
                  for r in round_runs(args.generator, 2 if args.round2 else 1)]
-    elif args.generator in ("foreign6", "foreign7", "foreign8", "foreign9", "foreign10", "foreign11", "foreign12"):
+    elif args.generator in CSV_GENERATORS:
         cases = [(r["name"], r["case"], r["seed"], r["params"]) for r in round_runs(args.generator, 2 if args.round2 else 1)]
     else:
         cases = STRESS if args.stress else ROUND2 if args.round2 else CASES2
@@ -428,13 +409,7 @@ def main() -> None:
             r = run_case(*c, base) if args.generator == "foreign" else run_case3(*c, base) if \
                 args.generator == "foreign3" else run_case4(*c, base) if args.generator == "foreign4" else \
                 run_case5(*c, base) if args.generator == "foreign5" else \
-                run_case6(*c, base) if args.generator == "foreign6" else \
-                run_case7(*c, base) if args.generator == "foreign7" else \
-                run_case8(*c, base) if args.generator == "foreign8" else \
-                run_case9(*c, base) if args.generator == "foreign9" else \
-                run_case10(*c, base) if args.generator == "foreign10" else \
-                run_case11(*c, base) if args.generator == "foreign11" else \
-                run_case12(*c, base) if args.generator == "foreign12" else \
+                _run_csv_case(CSV_GENERATORS[args.generator], *c, base) if args.generator in CSV_GENERATORS else \
                 run_case2(*c[:5], base, *c[5:])
         except subprocess.CalledProcessError as e:  # the generator refused (e.g. a run the vehicle cannot drive)
             said = (e.stderr or b"").decode(errors="replace").strip() or (e.stdout or b"").decode(errors="replace").strip()

@@ -522,8 +522,10 @@ def lower_at(fit: HypFit, ctx: Context, cells: Cells, start: Mapping[str, float]
     """True when ``fit``'s penalised objective (data and lab prior, with its slip-spread terms) is lower
     at ``start`` (its parameters taken from ``start`` where named) than at its optimum by more than
     :func:`meaningful`: the fit stopped in a local optimum, and a refit from ``start``
-    (:func:`fit_hypothesis`) may find a better one.  False for a fit without parameters or one whose
-    objective cannot be evaluated at ``start``."""
+    (:func:`fit_hypothesis`) may find a better one.  ``start``: name -> value (SI), scalars.  False for
+    a fit without parameters or one whose objective cannot be evaluated at ``start`` (outside the model's
+    domain); raises nothing of its own.  Source: a restart test for non-convex least squares (Nocedal &
+    Wright 2006, ch. 10)."""
     if not fit.k or fit.result is None:
         return False
     prob = _Problem(fit.hypothesis, ctx, cells, fit.spread)
@@ -534,7 +536,8 @@ def lower_at(fit: HypFit, ctx: Context, cells: Cells, start: Mapping[str, float]
 
 def meaningful(fit: HypFit) -> float:
     """The least fall of ``fit``'s penalised chi-square that is more than numerical noise or an
-    overdispersed model's scatter: one unit, or the reduced chi-square where that is larger."""
+    overdispersed model's scatter: one unit, or the reduced chi-square where that is larger (a scalar,
+    chi-square units).  Source: quasi-likelihood overdispersion, McCullagh & Nelder 1989 §9.2."""
     return max(1.0, fit.chi2_data / max(fit.dof, 1))
 
 
