@@ -142,6 +142,7 @@ def gauss_newton(
     ftol: float = 1e-12,
     jac0: np.ndarray | None = None,
     covariance: bool = True,
+    halvings: int = 5,
 ) -> FitResult:
     """Bounded Gauss–Newton with Levenberg–Marquardt damping.
 
@@ -150,8 +151,8 @@ def gauss_newton(
     ``u = x / x_scale`` (``lam -> 0`` is the paper's Gauss–Newton step, §1.2),
     projects ``x + dx`` onto the bounds, and freezes parameters that sit on a
     bound with the gradient pointing outwards (active set).  A trial where
-    ``fun`` is not finite (outside the model's domain) is halved, up to 6
-    times.  A step that does not lower the cost is rejected and ``lam`` raised tenfold; an accepted one lowers
+    ``fun`` is not finite (outside the model's domain) is halved, up to
+    ``halvings`` times; a step still outside it counts as rejected.  A step that does not lower the cost is rejected and ``lam`` raised tenfold; an accepted one lowers
     it tenfold.  Stops when the relative step ``|du| < eps (|u| + eps)``, or the
     relative cost change is below ``ftol``, or after ``max_iter`` iterations.
 
@@ -179,6 +180,12 @@ def gauss_newton(
         refit): the Jacobian is not evaluated at the last point, and ``jac``,
         ``covariance``, ``stderr``, ``correlation`` and ``condition_number``
         are NaN.
+    halvings : how often a trial outside the model's domain is halved along its
+        direction before it counts as rejected (``lam`` raised tenfold, which
+        shortens the step and turns it toward the gradient, as a trust region
+        shrinks on a non-finite residual in ``scipy.optimize.least_squares``).
+        Halving finds the way along a domain edge when the start is far from
+        the optimum; 0 when the start is at an optimum already (a fold refit).
 
     Returns
     -------
@@ -275,7 +282,7 @@ def gauss_newton(
                     continue
                 du = np.zeros(p)
                 du[free] = du_f
-                for _ in range(6):  # infeasible trial (model undefined there): halve the step
+                for _ in range(halvings + 1):  # infeasible trial (model undefined there): halve the step
                     x_new = np.clip(x + d * du, lo, hi)
                     r_new = fun_w(x_new)
                     if np.isfinite(r_new).all():

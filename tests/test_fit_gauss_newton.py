@@ -77,6 +77,27 @@ def test_warm_refit_with_the_start_jacobian_and_no_covariance_finds_the_same_opt
         gauss_newton(fold, full.x, jac0=full.jac)
 
 
+def test_a_refit_at_the_domain_edge_without_halvings_stays_there_with_fewer_calls():
+    """A model undefined beyond x2 = 0.3 (as Wong's beyond sinkage r) whose data want x2 = 0.5: the
+    fit stops at the edge; a fold refit from there with ``halvings=0`` (damping raised at once on a
+    trial outside the domain) ends where the halving one does, with fewer calls."""
+    y = _data(3)
+
+    def model(x, rows=slice(None)):
+        r = (_decay(x) - y)[rows]
+        return np.full(r.size, np.inf) if x[2] > 0.3 else r
+
+    full = gauss_newton(model, [1.0, 1.0, 0.0])
+    assert full.success and 0.29 < full.x[2] <= 0.3
+    keep = np.arange(T.size) % 5 != 0
+    refits = [gauss_newton(lambda x: model(x, keep), full.x, eps=1e-4, max_iter=4, jac0=full.jac[keep],
+                           covariance=False, halvings=h) for h in (5, 0)]
+    assert all(np.isfinite(r.cost) for r in refits)
+    np.testing.assert_allclose(refits[1].x, refits[0].x, rtol=1e-4, atol=1e-6)
+    assert refits[1].cost == pytest.approx(refits[0].cost, rel=1e-6)
+    assert refits[1].nfev < refits[0].nfev
+
+
 def test_recovers_truth_within_two_standard_errors_in_90_percent_of_seeds():
     truth = np.array([3.0, 0.7, 0.5])
     hits, total = 0, 0
