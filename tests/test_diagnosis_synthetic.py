@@ -970,3 +970,28 @@ def test_a_nested_refit_with_a_soil_in_conflict_with_the_lab_holds_back_only_a_c
     assert dg._prior_conflict(refit) == (chi2_refit > q) and dg._prior_conflict(cause) == (chi2_cause > q)
     assert dg._not_better_than_nested(None, {"terrain": refit}, cause, ["drawbar_pull_n"]) == (
         ["terrain"] if held_back else [])
+
+
+def test_a_cause_whose_lab_soil_form_leaves_structure_is_named_only_on_a_soil_within_the_lab_uncertainty():
+    """The route of ``_on_soil_within_lab`` (rule step 5): the most probable hypothesis, Lyasko with the soil
+    re-fitted, held back only by the lab-soil Lyasko it does not beat on new data, is named in Lyasko's place;
+    not when that lab-soil form is not supported, when nothing held it back, when the most probable
+    hypothesis is of another effect, or when it leaves structure itself."""
+    from wheelsoil.model.diagnosis import _on_soil_within_lab
+    from wheelsoil.model.fit import prepare_data
+
+    field = SAND.with_values(n=SAND.n + 0.05, phi=SAND.phi + math.radians(1.0))
+    df = synthetic_data(SAND, DEFAULT_WHEEL, "lyasko", {"m1": 0.5, "m2": 0.05}, duration_s=30.0, load_n=9000.0,
+                        terrain_truth=field, seed=0)
+    d = diagnose(prepare_data(df, slip_min=0.1), SAND, DEFAULT_WHEEL)
+    probs = dict(d.probabilities)
+    top = max(probs, key=probs.get)
+    assert top == "lyasko+terrain" and d.effect == "slip_sinkage"
+    supported = [*d.supported, "lyasko"]
+    held = {top: ["lyasko"]}
+    assert _on_soil_within_lab(d.data, d.fits, "lyasko", supported, held, probs) == top
+    assert _on_soil_within_lab(d.data, d.fits, "lyasko", [k for k in supported if k != "lyasko"], held, probs) is None
+    assert _on_soil_within_lab(d.data, d.fits, "lyasko", supported, {}, probs) is None
+    assert _on_soil_within_lab(d.data, d.fits, "lyasko", supported, held, {**probs, "terrain": 2.0}) is None
+    wong_like = d.fits[top].__class__(**{**vars(d.fits[top]), "cell_pred": d.fits["wong"].cell_pred})
+    assert _on_soil_within_lab(d.data, {**d.fits, top: wong_like}, "lyasko", supported, held, probs) is None
