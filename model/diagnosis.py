@@ -121,7 +121,8 @@ decides with this rule (constants below; none was tuned on a benchmark):
    significant structure (step 1 on its own residuals) -> ``unexplained``
    with what was tried, unless the most probable hypothesis of all is the same cause with the soil
    re-fitted within the lab's uncertainty, supported but for not beating the candidate's lab-soil forms
-   on new data, and leaves no such structure: then it is named, at "low" (:func:`_on_soil_within_lab`).
+   on new data, and leaves no such structure: it is then the candidate, holds against the rivals of other
+   effects itself and passes the checks below, and a cause it names is "low" (:func:`_on_soil_within_lab`).
    A slip sinkage whose measured sinkage does not grow with slip
    (one-sided p >= ``ALPHA``) and grows less than the model says (one-sided t-test at ``ALPHA`` of the
    measured cells' slope at a given load against the model's, :func:`_sinkage_contradicts`)
@@ -2082,8 +2083,8 @@ def _not_better_than_nested(data, fits, f: HypFit, target) -> list:
 
 
 def _on_soil_within_lab(data: FitData, fits: dict, best: str, supported, held_back: dict, probs: dict) -> str | None:
-    """The hypothesis named instead of the candidate ``best`` when ``best`` leaves significant structure of
-    relevant size (module doc, step 5), or None: the most probable hypothesis of all, of ``best``'s effect,
+    """The candidate in place of ``best`` when ``best`` leaves significant structure of relevant size (module
+    doc, step 5; it then holds against the rivals of other effects itself), or None: the most probable hypothesis of all, of ``best``'s effect,
     a cause with the terrain re-fitted against the lab priors (``terrain_block``) that is supported but for
     the nested hypotheses it does not beat out of sample (``held_back``: it lowers the target error against
     Wong's and worsens no channel), each of them supported and of the same effect (the cause on the lab

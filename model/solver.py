@@ -152,8 +152,9 @@ def gauss_newton(
     projects ``x + dx`` onto the bounds, and freezes parameters that sit on a
     bound with the gradient pointing outwards (active set).  A trial where
     ``fun`` is not finite (outside the model's domain) is halved, up to
-    ``halvings`` times; a step still outside it counts as rejected.  A step that does not lower the cost is rejected and ``lam`` raised tenfold; an accepted one lowers
-    it tenfold.  Stops when the relative step ``|du| < eps (|u| + eps)``, or the
+    ``halvings`` times; a step still outside it counts as rejected.  A step
+    that does not lower the cost is rejected and ``lam`` raised tenfold; an
+    accepted one lowers it tenfold.  Stops when the relative step ``|du| < eps (|u| + eps)``, or the
     relative cost change is below ``ftol``, or after ``max_iter`` iterations.
 
     Parameters
