@@ -2084,8 +2084,9 @@ def _not_better_than_nested(data, fits, f: HypFit, target) -> list:
 
 def _on_soil_within_lab(data: FitData, fits: dict, best: str, supported, held_back: dict, probs: dict) -> str | None:
     """The candidate in place of ``best`` when ``best`` leaves significant structure of relevant size (module
-    doc, step 5; it then holds against the rivals of other effects itself), or None: the most probable hypothesis of all, of ``best``'s effect,
-    a cause with the terrain re-fitted against the lab priors (``terrain_block``) that is supported but for
+    doc, step 5; it then holds against the rivals of other effects itself), or None: the most probable
+    hypothesis of all, of ``best``'s effect, a cause with the terrain re-fitted against the lab priors
+    (``terrain_block``) that is supported but for
     the nested hypotheses it does not beat out of sample (``held_back``: it lowers the target error against
     Wong's and worsens no channel), each of them supported and of the same effect (the cause on the lab
     soil), with its soil within the lab's stated uncertainty (no :func:`_prior_conflict`) and no
