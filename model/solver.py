@@ -52,7 +52,8 @@ class FitResult:
     iterations, nfev : Gauss–Newton iterations and function evaluations.
     success, status, message : convergence flag, code and text.  Status:
         1 relative step < eps, 2 relative cost change < ftol, 3 gradient zero,
-        0 max_iter reached, -1 non-finite residuals, -2 damping exhausted.
+        0 max_iter reached, -1 non-finite residuals, -2 damping exhausted,
+        -3 a Jacobian column not finite (its entries are returned as 0).
     n_obs, dof : number of residuals and ``n_obs - p``.
     condition_number : of the scaled Jacobian (large -> poorly identified).
     at_bound : names of parameters that ended on a bound.
@@ -110,21 +111,32 @@ class FitResult:
 def _fd_jacobian(fun_w, x, r0, lo, hi, d):
     """Forward-difference Jacobian (m, p) of ``fun_w`` at ``x``; the step is
     ``sqrt(eps_mach) * max(|x_i|, d_i)``, taken backwards next to an upper bound
-    or where the forward point is outside the model's domain."""
+    or where the forward point is outside the model's domain, and shortened (up to
+    three times, by 16 each) where both points are (a model whose domain edge is
+    ragged at this scale, e.g. a sinkage root that fails near the wheel's radius).
+    A column still not finite stays so (the caller stops: :func:`gauss_newton`)."""
     p = len(x)
     J = np.empty((len(r0), p))
     for i in range(p):
         h = math.sqrt(_EPS_MACH) * max(abs(x[i]), d[i])
         if x[i] + h > hi[i]:
             h = -h
-        xh = x.copy()
-        xh[i] += h
-        col = (fun_w(xh) - r0) / h
-        if not np.isfinite(col).all() and x[i] - h >= lo[i]:  # outside the model's domain: step back
-            xh[i] = x[i] - h
-            col = (fun_w(xh) - r0) / -h
+        for _ in range(4):  # outside the model's domain both ways at this step: a shorter one
+            col = _fd_column(fun_w, x, r0, i, h)
+            if not np.isfinite(col).all() and lo[i] <= x[i] - h <= hi[i]:  # step back
+                col = _fd_column(fun_w, x, r0, i, -h)
+            if np.isfinite(col).all():
+                break
+            h /= 16.0
         J[:, i] = col
     return J
+
+
+def _fd_column(fun_w, x, r0, i, h):
+    """One forward-difference column: ``(fun_w(x + h e_i) - r0) / h``."""
+    xh = x.copy()
+    xh[i] += h
+    return (fun_w(xh) - r0) / h
 
 
 def gauss_newton(
@@ -260,6 +272,11 @@ def gauss_newton(
         else:
             J = jac_w(x, r)
         for it in range(1, max_iter + 1):
+            if not np.all(np.isfinite(J)):
+                bad = [names[i] for i in np.flatnonzero(~np.isfinite(J).all(axis=0))]
+                status, message = -3, ("the Jacobian is not finite in " + ", ".join(bad)
+                                       + ": the model is undefined on both sides of the point reached")
+                break
             Js = J * d
             g = Js.T @ r
             at_lo = (x <= lo) & (g > 0)
@@ -312,8 +329,11 @@ def gauss_newton(
                 J = jac_w(x, r)  # at the new point: the next step's, or the covariance's
             if status:
                 break
-    if p == 0 or not np.all(np.isfinite(J)):
-        J = np.nan_to_num(J)
+    if p and status >= 0 and not np.all(np.isfinite(J)):  # the optimum's own Jacobian (for the covariance)
+        bad = [names[i] for i in np.flatnonzero(~np.isfinite(J).all(axis=0))]
+        status, message = -3, ("the Jacobian is not finite in " + ", ".join(bad)
+                               + ": the model is undefined on both sides of the point reached")
+    J = np.nan_to_num(J, nan=0.0, posinf=0.0, neginf=0.0)  # a column not finite carries no information
     cost = 0.5 * float(r @ r) if np.all(np.isfinite(r)) else float("nan")
     dof = m - p
     if covariance:

@@ -1,5 +1,7 @@
 """The generic Gauss–Newton / LM solver agrees with scipy and has honest errors."""
 
+import warnings
+
 import numpy as np
 import pytest
 from scipy.optimize import least_squares
@@ -148,3 +150,35 @@ def test_report_text_names_parameters_and_correlations():
     r = gauss_newton(lambda x: _decay(x) - y, [1.0, 1.0, 0.0], names=["a", "k", "c"])
     text = r.report()
     assert "converged" in text and "k =" in text and "C(k, c)" in text
+
+
+def test_a_ragged_domain_edge_at_the_bound_gets_a_shorter_difference_step():
+    """The data want x2 below its lower bound 0.2, and the model is undefined in a thin band just
+    above 0.2 (as Wong's sinkage root fails in patches near the wheel's radius): the forward step
+    from the bound lands in the band and the backward one is out of bounds, so a shorter step
+    gives the Jacobian column; the fit ends at the bound with finite standard errors, quietly."""
+    y = _data(3)
+    lo, hi = [0.0, 0.0, 0.2], [10.0, 10.0, 1.0]
+
+    def model(x):
+        r = _decay([x[0], x[1], x[2] + 0.3]) - y  # optimum at x2 = -0.3, outside the bounds
+        return np.full(r.size, np.inf) if 0.2 + 1e-10 < x[2] < 0.2 + 1e-8 else r
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)
+        fit = gauss_newton(model, [1.0, 1.0, 0.5], bounds=(lo, hi))
+    assert fit.x[2] == 0.2 and fit.success, fit.message
+    assert np.all(np.isfinite(fit.jac)) and np.all(np.isfinite(list(fit.stderr.values())))
+
+
+def test_a_jacobian_column_undefined_both_ways_stops_the_fit_and_names_the_parameter():
+    """A model defined on the line x1 = 1 alone: no difference step in x1 is finite, so the fit stops
+    with status -3 naming x1, the column zeroed (no information), and no overflow downstream."""
+    def model(x):
+        return np.array([x[0] - 2.0, x[0] + 1.0, 0.5]) if x[1] == 1.0 else np.full(3, np.nan)
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)
+        fit = gauss_newton(model, [0.0, 1.0], names=["a", "b"])
+    assert not fit.success and fit.status == -3 and "not finite in b" in fit.message
+    assert np.all(fit.jac[:, 1] == 0.0)
