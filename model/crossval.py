@@ -234,10 +234,10 @@ class _Problem:
             r = np.concatenate([r, (np.asarray(u, float)[self.prior_idx] - self.prior_mu) / self.prior_sd])
         return r
 
-    def solve(self, x0=None, max_iter=60, eps=1e-6, jac0=None, covariance=True, halvings=5):
+    def solve(self, x0=None, max_iter=60, eps=1e-6, **kw):
+        """:func:`~.solver.gauss_newton` on this problem (``kw``: its ``jac0``, ``covariance``, ``halvings``)."""
         return gauss_newton(self.fun, self.x0 if x0 is None else x0, bounds=(self.lo, self.hi), x_scale=self.sc,
-                            names=self.names, eps=eps, max_iter=max_iter, ftol=FIT_FTOL, absolute_sigma=True,
-                            jac0=jac0, covariance=covariance, halvings=halvings)
+                            names=self.names, eps=eps, max_iter=max_iter, ftol=FIT_FTOL, absolute_sigma=True, **kw)
 
     def data_rows(self, keep: np.ndarray) -> np.ndarray:
         """Boolean mask over this problem's data rows: those of the cells ``keep`` (n_cells,),
