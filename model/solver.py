@@ -132,6 +132,14 @@ def _fd_jacobian(fun_w, x, r0, lo, hi, d):
     return J
 
 
+def _not_finite(J, names) -> str:
+    """Status -3's message naming the parameters whose Jacobian column (of ``J`` (m, p)) is not
+    finite, or "" when every column is."""
+    bad = [names[i] for i in np.flatnonzero(~np.isfinite(J).all(axis=0))]
+    return ("the Jacobian is not finite in " + ", ".join(bad) + ": the model is undefined on both sides of the "
+            "point reached") if bad else ""
+
+
 def _fd_column(fun_w, x, r0, i, h):
     """One forward-difference column: ``(fun_w(x + h e_i) - r0) / h``."""
     xh = x.copy()
@@ -272,10 +280,8 @@ def gauss_newton(
         else:
             J = jac_w(x, r)
         for it in range(1, max_iter + 1):
-            if not np.all(np.isfinite(J)):
-                bad = [names[i] for i in np.flatnonzero(~np.isfinite(J).all(axis=0))]
-                status, message = -3, ("the Jacobian is not finite in " + ", ".join(bad)
-                                       + ": the model is undefined on both sides of the point reached")
+            if bad := _not_finite(J, names):
+                status, message = -3, bad
                 break
             Js = J * d
             g = Js.T @ r
@@ -329,10 +335,8 @@ def gauss_newton(
                 J = jac_w(x, r)  # at the new point: the next step's, or the covariance's
             if status:
                 break
-    if p and status >= 0 and not np.all(np.isfinite(J)):  # the optimum's own Jacobian (for the covariance)
-        bad = [names[i] for i in np.flatnonzero(~np.isfinite(J).all(axis=0))]
-        status, message = -3, ("the Jacobian is not finite in " + ", ".join(bad)
-                               + ": the model is undefined on both sides of the point reached")
+    if p and status >= 0 and (bad := _not_finite(J, names)):  # the optimum's own Jacobian (for the covariance)
+        status, message = -3, bad
     J = np.nan_to_num(J, nan=0.0, posinf=0.0, neginf=0.0)  # a column not finite carries no information
     cost = 0.5 * float(r @ r) if np.all(np.isfinite(r)) else float("nan")
     dof = m - p

@@ -172,8 +172,8 @@ def test_a_ragged_domain_edge_at_the_bound_gets_a_shorter_difference_step():
 
 
 def test_a_jacobian_column_undefined_both_ways_stops_the_fit_and_names_the_parameter():
-    """A model defined on the line x1 = 1 alone: no difference step in x1 is finite, so the fit stops
-    with status -3 naming x1, the column zeroed (no information), and no overflow downstream."""
+    """A model defined on the line b = 1 alone: no difference step in b is finite, so the fit stops
+    with status -3 naming b, the column zeroed (no information), and no overflow downstream."""
     def model(x):
         return np.array([x[0] - 2.0, x[0] + 1.0, 0.5]) if x[1] == 1.0 else np.full(3, np.nan)
 
