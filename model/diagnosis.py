@@ -605,36 +605,41 @@ def _rms_upper(F: float, df1: int, df2: int, s2: float, U: int, level: float = 0
     return float(math.sqrt(lam * s2 / U))
 
 
-def _step_test(s_u: np.ndarray, e_u: np.ndarray) -> tuple[float, np.ndarray, tuple]:
+def _step_test(s_u: np.ndarray, e_u: np.ndarray, level: bool = False,
+               df_used: int = 0) -> tuple[float, np.ndarray, tuple]:
     """Change-point F-test of unit means ``e_u`` (U,) ordered by ``s_u`` (U,): two levels (before
-    and after a split between neighbouring units, at least 2 units a side) against zero, the best
-    split, its p-value Bonferroni-corrected over the U - 3 splits (conservative for a maximum of
-    correlated statistics).  Another patch of ground from some point on is a step, which a
-    low-order polynomial and fixed bins smear into their noise reference.
+    and after a split between neighbouring units, at least 2 units a side) against zero (any
+    structure: a step or a level), or with ``level`` against one common level (a change: the
+    level alone is no step), the best split, its p-value Bonferroni-corrected over the U - 3
+    splits (conservative for a maximum of correlated statistics); ``df_used`` degrees of freedom
+    the caller spent on ``e_u`` before (a covariate regressed out).  Another patch of ground from
+    some point on is a step, which a low-order polynomial and fixed bins smear into their noise
+    reference.
     Returns ``(p, fitted (U,), (s_before, s_after))``: the two coordinates the best split
     lies between (p NaN, bounds NaN for fewer than 5 units).
     Source: change-point detection by maximal F over splits (Hawkins 1977, JASA 72:180;
     Bonferroni bound as in Worsley 1979, JASA 74:365)."""
     U = e_u.size
-    if U < 5:
+    if U < 5 + df_used:
         return float("nan"), np.zeros_like(e_u), (float("nan"), float("nan"))
     order = np.argsort(s_u, kind="stable")
     e = e_u[order]
-    rss0 = float(np.sum(e**2))
+    rss0 = float(np.sum((e - e.mean()) ** 2) if level else np.sum(e**2))
+    df1 = 1 if level else 2
     best_f, best_k = -1.0, None
     for k in range(2, U - 1):
         a, b = e[:k], e[k:]
         rss1 = float(np.sum((a - a.mean()) ** 2) + np.sum((b - b.mean()) ** 2))
-        if rss1 <= 0:
-            best_f, best_k = float("inf"), k
+        if rss1 <= 0:  # an exact split: infinitely significant, unless there is nothing to split
+            best_f, best_k = (float("inf") if rss0 > 0 else 0.0), k
             break
-        f = ((rss0 - rss1) / 2.0) / (rss1 / (U - 2))
+        f = ((rss0 - rss1) / df1) / (rss1 / (U - 2 - df_used))
         if f > best_f:
             best_f, best_k = f, k
     fitted = np.empty(U)
     fitted[order[:best_k]] = e[:best_k].mean()
     fitted[order[best_k:]] = e[best_k:].mean()
-    p = 0.0 if not np.isfinite(best_f) else float(stats.f.sf(best_f, 2, U - 2))
+    p = 0.0 if not np.isfinite(best_f) else float(stats.f.sf(best_f, df1, U - 2 - df_used))
     s = s_u[order]
     return min(1.0, (U - 3) * p), fitted, (float(s[best_k - 1]), float(s[best_k]))
 
@@ -1952,9 +1957,13 @@ def _diagnose_auto(data: FitData, terrain, wheel, **kw) -> "Diagnosis":
 
 def _change_point(data: FitData, pred: dict):
     """The change point along the run in the residuals ``pred`` leaves (Wong's): the channel whose
-    cycle means show the most significant step (:func:`_step_test`, significant at ``ALPHA``
-    over the channels), the split refined over the cells between the two cycles around it
-    (least squares of two levels on the cell residuals of every channel, in noise units).
+    cycle means show the most significant change of level (:func:`_step_test` against one level,
+    significant at ``ALPHA`` over the channels; a level error alone is a mismatch, not a change),
+    the split refined over the cells between the two cycles around it (least squares of two levels
+    on the cell residuals of every channel, in noise units).  Where the cycles' loads differ (a rig
+    stepping its load pass by pass) the cycle means' linear dependence on the cycle's mean load is
+    taken out first: a soil value off everywhere errs by more under more load, which is no change
+    of ground along the run.
     Returns ``(x_step, n_splits)`` (normalised drift coordinate, the number of candidate
     splits), or None (a table, fewer than 5 cycles, or no significant step)."""
     cells = data.cells
@@ -1965,6 +1974,8 @@ def _change_point(data: FitData, pred: dict):
         return None
     cnt = np.bincount(inv).astype(float)
     xg = np.bincount(inv, weights=cells.x) / cnt
+    lg = np.bincount(inv, weights=cells.load_n) / cnt
+    loads_differ = np.std(lg) > 0.01 * abs(np.mean(lg))
     best = None
     E = []
     for c, y in cells.channels.items():
@@ -1973,7 +1984,9 @@ def _change_point(data: FitData, pred: dict):
             continue
         E.append(e)
         gm = np.bincount(inv, weights=e) / cnt
-        p, _, bounds = _step_test(xg, gm)
+        if loads_differ:
+            gm = gm - (lg - lg.mean()) * (np.dot(lg - lg.mean(), gm) / np.dot(lg - lg.mean(), lg - lg.mean()))
+        p, _, bounds = _step_test(xg, gm, level=True, df_used=int(loads_differ))
         if np.isfinite(p) and (best is None or p < best[0]):
             best = (p, bounds)
     if best is None or best[0] >= ALPHA / max(len(E), 1):

@@ -352,6 +352,37 @@ def test_a_step_along_the_run_is_found_and_noise_alone_is_not():
     assert np.mean(np.array(null) < ALPHA) <= 1.5 * ALPHA
 
 
+def test_a_level_error_alone_puts_no_change_point_along_the_run():
+    """The step form's change point needs a change, not an error: cycle means all off by one level
+    (a constant mismatch) give none, nor do errors growing with the loads a rig steps pass by pass;
+    the same level stepping half-way gives one within the two cycles around the step (refined over
+    their cells), and on independent noise about a level the test keeps its size."""
+    from types import SimpleNamespace
+
+    from wheelsoil.model.diagnosis import ALPHA, _change_point, _step_test
+
+    cycles, per = 12, 8
+    group = np.repeat(np.arange(cycles), per)
+    x = (group + np.tile(np.linspace(0.0, 0.9, per), cycles)) / cycles - 0.5
+    rng = np.random.default_rng(5)
+
+    def data_with(level, load_n=np.full(cycles, 500.0)):  # one channel, unit noise, Wong predicting zero
+        y = level[group] + rng.standard_normal(group.size)
+        cells = SimpleNamespace(x=x, group=group, load_n=load_n[group], channels={"drawbar_pull_n": y},
+                                sigma={"drawbar_pull_n": 1.0})
+        return SimpleNamespace(kind="time_series", cells=cells)
+
+    pred = {"drawbar_pull_n": np.zeros(group.size)}
+    assert _change_point(data_with(np.full(cycles, 4.0)), pred) is None
+    passes = np.repeat([350.0, 500.0, 700.0], cycles // 3)  # a rig's loads, stepped pass by pass
+    assert _change_point(data_with(passes / 100.0, passes), pred) is None
+    stepped = np.where(np.arange(cycles) < 7, 4.0, 1.0)
+    x_step, n_splits = _change_point(data_with(stepped), pred)
+    assert x[group == 6].min() < x_step < x[group == 7].max() and n_splits == cycles - 3
+    u = np.linspace(-0.5, 0.5, cycles)
+    null = [_step_test(u, 3.0 + rng.standard_normal(cycles), level=True)[0] for _ in range(2000)]
+    assert np.mean(np.array(null) < ALPHA) <= 1.5 * ALPHA
+
 def test_summary_counts_cycles_and_the_folds_they_were_merged_into(monkeypatch):
     """More accelerate cycles than MAX_FOLDS are merged into MAX_FOLDS folds; the summary says both."""
     import wheelsoil.model.crossval as cv
