@@ -68,8 +68,10 @@ decides with this rule (constants below; none was tuned on a benchmark):
    (what the extra part adds must pay off on data it was not fitted to, in the target
    channels, or where the smaller model leaves an error; a smaller model whose terrain
    conflicts with the lab values is not asked when H's does not: it is no credible explanation).
-   The step drift is tried only when step 1's change-point test finds a step
-   along the run; the change point is then fixed where it was found.
+   The step drift is tried only when a change-point test finds a change of level along the
+   run in what a constant soil leaves (the five-value re-fit's residuals; a level error, or one
+   following loads a rig steps pass by pass, is no change); the change point is then fixed
+   where it was found.
 4. **Probabilities.**  Posterior probabilities of all hypotheses tried:
    Laplace evidence of each fit (lab priors as Gaussian priors, the
    unit-information prior for other parameters, one common overdispersion
@@ -605,14 +607,12 @@ def _rms_upper(F: float, df1: int, df2: int, s2: float, U: int, level: float = 0
     return float(math.sqrt(lam * s2 / U))
 
 
-def _step_test(s_u: np.ndarray, e_u: np.ndarray, level: bool = False,
-               df_used: int = 0) -> tuple[float, np.ndarray, tuple]:
+def _step_test(s_u: np.ndarray, e_u: np.ndarray, level: bool = False) -> tuple[float, np.ndarray, tuple]:
     """Change-point F-test of unit means ``e_u`` (U,) ordered by ``s_u`` (U,): two levels (before
     and after a split between neighbouring units, at least 2 units a side) against zero (any
     structure: a step or a level), or with ``level`` against one common level (a change: the
     level alone is no step), the best split, its p-value Bonferroni-corrected over the U - 3
-    splits (conservative for a maximum of correlated statistics); ``df_used`` degrees of freedom
-    the caller spent on ``e_u`` before (a covariate regressed out).  Another patch of ground from
+    splits (conservative for a maximum of correlated statistics).  Another patch of ground from
     some point on is a step, which a low-order polynomial and fixed bins smear into their noise
     reference.
     Returns ``(p, fitted (U,), (s_before, s_after))``: the two coordinates the best split
@@ -620,7 +620,7 @@ def _step_test(s_u: np.ndarray, e_u: np.ndarray, level: bool = False,
     Source: change-point detection by maximal F over splits (Hawkins 1977, JASA 72:180;
     Bonferroni bound as in Worsley 1979, JASA 74:365)."""
     U = e_u.size
-    if U < 5 + df_used:
+    if U < 5:
         return float("nan"), np.zeros_like(e_u), (float("nan"), float("nan"))
     order = np.argsort(s_u, kind="stable")
     e = e_u[order]
@@ -633,13 +633,13 @@ def _step_test(s_u: np.ndarray, e_u: np.ndarray, level: bool = False,
         if rss1 <= 0:  # an exact split: infinitely significant, unless there is nothing to split
             best_f, best_k = (float("inf") if rss0 > 0 else 0.0), k
             break
-        f = ((rss0 - rss1) / df1) / (rss1 / (U - 2 - df_used))
+        f = ((rss0 - rss1) / df1) / (rss1 / (U - 2))
         if f > best_f:
             best_f, best_k = f, k
     fitted = np.empty(U)
     fitted[order[:best_k]] = e[:best_k].mean()
     fitted[order[best_k:]] = e[best_k:].mean()
-    p = 0.0 if not np.isfinite(best_f) else float(stats.f.sf(best_f, df1, U - 2 - df_used))
+    p = 0.0 if not np.isfinite(best_f) else float(stats.f.sf(best_f, df1, U - 2))
     s = s_u[order]
     return min(1.0, (U - 3) * p), fitted, (float(s[best_k - 1]), float(s[best_k]))
 
@@ -1500,7 +1500,7 @@ def diagnose(
         sink_ev["significant"] = bool(np.isfinite(sink_ev["p_positive"]) and sink_ev["p_positive"] < ALPHA)
         sink_ev["z_range_m"] = [float(np.nanmin(zc)), float(np.nanmax(zc))]
     has_x = data.cells.x is not None
-    steps = None  # (change point, number of candidate splits) in Wong's residuals along the run
+    steps = None  # (change point, number of candidate splits) along the run in a constant soil's residuals
     tried = []
     fits: dict[str, HypFit] = {}
     bar = None
@@ -1538,10 +1538,12 @@ def diagnose(
             _escape_local_optima(fits, name, ctx, data, max_iter)
         except (ValueError, FloatingPointError, np.linalg.LinAlgError) as exc:
             failures.append(f"{h.title}: could not be fitted: {exc}")
-        if name == "wong" and name in fits and has_x:  # a step along the run: where the step drift puts it
-            steps = _change_point(data, fits["wong"].cell_pred)
-            if steps is not None:
-                ctx = dataclasses.replace(ctx, x_step=steps[0])
+        if has_x and name in fits and (name == "wong" or (name == "terrain" and fits[name].success)):
+            # a step along the run, where the step drift puts it: in what a constant soil leaves (the five-value
+            # re-fit once fitted, Wong's lab soil before): a soil off everywhere, its error following the loads a
+            # rig steps pass by pass, is no change of ground (module doc, step 3)
+            steps = _change_point(data, fits[name].cell_pred)
+            ctx = dataclasses.replace(ctx, x_step=None if steps is None else steps[0])
         if bar is not None:
             bar.update(1)
     if bar is not None:
@@ -1956,14 +1958,11 @@ def _diagnose_auto(data: FitData, terrain, wheel, **kw) -> "Diagnosis":
 
 
 def _change_point(data: FitData, pred: dict):
-    """The change point along the run in the residuals ``pred`` leaves (Wong's): the channel whose
-    cycle means show the most significant change of level (:func:`_step_test` against one level,
-    significant at ``ALPHA`` over the channels; a level error alone is a mismatch, not a change),
-    the split refined over the cells between the two cycles around it (least squares of two levels
-    on the cell residuals of every channel, in noise units).  Where the cycles' loads differ (a rig
-    stepping its load pass by pass) the cycle means' linear dependence on the cycle's mean load is
-    taken out first: a soil value off everywhere errs by more under more load, which is no change
-    of ground along the run.
+    """The change point along the run in the residuals ``pred`` leaves (a constant soil's: Wong's, or
+    the five-value re-fit's): the channel whose cycle means show the most significant change of level
+    (:func:`_step_test` against one level, significant at ``ALPHA`` over the channels; a level error
+    alone is a mismatch, not a change), the split refined over the cells between the two cycles around
+    it (least squares of two levels on the cell residuals of every channel, in noise units).
     Returns ``(x_step, n_splits)`` (normalised drift coordinate, the number of candidate
     splits), or None (a table, fewer than 5 cycles, or no significant step)."""
     cells = data.cells
@@ -1974,8 +1973,6 @@ def _change_point(data: FitData, pred: dict):
         return None
     cnt = np.bincount(inv).astype(float)
     xg = np.bincount(inv, weights=cells.x) / cnt
-    lg = np.bincount(inv, weights=cells.load_n) / cnt
-    loads_differ = np.std(lg) > 0.01 * abs(np.mean(lg))
     best = None
     E = []
     for c, y in cells.channels.items():
@@ -1984,9 +1981,7 @@ def _change_point(data: FitData, pred: dict):
             continue
         E.append(e)
         gm = np.bincount(inv, weights=e) / cnt
-        if loads_differ:
-            gm = gm - (lg - lg.mean()) * (np.dot(lg - lg.mean(), gm) / np.dot(lg - lg.mean(), lg - lg.mean()))
-        p, _, bounds = _step_test(xg, gm, level=True, df_used=int(loads_differ))
+        p, _, bounds = _step_test(xg, gm, level=True)
         if np.isfinite(p) and (best is None or p < best[0]):
             best = (p, bounds)
     if best is None or best[0] >= ALPHA / max(len(E), 1):
