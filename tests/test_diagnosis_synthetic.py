@@ -381,6 +381,7 @@ def test_a_level_error_alone_puts_no_change_point_along_the_run():
     null = [_step_test(u, 3.0 + rng.standard_normal(cycles), level=True)[0] for _ in range(2000)]
     assert np.mean(np.array(null) < ALPHA) <= 1.5 * ALPHA
 
+
 def test_a_soil_off_everywhere_under_loads_stepped_pass_by_pass_tries_no_change_of_ground():
     """A lab phi 4 deg too high and a rig stepping its load every four cycles (0.7, 1.0, 1.3 x):
     Wong's error grows with the load, so its cycle means change along the run, but the five-value
