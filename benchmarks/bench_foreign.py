@@ -1,6 +1,6 @@
-"""The diagnosis on runs of twelve independent generators (``benchmarks/foreign/`` to ``foreign12/``).
+"""The diagnosis on runs of thirteen independent generators (``benchmarks/foreign/`` to ``foreign13/``).
 
-    python benchmarks/bench_foreign.py [--generator foreign|foreign2 [--stress|--round2]|foreign3|...|foreign11 [--round2]|foreign12]
+    python benchmarks/bench_foreign.py [--generator foreign|foreign2 [--stress|--round2]|foreign3|...|foreign11 [--round2]|foreign12|foreign13]
                                        [--only a1,v15] [--keep DIR]
 
 Each generator was written from the hardware contract, the DBC files and the paper alone, by a
@@ -58,7 +58,11 @@ building up on the tyre, a hard pan, a transducer heating up), fitted the same w
 by the project after round 1 was scored, ``foreign11/make_round2.py``): the same cases on the other soil and wheel.
 ``foreign12`` (``round1.json``, seeds 1501-1530, written by its author before any run was generated): a thirteenth,
 written blind by a helper session (``foreign12/README.md``): a 4x4 truck pulling a weight-transfer sled until it
-stalls, its own loess and dune sand, seven causes on no list; fitted the same way.
+stalls, its own loess and dune sand, seven causes on no list; fitted the same way. ``foreign13`` (``round1.json``,
+seeds 1601-1630, written by its author before any run was generated): a fourteenth, written blind by a helper
+session (``foreign13/README.md``): a compact 4WD tractor towing a braked dynamometer trailer whose slip controller
+steps the slip up and down, its own silty clay and loamy sand, the sinkage from the vertical balance, seven causes
+on no list; fitted the same way.
 Prints one row per case (verdict, latency found against the truth, its method and reliability) and the
 totals, and the wall time.
 """
@@ -89,8 +93,9 @@ GEN9 = Path(__file__).resolve().parent / "foreign9" / "gen.py"
 GEN10 = Path(__file__).resolve().parent / "foreign10" / "gen.py"
 GEN11 = Path(__file__).resolve().parent / "foreign11" / "gen.py"
 GEN12 = Path(__file__).resolve().parent / "foreign12" / "gen.py"
+GEN13 = Path(__file__).resolve().parent / "foreign13" / "gen.py"
 #: the generators whose truth file carries its own ``fit_args`` (:func:`_run_csv_case`)
-CSV_GENERATORS = {gen.parent.name: gen for gen in (GEN6, GEN7, GEN8, GEN9, GEN10, GEN11, GEN12)}
+CSV_GENERATORS = {gen.parent.name: gen for gen in (GEN6, GEN7, GEN8, GEN9, GEN10, GEN11, GEN12, GEN13)}
 
 #: name, generator case, fronts, seed, latency [s], effect options
 CASES = [
@@ -164,7 +169,8 @@ ROUND2 = [
 #: sizes, every cause on no list at two sizes) by the project after the first was scored and before any of
 #: these was run; ``foreign5/round1.json`` (801-830) by its author before any run was scored, its
 #: ``round2.json`` (831-860) by the project after the first was scored and before any of these was run
-ROUNDS = {(gen.parent.name, k): gen.parent / f"round{k}.json" for gen in (GEN3, GEN4, GEN5, GEN6, GEN7, GEN8, GEN9, GEN10, GEN11, GEN12)
+ROUNDS = {(gen.parent.name, k): gen.parent / f"round{k}.json" for gen in (GEN3, GEN4, GEN5, GEN6, GEN7, GEN8, GEN9, GEN10, GEN11, GEN12,
+                                                                    GEN13)
           for k in (1, 2)}
 
 
@@ -355,7 +361,7 @@ def fit_and_score(name: str, truth: dict, out: Path, fronts: str, log: Path | No
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--generator", choices=tuple(f"foreign{k}" for k in ("", 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12)),
+    ap.add_argument("--generator", choices=tuple(f"foreign{k}" for k in ("", 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13)),
                     default="foreign",
                     help="which independent generator's cases (default: foreign, 14 cases; foreign2: 36; foreign3: "
                          "its first round, 30 runs on the paper's clay from a towed vehicle, logs in ASC, BLF and "
@@ -365,7 +371,8 @@ def main() -> None:
                          "foreign9: 30 vehicle CAN logs of field runs against a dynamometer vehicle per round; foreign10: 30 "
                          "CAN logs of a 4x4 tractor's hill climbs per round; foreign11: 30 CAN logs of a twelfth, "
                          "written blind (foreign11/README.md); foreign12: 30 CAN logs of a thirteenth, a truck's sled pulls, "
-                         "written blind (foreign12/README.md))")
+                         "written blind (foreign12/README.md); foreign13: 30 CAN logs of a fourteenth, a slip-controlled tow "
+                         "test, written blind (foreign13/README.md))")
     ap.add_argument("--stress", action="store_true",
                     help="with --generator foreign2: 24 runs of eight of its cases as short runs (4 cycles), with 3x "
                          "the sensor noise and with 3x the soil variability, instead of its 36 cases")
@@ -382,7 +389,7 @@ def main() -> None:
     ap.add_argument("--only", default="", help="comma list of case names (default: all)")
     ap.add_argument("--keep", type=Path, default=None, help="keep logs, recordings and reports here")
     args = ap.parse_args()
-    if args.stress and args.generator != "foreign2" or args.round2 and args.generator in ("foreign", "foreign12"):
+    if args.stress and args.generator != "foreign2" or args.round2 and args.generator in ("foreign", "foreign12", "foreign13"):
         ap.error("--stress needs --generator foreign2, --round2 one of foreign2 to foreign11")
     if args.stress and args.round2:
         ap.error("choose one of --stress and --round2")
