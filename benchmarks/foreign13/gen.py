@@ -77,8 +77,10 @@ class Draw:
 
 
 def load_lab(soil):
+    """The lab soil file (wheelsoil's terrain TOML: kc, kphi in kN units), with kc_kn, kphi_kn for this module."""
     with open(os.path.join(HERE, SOILS[soil]), "rb") as f:
-        return tomllib.load(f)
+        lab = tomllib.load(f)
+    return {**lab, "kc_kn": lab["kc"], "kphi_kn": lab["kphi"]}
 
 
 def field_value(lab, key, off_sd, b):
