@@ -169,8 +169,7 @@ ROUND2 = [
 #: sizes, every cause on no list at two sizes) by the project after the first was scored and before any of
 #: these was run; ``foreign5/round1.json`` (801-830) by its author before any run was scored, its
 #: ``round2.json`` (831-860) by the project after the first was scored and before any of these was run
-ROUNDS = {(gen.parent.name, k): gen.parent / f"round{k}.json" for gen in (GEN3, GEN4, GEN5, GEN6, GEN7, GEN8, GEN9, GEN10, GEN11, GEN12,
-                                                                    GEN13)
+ROUNDS = {(gen.parent.name, k): gen.parent / f"round{k}.json" for gen in (GEN3, GEN4, GEN5, *CSV_GENERATORS.values())
           for k in (1, 2)}
 
 

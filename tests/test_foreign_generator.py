@@ -35,11 +35,8 @@ def _load(gen_path, name):
     return gen
 
 
-@pytest.mark.parametrize("folder", [GEN.parent, GEN2.parent, GEN3.parent, GEN4.parent, GEN5.parent, GEN6.parent,
-                                    GEN7.parent, GEN8.parent, GEN9.parent, GEN10.parent, GEN11.parent, GEN12.parent,
-                                    GEN13.parent],
-                         ids=["foreign", "foreign2", "foreign3", "foreign4", "foreign5", "foreign6", "foreign7",
-                              "foreign8", "foreign9", "foreign10", "foreign11", "foreign12", "foreign13"])
+@pytest.mark.parametrize("folder", [g.parent for g in (GEN, GEN2, GEN3, GEN4, GEN5, GEN6, GEN7, GEN8, GEN9, GEN10,
+                                                         GEN11, GEN12, GEN13)], ids=lambda folder: folder.name)
 def test_the_independent_generators_import_nothing_from_wheelsoil(folder):
     files = list(folder.glob("*.py"))
     assert files
