@@ -232,10 +232,10 @@ decides with this rule (constants below; none was tuned on a benchmark):
    for, within the cycles or in slip and distance together, passes for noise:
    a gain drifting over the run, a lagging load channel; held-out batches 5, 6).
 
-Static sinkage (``sinkage="auto"``, the pipeline's default): on a time series, and on a table with a measured
-sinkage channel, every hypothesis is fitted under Eq. (10) and under the vertical balance Eq. (7) = W, and the
-law the data prefer by a Bayes factor over ``BF_ALTERNATIVE`` is used, else Eq. (10); the law may name a cause,
-not turn Wong's error into ``none`` (:func:`_diagnose_auto`).
+Static sinkage (``sinkage="auto"``, the pipeline's default): on data with a measured sinkage channel every
+hypothesis is fitted under Eq. (10) and under the vertical balance Eq. (7) = W, and the law the data prefer
+by a Bayes factor over ``BF_ALTERNATIVE`` is used, else Eq. (10); the law may name a cause, not turn Wong's
+error into ``none`` (:func:`_diagnose_auto`).
 
 Per channel (``channels``): ``none`` when Wong shows no relevant structure
 in that channel, else the effect of the most probable hypothesis that
@@ -1449,8 +1449,8 @@ def diagnose(
         hypothesis re-fits it against priors widened ``LIBRARY_PRIOR_WIDEN`` x;
         ``terrain`` and the ``+terrain`` combinations are then not separate hypotheses.
     sinkage : ``eq10`` | ``balance`` (model core: the static sinkage from Eq. 10 or from the vertical
-        balance Eq. 7 = W) | ``auto``: on a time series or data with measured sinkage, the law the data
-        choose (:func:`_diagnose_auto`), else ``eq10``.
+        balance Eq. 7 = W) | ``auto``: on data with measured sinkage, the law the data choose
+        (:func:`_diagnose_auto`), else ``eq10``.
     progress : tqdm progress bar.
     max_iter : Gauss-Newton iteration limit per fit (default ``FIT_MAX_ITER``; a fit that does not converge is
         reported in ``failures`` and left out of the verdict).
@@ -1904,26 +1904,22 @@ def _diagnose_auto(data: FitData, terrain, wheel, **kw) -> "Diagnosis":
     sinks in fact until the soil carries its load, the vertical balance Eq. (7) = W (Wong 2008 ch. 2),
     which differs from Eq. (10) by a few per cent of z0 and gives slightly other forces.  A soil-bin
     testbed under dead weights sinks so; a generator or a soil may follow either.  On data with a
-    measured sinkage channel, and on a time series without one, every hypothesis is fitted under both laws
+    measured sinkage channel the law is observable: every hypothesis is fitted under both laws
     (:func:`diagnose` twice) and the law whose marginal likelihood over all the causes tried
     (:func:`_law_evidence`) exceeds the other's by more than ``BF_ALTERNATIVE`` is used; otherwise
     Eq. (10), the paper's.  The law may name a cause but not erase Wong's error: when the data choose
     the balance and Wong's model under it shows no effect (``none``) while under Eq. (10) it errs,
     Eq. (10)'s verdict stands (a load channel reading 12 % high on a testbed table was ``none`` under
     the balance, which acts on the sinkage like a lower load).  An undetermined law keeps Eq. (10)'s
-    verdict whatever the balance's is.  On the forces alone the law shows in a sweep's many cycles: an
-    independent generator's tow test whose sinkage followed the balance, logged without a sinkage channel, was
-    named right 3 of 16 times in family with the law chosen, 1 with Eq. (10), and on four generators that
-    follow Eq. (10) the forces never chose the balance (ln Bayes factor <= 0.3 on their 120 runs).  A table
-    without measured sinkage keeps Eq. (10) (a table of the forces alone did not tell the laws apart).
-    The returned diagnosis' ``sinkage_law`` says how
+    verdict whatever the balance's is.  Without measured sinkage Eq. (10) is used (the forces alone were not
+    compared: vehicle runs keep the paper's law).  The returned diagnosis' ``sinkage_law`` says how
     the law was chosen (``law``, ``mode`` "auto", ``ln_bayes_factor`` balance over Eq. 10, and the
     other law's verdict); a law under which Wong's lab terrain buries the wheel is not chosen.
     Source: paper Eqs. (7), (10).  Raises what :func:`diagnose` raises."""
-    if "sinkage_m" not in data.channels and data.kind == "table":
+    if "sinkage_m" not in data.channels:
         d = diagnose(data, terrain, wheel, sinkage="eq10", **kw)
-        d.sinkage_law = {"law": "eq10", "mode": "auto", "reason": "a table without measured sinkage: the paper's "
-                         "Eq. (10) (on a table's forces alone the law was not chosen: they did not tell the two apart)"}
+        d.sinkage_law = {"law": "eq10", "mode": "auto", "reason": "no measured sinkage: the paper's Eq. (10) (on the "
+                         "forces alone the law was not chosen: a table of them did not tell the two apart)"}
         return d
     diags, buried = {}, None
     for law in ("eq10", "balance"):

@@ -817,8 +817,8 @@ def run_fit(
         ``vasilev, lyasko, ding, terrain_mismatch`` means the same; Wong always).
     fit_terrain : fit the terrain parameters too (k_eq = kc/b + kphi, n, c, phi, K,
         those the data identify).
-    sinkage : ``auto`` (default: on a recording, or a table with measured sinkage, the static-sinkage law the
-        data choose, else Eq. 10; :func:`wheelsoil.model.diagnosis.diagnose`), ``eq10`` or ``balance``.
+    sinkage : ``auto`` (default: on data with measured sinkage the static-sinkage law the data choose,
+        else Eq. 10; :func:`wheelsoil.model.diagnosis.diagnose`), ``eq10`` or ``balance``.
     rate_hz, cutoff_hz, inertia : processing of recordings (grid rate [Hz],
         low-pass cutoff [Hz], None = processing's default; wheel inertia
         compensation on/off).
@@ -1129,9 +1129,8 @@ def register(subparsers) -> None:
                    "identify) for soils without lab values")
     p.add_argument("--sinkage", choices=("auto", "eq10", "balance"), default="auto",
                    help="static sinkage from Eq. 10 (the paper's small-angle form), from the vertical force balance "
-                        "(Eq. 7 = W), or auto (default): on a recording, or a table with measured sinkage, every model "
-                        "is fitted under both and the law the data prefer by a Bayes factor over 10 is used, "
-                        "else Eq. 10")
+                        "(Eq. 7 = W), or auto (default): on data with measured sinkage every model is fitted under "
+                        "both and the law the data prefer by a Bayes factor over 10 is used, else Eq. 10")
     p.add_argument("--rate", type=float, default=100.0, metavar="HZ",
                    help="recordings: processing grid rate [Hz] (default 100)")
     p.add_argument("--cutoff", type=float, default=None, metavar="HZ",
