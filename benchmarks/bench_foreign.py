@@ -1,6 +1,6 @@
-"""The diagnosis on runs of thirteen independent generators (``benchmarks/foreign/`` to ``foreign13/``).
+"""The diagnosis on runs of fourteen independent generators (``benchmarks/foreign/`` to ``foreign14/``).
 
-    python benchmarks/bench_foreign.py [--generator foreign|foreign2 [--stress|--round2]|foreign3|...|foreign11 [--round2]|foreign12|foreign13]
+    python benchmarks/bench_foreign.py [--generator foreign|foreign2 [--stress|--round2]|foreign3|...|foreign11 [--round2]|foreign12|foreign13|foreign14]
                                        [--only a1,v15] [--keep DIR]
 
 Each generator was written from the hardware contract, the DBC files and the paper alone, by a
@@ -62,7 +62,11 @@ stalls, its own loess and dune sand, seven causes on no list; fitted the same wa
 seeds 1601-1630, written by its author before any run was generated): a fourteenth, written blind by a helper
 session (``foreign13/README.md``): a compact 4WD tractor towing a braked dynamometer trailer whose slip controller
 steps the slip up and down, its own silty clay and loamy sand, the sinkage from the vertical balance, seven causes
-on no list; fitted the same way.
+on no list; fitted the same way. ``foreign14`` (``round1.json``, seeds 1701-1730, written by its author before any
+run was generated): a fifteenth, written blind by a helper session (``foreign14/README.md``): a 4x4 pulling cable
+off an anchored winch whose brake ramps the pull slowly, its own silt loam and loamy sand, seven causes on no list
+(one of them, a transducer channel changing sign part-way, makes the pipeline refuse the log: a row ``refused``, a
+miss but no wrong name); fitted the same way.
 Prints one row per case (verdict, latency found against the truth, its method and reliability) and the
 totals, and the wall time.
 """
@@ -94,8 +98,9 @@ GEN10 = Path(__file__).resolve().parent / "foreign10" / "gen.py"
 GEN11 = Path(__file__).resolve().parent / "foreign11" / "gen.py"
 GEN12 = Path(__file__).resolve().parent / "foreign12" / "gen.py"
 GEN13 = Path(__file__).resolve().parent / "foreign13" / "gen.py"
+GEN14 = Path(__file__).resolve().parent / "foreign14" / "gen.py"
 #: the generators whose truth file carries its own ``fit_args`` (:func:`_run_csv_case`)
-CSV_GENERATORS = {gen.parent.name: gen for gen in (GEN6, GEN7, GEN8, GEN9, GEN10, GEN11, GEN12, GEN13)}
+CSV_GENERATORS = {gen.parent.name: gen for gen in (GEN6, GEN7, GEN8, GEN9, GEN10, GEN11, GEN12, GEN13, GEN14)}
 
 #: name, generator case, fronts, seed, latency [s], effect options
 CASES = [
@@ -298,8 +303,14 @@ def _run_csv_case(gen: Path, name: str, case: str, seed: int, params: dict, out:
             contextlib.redirect_stdout(log), contextlib.redirect_stderr(log):  # the CLI's own output, kept
         warnings.simplefilter("ignore")
         rc = wheelsoil_main(["fit", *fit_args, "-o", str(report_dir)])
-    if rc:
-        raise RuntimeError(f"wheelsoil fit {' '.join(fit_args)} exited {rc}")
+    if rc:  # the pipeline refused the data (a clear error, no report): neither right nor a wrong name
+        said = [ln for ln in (out / f"{name}.fit.txt").read_text().splitlines() if "error:" in ln]
+        print(f"{name}: wheelsoil fit exited {rc}: {said[-1].split('error:', 1)[1].strip() if said else '?'}",
+              flush=True)
+        return {"name": name, "fronts": "log", "truth": f"{case} {truth['params'] or ''}".strip(),
+                "listed": truth["family"] == "in", "effect": "refused", "model": None, "confidence": None,
+                "score": "refused", "form": None, "latency_true_s": (truth.get("params") or {}).get("gnss_latency_s"),
+                "latency_s": None, "latency_method": None, "latency_reliable": None, "terrain_beyond": None}
     rep = json.loads((report_dir / "report.json").read_text())
     d = rep["diagnosis"]
     q = (rep.get("data_quality") or [{}])[0]  # a log's GNSS latency against the generator's (tables have none)
@@ -360,7 +371,7 @@ def fit_and_score(name: str, truth: dict, out: Path, fronts: str, log: Path | No
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--generator", choices=tuple(f"foreign{k}" for k in ("", 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13)),
+    ap.add_argument("--generator", choices=tuple(f"foreign{k}" for k in ("", 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14)),
                     default="foreign",
                     help="which independent generator's cases (default: foreign, 14 cases; foreign2: 36; foreign3: "
                          "its first round, 30 runs on the paper's clay from a towed vehicle, logs in ASC, BLF and "
@@ -371,7 +382,8 @@ def main() -> None:
                          "CAN logs of a 4x4 tractor's hill climbs per round; foreign11: 30 CAN logs of a twelfth, "
                          "written blind (foreign11/README.md); foreign12: 30 CAN logs of a thirteenth, a truck's sled pulls, "
                          "written blind (foreign12/README.md); foreign13: 30 CAN logs of a fourteenth, a slip-controlled tow "
-                         "test, written blind (foreign13/README.md))")
+                         "test, written blind (foreign13/README.md); foreign14: 30 CAN logs of a fifteenth, drawbar-pull ramps against an "
+                         "anchored winch, written blind (foreign14/README.md))")
     ap.add_argument("--stress", action="store_true",
                     help="with --generator foreign2: 24 runs of eight of its cases as short runs (4 cycles), with 3x "
                          "the sensor noise and with 3x the soil variability, instead of its 36 cases")
@@ -388,7 +400,7 @@ def main() -> None:
     ap.add_argument("--only", default="", help="comma list of case names (default: all)")
     ap.add_argument("--keep", type=Path, default=None, help="keep logs, recordings and reports here")
     args = ap.parse_args()
-    if args.stress and args.generator != "foreign2" or args.round2 and args.generator in ("foreign", "foreign12", "foreign13"):
+    if args.stress and args.generator != "foreign2" or args.round2 and args.generator in ("foreign", "foreign12", "foreign13", "foreign14"):
         ap.error("--stress needs --generator foreign2, --round2 one of foreign2 to foreign11")
     if args.stress and args.round2:
         ap.error("choose one of --stress and --round2")

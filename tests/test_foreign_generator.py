@@ -11,7 +11,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
 from bench_foreign import (CASES, CASES2, GEN, GEN2, GEN3, GEN4, GEN5, GEN6, GEN7, GEN8, GEN9, GEN10, GEN11,  # noqa: E402
-                           GEN12, GEN13,
+                           GEN12, GEN13, GEN14,
                            NAMED, ROUND2, STRESS, generate, round_runs, run_case, run_case2, run_case6)
 
 
@@ -36,7 +36,7 @@ def _load(gen_path, name):
 
 
 @pytest.mark.parametrize("folder", [g.parent for g in (GEN, GEN2, GEN3, GEN4, GEN5, GEN6, GEN7, GEN8, GEN9, GEN10,
-                                                         GEN11, GEN12, GEN13)], ids=lambda folder: folder.name)
+                                                         GEN11, GEN12, GEN13, GEN14)], ids=lambda folder: folder.name)
 def test_the_independent_generators_import_nothing_from_wheelsoil(folder):
     files = list(folder.glob("*.py"))
     assert files
