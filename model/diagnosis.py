@@ -299,6 +299,8 @@ LAB_SD_LEVEL = 0.6827  #: a named mismatch whose data estimates lie within the r
 #: most: a point estimate just past one lab sd with a standard error of a lab sd or more shows the soil off the
 #: lab only weakly (the four wrong mismatches named on the independent generators' kept runs lay 1.05-2.2 sd
 #: off with standard errors of 1.3-2.6 sd; so did eight right ones: no threshold parts them)
+DATA_PRECISION_MIN = 0.0101  #: a lab value whose data precision (per lab variance, the other values held) is at most
+#: this is not estimated by the data (:func:`data_estimates`; as a posterior sd of 0.995 lab sd for a value alone)
 WALD_Z = 2.0  #: an effect parameter differs from its null value when |value - null| > WALD_Z se
 LOAD_RATIO_TOL = 1.25  #: model W / measured W outside [1/1.25, 1.25] in a slip bin: inconsistent
 #: (Eq. 10's own small-angle error reaches ~20 % on library soils, wheelsoil.model.wong)
@@ -2163,26 +2165,59 @@ def _within_lab_uncertainty(data: FitData, fits: dict, supported, sink_ev: dict 
             "candidate": candidate}
 
 
+def _conditional_precision(f: HypFit) -> dict:
+    """value -> the data's precision of each lab value of the re-fit ``f`` per lab variance, the other lab values
+    held where the fit put them and the effect parameters (no prior) profiled out (their Schur complement in the
+    fit's information matrix, scaled by its overdispersion as the Laplace covariance is); {} when ``f`` carries
+    no information matrix.  Source: the Gaussian approximation of the posterior (Laplace; Gelman et al., *Bayesian
+    Data Analysis*, 3rd ed., §4.1)."""
+    names = [q.name for q in getattr(f, "hparams", ())]
+    pri = [i for i, q in enumerate(names) if q in f.prior]
+    info = getattr(f, "info", ())
+    if not pri or len(info) != 2 or not np.all(np.isfinite(info[0])):
+        return {}
+    c_hat = max(1.0, f.chi2_data / f.dof) if f.dof > 0 else 1.0
+    D = np.asarray(info[0], float) / c_hat  # in solver variables (ln for the ln-scale k_eq and K, as their priors)
+    free = [i for i in range(len(names)) if i not in pri]
+    Dp = D[np.ix_(pri, pri)]
+    if free:
+        Dp = Dp - D[np.ix_(pri, free)] @ inv_psd(D[np.ix_(free, free)]) @ D[np.ix_(free, pri)]
+    return {names[i]: float(Dp[j, j]) * f.prior[names[i]][1] ** 2 for j, i in enumerate(pri)}
+
+
 def data_estimates(f: HypFit) -> dict:
     """The data's own estimate of each lab value of the re-fit ``f`` (a converged :class:`HypFit` with lab
     priors), in lab standard deviations from the lab value (on the prior's scale: ln k_eq and ln K), with its
-    standard error: value -> (z_data, se_data), floats; a value the data do not constrain (posterior standard
-    error s of 0.995 lab sd or more) is left out; {} for a fit without priors.  Never raises.  The fit is a posterior:
-    where the data constrain a value weakly, the lab prior pulls it towards the lab value, and "within the
-    lab's uncertainty" would follow from the prior, not from the data.  The data's estimate undoes that
-    shrinkage (Gaussian conjugacy, per value: posterior = prior + (1 - s^2) (data - prior), s from the
-    Laplace covariance), its standard error s / sqrt(1 - s^2), widened by the folds' jackknife where that is
-    larger (the reported standard error).  (An independent generator's k_eq 3.5 sd off, a vehicle run
-    without measured sinkage: the re-fit put it at 1.7 sd with s = 0.72; the data's estimate, 3.6 +/- 1.05.)"""
+    standard error: value -> (z_data, se_data), floats; a value the data do not constrain (a data precision of
+    at most ``DATA_PRECISION_MIN`` per lab variance with the other values held, or a posterior standard error s
+    of 0.995 lab sd or more) is left out; {} for a fit without priors.  Never raises.  The fit is a posterior:
+    where the data constrain a value weakly, the lab prior pulls it towards the lab value, and "within the lab's
+    uncertainty" would follow from the prior, not from the data.  The data's estimate undoes that pull
+    (Gaussian conjugacy of the Laplace approximation, Gelman et al., *Bayesian Data Analysis*, §2.5): with d the
+    data's precision of the value per lab variance, the other lab values held where the fit put them
+    (:func:`_conditional_precision`), the estimate is ``z (1 + 1/d)`` (z its posterior place, :func:`prior_z`).
+    Its standard error is the larger of ``1/sqrt(d)`` and ``s / sqrt(1 - s^2)`` (the other values free within
+    their lab priors), widened by the folds' jackknife where that is larger (the reported standard error).  A
+    value fitted alone gets ``z / (1 - s^2) +/- s / sqrt(1 - s^2)`` either way.  In a re-fit of several
+    correlated values (c with phi and K through the shear strength) a value the data hardly constrain alone
+    moves in the posterior with the others; dividing that move by its small marginal precision (``1 - s^2``)
+    placed an independent generator's c, 0.98 lab sd off, at -67 +/- 9 lab sd ("beyond one lab sd", which
+    turned that run's `none` into `unexplained`); held with the others, -0.79 +/- 9.2, and its k_eq, n, phi,
+    K at -0.44, +0.34, -0.48, -0.74 against -0.44, +0.33, -0.50, -0.74.  (A k_eq 3.5 sd off on a vehicle run
+    without measured sinkage, fitted alone: the re-fit put it at 1.7 sd with s = 0.72; the data's estimate,
+    3.6 +/- 1.05.)"""
     out = {}
-    z = prior_z(f)
+    cond = _conditional_precision(f)
+    zp = prior_z(f)
     for p, (_, sd) in f.prior.items():
-        s = _se_prior_scale(p, f, f.stderr_fit.get(p, np.nan)) / sd
-        if not np.isfinite(s) or s * s >= 0.99:
+        s = _se_prior_scale(p, f, f.stderr_fit.get(p, np.nan)) / sd  # p's posterior sd, the others free
+        # the data's precision of p per lab variance, the other lab values held (alone: from s)
+        d = cond[p] if p in cond else (1.0 / (s * s) - 1.0 if np.isfinite(s) and s > 0 else float("nan"))
+        if not (np.isfinite(d) and np.isfinite(s)) or d <= DATA_PRECISION_MIN or s * s >= 0.99:
             continue
         se_rep = _se_prior_scale(p, f, f.stderr.get(p, np.nan)) / sd
         widen = max(1.0, se_rep / s) if np.isfinite(se_rep) and s > 0 else 1.0
-        out[p] = (z[p] / (1.0 - s * s), s / math.sqrt(1.0 - s * s) * widen)
+        out[p] = (zp[p] * (1.0 + 1.0 / d), widen * max(1.0 / math.sqrt(d), s / math.sqrt(1.0 - s * s)))
     return out
 
 
@@ -2698,7 +2733,8 @@ def _top_unsupported(d: Diagnosis, top: str) -> str:
                    f"({p})")
     more = d.fits[top].success and _fold_limited(d.paired[top], d.target_channels)
     return (f"The most probable hypothesis, {TITLES[top]} ({d.probabilities[top]:.3g}), predicts new data with "
-            + ", ".join(txt) + f" against Wong's model; it {d.why_not[top]}"
+            + ", ".join(txt) + " against Wong's model; "
+            + ("" if d.why_not[top].startswith("its ") else "it ") + d.why_not[top]
             + (", so it is not named." if not more else
                ", so it is not named: more test points would tell." if d.data.kind == "table" else
                ", so it is not named: a run with more accelerate cycles would tell."))
