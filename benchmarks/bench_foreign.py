@@ -307,18 +307,16 @@ def _run_csv_case(gen: Path, name: str, case: str, seed: int, params: dict, out:
         said = [ln for ln in (out / f"{name}.fit.txt").read_text().splitlines() if "error:" in ln]
         print(f"{name}: wheelsoil fit exited {rc}: {said[-1].split('error:', 1)[1].strip() if said else '?'}",
               flush=True)
-        return {"name": name, "fronts": "log", "truth": f"{case} {truth['params'] or ''}".strip(),
-                "listed": truth["family"] == "in", "effect": "refused", "model": None, "confidence": None,
-                "score": "refused", "form": None, "latency_true_s": (truth.get("params") or {}).get("gnss_latency_s"),
-                "latency_s": None, "latency_method": None, "latency_reliable": None, "terrain_beyond": None}
-    rep = json.loads((report_dir / "report.json").read_text())
-    d = rep["diagnosis"]
-    q = (rep.get("data_quality") or [{}])[0]  # a log's GNSS latency against the generator's (tables have none)
+        d, q, score = {"effect": "refused"}, {}, "refused"
+    else:
+        rep = json.loads((report_dir / "report.json").read_text())
+        d = rep["diagnosis"]
+        q = (rep.get("data_quality") or [{}])[0]  # a log's GNSS latency against the generator's (tables have none)
+        # in family, right is the listed verdict itself: a generator that also accepts `unexplained` there
+        # (foreign11) is scored as the others are
+        acceptable = [v for v in truth["acceptable_verdicts"] if truth["family"] != "in" or v != "unexplained"]
+        score = "right" if d["effect"] in acceptable else ("WRONG" if d["effect"] in NAMED else "miss")
     lat = (q.get("processing_quality") or {}).get("latency") or {}
-    # in family, right is the listed verdict itself: a generator that also accepts `unexplained` there
-    # (foreign11) is scored as the others are
-    acceptable = [v for v in truth["acceptable_verdicts"] if truth["family"] != "in" or v != "unexplained"]
-    score = "right" if d["effect"] in acceptable else ("WRONG" if d["effect"] in NAMED else "miss")
     form = truth.get("form")
     return {"name": name, "fronts": "log" if fit_args[0].endswith(data[1:]) else "table", "truth": f"{case} {truth['params'] or ''}".strip(),
             "listed": truth["family"] == "in", "effect": d["effect"], "model": d.get("model"),
