@@ -1,6 +1,11 @@
 #!/usr/bin/env python
-"""Write round1.json (30 runs f14r1_01..f14r1_30, seeds 1701-1730, cases shuffled, per-run
-sizes drawn and written into params).  Refuses to overwrite an existing round file."""
+"""Write roundK.json (30 runs f14rK_01..f14rK_30, seeds 1701-1730 for round 1, 1731-1760 for round 2,
+cases shuffled, per-run sizes drawn and written into params).  Refuses to overwrite an existing round file.
+
+    python make_rounds.py [round1.json|round2.json]
+
+Round 1 was written by the generator's author before any run; round 2 by the project after round 1 was
+scored and before any of its runs was generated (the same plan, fresh seeds and a fresh shuffle)."""
 import json
 import os
 import sys
@@ -21,19 +26,21 @@ SIZE_KEYS = ["soil", "fmt", "duration_s", "gnss_latency_s", "H", "m1", "m2", "n1
 
 
 def main():
-    out = os.path.join(HERE, sys.argv[1] if len(sys.argv) > 1 else "round1.json")
+    fname = sys.argv[1] if len(sys.argv) > 1 else "round1.json"
+    k = {"round1.json": 1, "round2.json": 2}[fname]
+    out = os.path.join(HERE, fname)
     if os.path.exists(out):
         print(f"refusing to overwrite {out}")
         return 1
     assert len(PLAN) == 30
-    rng = np.random.default_rng(14_2026)
+    rng = np.random.default_rng(14_2026 + (k - 1))
     cases = list(rng.permutation(PLAN))
     runs = []
     for i, case in enumerate(cases):
-        seed = 1701 + i
+        seed = 1701 + 30 * (k - 1) + i
         p = gen.draw_params(str(case), seed, {})
         params = {k: p[k] for k in SIZE_KEYS if k in p}
-        runs.append({"name": f"f14r1_{i + 1:02d}", "case": str(case), "seed": seed, "params": params})
+        runs.append({"name": f"f14r{k}_{i + 1:02d}", "case": str(case), "seed": seed, "params": params})
     with open(out, "w") as f:
         json.dump(runs, f, indent=1)
     print(f"wrote {out}: {len(runs)} runs")
