@@ -118,7 +118,8 @@ decides with this rule (constants below; none was tuned on a benchmark):
    are never merged into one named cause).  The same holds when the best
    explanation is ``dp_resistance``, the generic "something acts on the
    drawbar pull alone" that stands for causes on no list, or when an
-   unsupported hypothesis of another effect has more evidence than the candidate (one whose
+   unsupported hypothesis of another effect has more evidence than the candidate and than every form
+   of the candidate's effect held back only by the nested models it does not beat out of sample (one whose
    effect parameters are null counts as the smaller model it reduces to).  If the candidate leaves relevant
    significant structure (step 1 on its own residuals) -> ``unexplained``
    with what was tried, unless the most probable hypothesis of all is the same cause with the soil
@@ -329,7 +330,7 @@ EFFECT_TITLES = {
 WHY_UNEXPLAINED = {
     "not_supported": "no hypothesis lowers the target channels' error out of sample without worsening another",
     "equally_well": "causes of different effects explain the data about equally well",
-    "rival_more_evidence": "an unsupported hypothesis of another effect has more evidence than the candidate",
+    "rival_more_evidence": "an unsupported hypothesis of another effect has more evidence than the candidate's cause",
     "low_probability": f"the candidate's effect has a posterior probability under P_NAME = {P_NAME:g}",
     "not_listed": "the best explanation is a stand-in for causes on no list",
     "leaves_structure": "the candidate leaves significant structure of relevant size",
@@ -1646,10 +1647,13 @@ def diagnose(
         model = best
         pb = probs.get(best, 0.0)
         alternatives = [k for k in supported if k != best and probs.get(k, 0.0) * BF_ALTERNATIVE >= pb]
-        # an unsupported hypothesis of another effect with more evidence than the candidate: ambiguous
-        # (the most probable first: it is the one the reason and the separating measurement name)
+        # an unsupported hypothesis of another effect with more evidence than the candidate's cause (the candidate,
+        # or a form of its effect held back only by the nested models it does not beat on new data, e.g. the same
+        # shift on a re-fitted soil): ambiguous (the most probable first: the one the reason and the separating
+        # measurement name)
+        p_cause = max([pb, *(probs.get(k, 0.0) for k in held_back if eff_of[k] == fits[best].effect)])
         rivals = sorted((k for k in probs if k not in supported and k != "wong" and eff_of[k] != fits[best].effect
-                         and probs[k] > pb), key=lambda k: -probs[k])
+                         and probs[k] > p_cause), key=lambda k: -probs[k])
         # a supported hypothesis of another effect, a listed cause or a stand-in for causes on no list,
         # that the candidate does not hold against out of sample explains the data as well where it
         # matters, whatever the in-sample evidence says

@@ -2163,9 +2163,12 @@ TRACTION_GROSS = 2.0
 #: ``WHEEL_GAIN_GROSS`` slip (Eq. 6) from it is meaningless.
 WHEEL_GAIN_MAX = 1.1
 WHEEL_GAIN_GROSS = 1.5
-#: A transducer's bridges differ in gain by a few per cent, its crosstalk is a few per cent: a once- or twice-
-#: per-revolution part of the hub forces above this share of the load is two force signals decoded with
-#: different factors (or one with another byte order), and the load's level is then wrong too.
+#: A transducer's bridges differ in gain by a few per cent, its crosstalk is a few per cent: a twice-per-revolution
+#: part of the hub forces above this share of the load is two force signals decoded with different factors, signs
+#: or byte orders (a rotating pair read with unequal gains, or mirrored, beats at twice the wheel angle), and the
+#: load's level is then wrong too.  A once-per-revolution part is not: a rotating channel's offset (taken out with
+#: the ripple) or a wheel out of round (its load and moment beat with the angle, as an independent generator's
+#: 18 mm rim runout did at 20 % of the load) make one, and processing says so and takes it out.
 RIPPLE_DECODE_REL = 0.2
 #: A ground vehicle on a test track: a speed above this [m/s] (216 km/h) is a decoding error.
 SPEED_MAX_MPS = 60.0
@@ -2185,7 +2188,7 @@ def _implausible(load, dp, torque, slip, speed, rw, r, lag_q, label, warns: list
     Checks: median load over the run > 0; median T/(r W) and |Dp|/W over the driving samples at most
     :data:`TRACTION_MAX`; the torque not opposing positive slip in most driving samples; the module's speed
     within :data:`WHEEL_GAIN_MAX` of the transducer's wheel-angle rate; the forces' part locked to the wheel
-    angle under :data:`RIPPLE_DECODE_REL` of the load; V below :data:`SPEED_MAX_MPS` and not
+    angle at twice its rate under :data:`RIPPLE_DECODE_REL` of the load; V below :data:`SPEED_MAX_MPS` and not
     nil all the while the wheel turns.  Source: Wong 2008 ch. 2 (traction limit), hardware.md (frames and signs)."""
     out = []
 
@@ -2200,11 +2203,10 @@ def _implausible(load, dp, torque, slip, speed, rw, r, lag_q, label, warns: list
             add("load", w_med, True, f"the vertical load's median over the run is {w_med:.3g} N (a wheel carries a "
                 "positive load): check the sign and factor of the vertical force in the DBC, and that the configured "
                 f"force signals ({forces}) are not swapped, nor the force and moment messages' ids")
-        amp = max((float((ripple or {}).get(k) or 0.0) for k in ("fx_1x_n", "fx_2x_n", "fz_1x_n", "fz_2x_n")),
-                  default=0.0)
+        amp = max((float((ripple or {}).get(k) or 0.0) for k in ("fx_2x_n", "fz_2x_n")), default=0.0)
         if np.isfinite(w_med) and w_med > 0 and amp > RIPPLE_DECODE_REL * w_med:
             add("ripple", amp / w_med, True,
-                f"the hub forces carry {amp:.0f} N ({100 * amp / w_med:.0f} % of the load) once or twice per wheel "
+                f"the hub forces carry {amp:.0f} N ({100 * amp / w_med:.0f} % of the load) twice per wheel "
                 "revolution, far beyond a transducer's bridge gains or crosstalk (a few per cent): the two in-plane "
                 f"forces ({label('wft_fx_w')}, {label('wft_fz_w')}) are decoded with different factors or byte "
                 "orders, and the load's level is wrong too")
