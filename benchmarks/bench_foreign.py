@@ -1,6 +1,6 @@
 """The diagnosis on runs of fourteen independent generators (``benchmarks/foreign/`` to ``foreign14/``).
 
-    python benchmarks/bench_foreign.py [--generator foreign|foreign2 [--stress|--round2]|foreign3|...|foreign11 [--round2]|foreign12|foreign13|foreign14 [--round2]]
+    python benchmarks/bench_foreign.py [--generator foreign|foreign2 [--stress|--round2]|foreign3|...|foreign14 [--round2]]
                                        [--only a1,v15] [--keep DIR]
 
 Each generator was written from the hardware contract, the DBC files and the paper alone, by a
@@ -58,11 +58,12 @@ building up on the tyre, a hard pan, a transducer heating up), fitted the same w
 by the project after round 1 was scored, ``foreign11/make_round2.py``): the same cases on the other soil and wheel.
 ``foreign12`` (``round1.json``, seeds 1501-1530, written by its author before any run was generated): a thirteenth,
 written blind by a helper session (``foreign12/README.md``): a 4x4 truck pulling a weight-transfer sled until it
-stalls, its own loess and dune sand, seven causes on no list; fitted the same way. ``foreign13`` (``round1.json``,
+stalls, its own loess and dune sand, seven causes on no list; fitted the same way; its ``--round2`` (1531-1560,
+written by the project after round 1 was scored, ``foreign12/make_round2.py``): the same cases in a fresh order. ``foreign13`` (``round1.json``,
 seeds 1601-1630, written by its author before any run was generated): a fourteenth, written blind by a helper
 session (``foreign13/README.md``): a compact 4WD tractor towing a braked dynamometer trailer whose slip controller
 steps the slip up and down, its own silty clay and loamy sand, the sinkage from the vertical balance, seven causes
-on no list; fitted the same way. ``foreign14`` (``round1.json``, seeds 1701-1730, written by its author before any
+on no list; fitted the same way; its ``--round2`` (1631-1660, ``foreign13/make_round2.py``, as ``foreign12``'s). ``foreign14`` (``round1.json``, seeds 1701-1730, written by its author before any
 run was generated): a fifteenth, written blind by a helper session (``foreign14/README.md``): a 4x4 pulling cable
 off an anchored winch whose brake ramps the pull slowly, its own silt loam and loamy sand, seven causes on no list
 (one of them, a transducer channel changing sign part-way, makes the pipeline refuse the log: a row ``refused``, a
@@ -396,13 +397,14 @@ def main() -> None:
                          "foreign7: 28 rig time series on seeds 1031-1058 (foreign7/round2.json); with foreign8: 30 "
                          "logs on seeds 1131-1160 (foreign8/round2.json); with foreign9: 30 logs on seeds 1231-1260 "
                          "(foreign9/round2.json, written by the project); with foreign10: 30 logs on seeds 1331-1360; with "
-                         "foreign11: 30 logs on seeds 1431-1460 (foreign11/round2.json, written by the project); with foreign14: 30 "
-                         "logs on seeds 1731-1760 (foreign14/round2.json, written by the project)")
+                         "foreign11: 30 logs on seeds 1431-1460 (foreign11/round2.json, written by the project); with foreign12, "
+                         "foreign13, foreign14: 30 logs on seeds 1531-1560, 1631-1660, 1731-1760 (their round2.json, written by "
+                         "the project)")
     ap.add_argument("--only", default="", help="comma list of case names (default: all)")
     ap.add_argument("--keep", type=Path, default=None, help="keep logs, recordings and reports here")
     args = ap.parse_args()
-    if args.stress and args.generator != "foreign2" or args.round2 and args.generator in ("foreign", "foreign12", "foreign13"):
-        ap.error("--stress needs --generator foreign2, --round2 one of foreign2 to foreign11 or foreign14")
+    if args.stress and args.generator != "foreign2" or args.round2 and args.generator == "foreign":
+        ap.error("--stress needs --generator foreign2, --round2 one of foreign2 to foreign14")
     if args.stress and args.round2:
         ap.error("choose one of --stress and --round2")
     only = set(filter(None, args.only.split(",")))
