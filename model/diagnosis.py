@@ -1388,10 +1388,11 @@ _LOOK_ALIKES = {
                          "depth and at the wheel's loading rate, a shear test of the tyre's rubber on this soil, the "
                          "wheel's sinkage and rut depth against the load, the same sweep at another forward speed "
                          "and at a second static load, and the wheel's tread, alignment and loaded radius"),
-    "stress_distribution": ("a shear strength that falls with slip (a soil remoulded at high shear) shifts the "
-                            "forces as a moving stress maximum does",
-                            "shear tests at several shear rates and the normal stress under the wheel (pressure "
-                            "sensors in the rim)"),
+    "stress_distribution": ("a shear strength that falls with slip (a soil remoulded at high shear), or a tyre-soil "
+                            "interface weaker than the soil (a worn or smooth tread: an independent generator's was "
+                            "named a stress shift), shifts the forces as a moving stress maximum does",
+                            "shear tests at several shear rates, a shear test of the tyre's rubber on this soil, and "
+                            "the normal stress under the wheel (pressure sensors in the rim)"),
     "terrain_drift": ("a transducer zero or gain drifting along the run (a bridge warming up), or mud building "
                       "up on the tyre, changes the readings as a changing soil would",
                       "the transducer's zeros with the wheel lifted before and after the run, and the same slip "

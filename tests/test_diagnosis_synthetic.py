@@ -537,6 +537,7 @@ def test_a_named_cause_says_which_causes_on_no_list_it_does_not_exclude():
     assert "firm layer" in _not_excluded("terrain_mismatch", None)  # measured: held-out batches 3 and 4
     assert "interface" in _not_excluded("terrain_mismatch", None)  # measured: held-out batch 8
     assert "falls with slip" in _not_excluded("stress_distribution", None)
+    assert "interface weaker" in _not_excluded("stress_distribution", None)  # measured: foreign13's f13r2_16
     assert "sinkage against slip" in _not_excluded("slip_sinkage", {"significant": False})
     assert _not_excluded("slip_sinkage", {"significant": True}) is None  # the sinkage channel rules them out
     assert _not_excluded("none", None) is None and _not_excluded("unexplained", None) is None
