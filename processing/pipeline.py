@@ -2208,8 +2208,8 @@ def _implausible(load, dp, torque, slip, speed, rw, r, lag_q, label, warns: list
             add("ripple", amp / w_med, True,
                 f"the hub forces carry {amp:.0f} N ({100 * amp / w_med:.0f} % of the load) twice per wheel "
                 "revolution, far beyond a transducer's bridge gains or crosstalk (a few per cent): the two in-plane "
-                f"forces ({label('wft_fx_w')}, {label('wft_fz_w')}) are decoded with different factors or byte "
-                "orders, and the load's level is wrong too")
+                f"forces ({label('wft_fx_w')}, {label('wft_fz_w')}) are decoded with different factors, signs or "
+                "byte orders, and the load's level is wrong too")
         drive = (np.isfinite(slip) & (slip > PLAUSIBLE_SLIP_MIN) & np.isfinite(load) & (load > 0)
                  & np.isfinite(torque) & np.isfinite(dp))
         if np.count_nonzero(drive) >= 50 and r > 0:

@@ -27,20 +27,20 @@ SIZE_KEYS = ["soil", "fmt", "duration_s", "gnss_latency_s", "H", "m1", "m2", "n1
 
 def main():
     fname = sys.argv[1] if len(sys.argv) > 1 else "round1.json"
-    k = {"round1.json": 1, "round2.json": 2}[fname]
+    rnd = {"round1.json": 1, "round2.json": 2}[fname]
     out = os.path.join(HERE, fname)
     if os.path.exists(out):
         print(f"refusing to overwrite {out}")
         return 1
     assert len(PLAN) == 30
-    rng = np.random.default_rng(14_2026 + (k - 1))
+    rng = np.random.default_rng(14_2026 + (rnd - 1))
     cases = list(rng.permutation(PLAN))
     runs = []
     for i, case in enumerate(cases):
-        seed = 1701 + 30 * (k - 1) + i
+        seed = 1701 + 30 * (rnd - 1) + i
         p = gen.draw_params(str(case), seed, {})
         params = {k: p[k] for k in SIZE_KEYS if k in p}
-        runs.append({"name": f"f14r{k}_{i + 1:02d}", "case": str(case), "seed": seed, "params": params})
+        runs.append({"name": f"f14r{rnd}_{i + 1:02d}", "case": str(case), "seed": seed, "params": params})
     with open(out, "w") as f:
         json.dump(runs, f, indent=1)
     print(f"wrote {out}: {len(runs)} runs")
