@@ -154,6 +154,13 @@ class HypFit:
         return _laplace(self.chi2_data, self.chi2_prior, self.info, self.hparams, self.n_data / deff, c_hat * deff)
 
     @property
+    def c_hat(self) -> float:
+        """The fit's own overdispersion, ``max(1, chi2_data / dof)`` (a scalar): the reduced chi-square where
+        it exceeds one, by which its Laplace covariance is scaled.  Source: quasi-likelihood overdispersion,
+        McCullagh & Nelder 1989 §9.2."""
+        return max(1.0, self.chi2_data / max(self.dof, 1))
+
+    @property
     def cv_R0_n(self) -> float | None:
         """Out-of-sample RMS error of Dp on the cells [N] (None before cross-validation)."""
         return None if self.cv is None else self.cv["cv_R0_n"]
@@ -542,8 +549,8 @@ def lower_at(fit: HypFit, ctx: Context, cells: Cells, start: Mapping[str, float]
 def meaningful(fit: HypFit) -> float:
     """The least fall of ``fit``'s penalised chi-square that is more than numerical noise or an
     overdispersed model's scatter: one unit, or the reduced chi-square where that is larger (a scalar,
-    chi-square units).  Source: quasi-likelihood overdispersion, McCullagh & Nelder 1989 §9.2."""
-    return max(1.0, fit.chi2_data / max(fit.dof, 1))
+    chi-square units; :attr:`HypFit.c_hat`).  Source: quasi-likelihood overdispersion, McCullagh & Nelder 1989 §9.2."""
+    return fit.c_hat
 
 
 def cross_validate(fit: HypFit, ctx: Context, cells: Cells, group_kind: str = "") -> HypFit:

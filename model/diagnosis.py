@@ -2181,8 +2181,7 @@ def _conditional_precision(f: HypFit) -> dict:
     info = getattr(f, "info", ())
     if not pri or len(info) != 2 or not np.all(np.isfinite(info[0])):
         return {}
-    c_hat = max(1.0, f.chi2_data / f.dof) if f.dof > 0 else 1.0
-    D = np.asarray(info[0], float) / c_hat  # in solver variables (ln for the ln-scale k_eq and K, as their priors)
+    D = np.asarray(info[0], float) / f.c_hat  # in solver variables (ln for the ln-scale k_eq and K, as their priors)
     free = [i for i in range(len(names)) if i not in pri]
     Dp = D[np.ix_(pri, pri)]
     if free:

@@ -367,7 +367,7 @@ def test_a_latency_the_data_cannot_pin_down_is_not_claimed_reliable_and_names_no
 
 
 def _run14(name, tmp_path):
-    r = next(x for x in round_runs("foreign14", 1) if x["name"] == name)
+    r = next(x for x in round_runs("foreign14", int(name[4])) if x["name"] == name)  # f14rK_NN: round K
     return _run_csv_case(GEN14, r["name"], r["case"], r["seed"], r["params"], tmp_path)
 
 
@@ -426,8 +426,7 @@ def test_a_wheel_out_of_round_is_fitted_with_its_ripple_said_not_refused_as_a_de
     moment with it. Processing refused the log as two force signals decoded with different factors, which beat
     at twice the wheel angle, not once. Now the once-per-revolution part is said and taken out, the run is
     fitted, and no cause is named; a channel changing sign part-way (f14r1_08) is still refused (test above)."""
-    r = next(x for x in round_runs("foreign14", 2) if x["name"] == "f14r2_16")
-    row = _run_csv_case(GEN14, r["name"], r["case"], r["seed"], r["params"], tmp_path)
+    row = _run14("f14r2_16", tmp_path)
     assert row["effect"] not in ("refused", *NAMED), row
     said = (tmp_path / "rep_f14r2_16" / "report.json").read_text()
     assert "once per wheel revolution" in said and "out of round" in said
