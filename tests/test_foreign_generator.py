@@ -430,3 +430,23 @@ def test_a_wheel_out_of_round_is_fitted_with_its_ripple_said_not_refused_as_a_de
     assert row["effect"] not in ("refused", *NAMED), row
     said = (tmp_path / "rep_f14r2_16" / "report.json").read_text()
     assert "once per wheel revolution" in said and "out of round" in said
+
+
+def test_evidence_the_smaller_model_cannot_produce_counts_for_no_listed_cause(tmp_path):
+    """The fourteenth generator's f13r2_11: the inner wheel of a curve (a cause on no list). Ding's stress-only form
+    on a re-fitted soil has nearly all the evidence, 1e57 times the five-value re-fit's, yet its n1 is not told from
+    zero over the folds. Counted for the terrain re-fit it reduces to, its evidence made a terrain mismatch 1.0
+    probable and a phi and K mismatch was named. The smaller model cannot produce that evidence, so it counts for
+    no listed cause, and the run is `unexplained`."""
+    import json
+
+    from wheelsoil.model.diagnosis import BF_NESTED, P_NAME
+
+    r = next(x for x in round_runs("foreign13", 2) if x["name"] == "f13r2_11")
+    row = _run_csv_case(GEN13, r["name"], r["case"], r["seed"], r["params"], tmp_path)
+    d = json.loads((tmp_path / "rep_f13r2_11" / "report.json").read_text())["diagnosis"]
+    assert row["effect"] not in NAMED and d["effect"] == "unexplained", d["summary"]
+    m = d["models"]
+    assert "not distinguishable from zero" in m["ding_stress+terrain"]["not_supported_because"]
+    assert m["ding_stress+terrain"]["probability"] > BF_NESTED * m["terrain"]["probability"]
+    assert d["effect_probabilities"]["terrain_mismatch"] < P_NAME
