@@ -42,9 +42,9 @@ from pathlib import Path
 
 import numpy as np
 
-from .diagnosis import (CHANNEL_TITLES, EFFECT_TITLES, LAB_Z, SLIP_SINKAGE_MODELS, TITLES, WHY_UNEXPLAINED,
-                        data_estimates, prior_z, structure_title)
+from .diagnosis import EFFECT_TITLES, LAB_Z, SLIP_SINKAGE_MODELS, TITLES, WHY_UNEXPLAINED, data_estimates, prior_z
 from .diagnosis import json_ready as _clean
+from .structure import CHANNEL_TITLES, structure_title
 
 __all__ = ["write_report", "report_dict", "fmt", "fmt_param", "param_unit", "SCHEMA", "ALL_MODELS",
            "REQUIRED_KEYS", "CORRELATION_LIMIT", "CONDITION_LIMIT", "exclusion_masks"]

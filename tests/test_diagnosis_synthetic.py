@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 
 from wheelsoil.model import DEFAULT_WHEEL, load_terrain, wong_forces
-from wheelsoil.model.diagnosis import EFFECTS, MIN_REL, TITLES, WHY_UNEXPLAINED, _fmt, diagnose, structure_test
+from wheelsoil.model.diagnosis import EFFECTS, TITLES, WHY_UNEXPLAINED, diagnose
+from wheelsoil.model.structure import MIN_REL, _fmt, structure_test
 from wheelsoil.model.fit import synthetic_data
 
 SAND = load_terrain("sand")
@@ -68,7 +69,7 @@ def _invariants(d):
             r = d.paired[top]["drawbar_pull_n"]
             assert f"drawbar pull {_fmt(r['wong_cv_rmse'])} -> {_fmt(r['cv_rmse'])}" in d.summary
     if d.effect == "none" and not d.lab_uncertainty:  # a run that cannot exclude a relevant error says so
-        from wheelsoil.model.diagnosis import _loose, _noisy
+        from wheelsoil.model.structure import _loose, _noisy
 
         loose = bool(_loose(d.structure["wong"]))
         assert ("cannot exclude one either" in d.summary) == loose
@@ -239,7 +240,8 @@ def test_a_slip_sinkage_fit_whose_sinkage_growth_the_measurement_contradicts_is_
     growing as little as the measurement is not, nor is a fit of another effect."""
     from types import SimpleNamespace
 
-    from wheelsoil.model.diagnosis import _sinkage_contradicts, _slope_test
+    from wheelsoil.model.diagnosis import _sinkage_contradicts
+    from wheelsoil.model.structure import _slope_test
 
     rng = np.random.default_rng(3)
     slip = np.tile(np.linspace(0.12, 0.88, 9), 6)
@@ -339,7 +341,7 @@ def test_a_step_along_the_run_is_found_and_noise_alone_is_not():
     """Another patch of ground from some cycle on is a step in the cycle means: the change-point
     test finds it where a quadratic and three fixed bins smear it into their noise reference; on
     independent noise it keeps its level (Bonferroni over the splits is conservative)."""
-    from wheelsoil.model.diagnosis import ALPHA, _structure_1d
+    from wheelsoil.model.structure import ALPHA, _structure_1d
 
     x = np.linspace(-0.5, 0.5, 10)
     rng = np.random.default_rng(3)
@@ -359,7 +361,7 @@ def test_a_level_error_alone_puts_no_change_point_along_the_run():
     test keeps its size."""
     from types import SimpleNamespace
 
-    from wheelsoil.model.diagnosis import ALPHA, _change_point, _step_test
+    from wheelsoil.model.structure import ALPHA, _change_point, _step_test
 
     cycles, per = 12, 8
     group = np.repeat(np.arange(cycles), per)
@@ -387,7 +389,7 @@ def test_a_soil_off_everywhere_under_loads_stepped_pass_by_pass_tries_no_change_
     Wong's error grows with the load, so its cycle means change along the run, but the five-value
     re-fit of a constant soil leaves no change, and the step drift (another patch of ground) is not
     tried; the mismatch is not called a drift."""
-    from wheelsoil.model.diagnosis import _change_point
+    from wheelsoil.model.structure import _change_point
     from wheelsoil.model.fit import prepare_data
 
     df = synthetic_data(SAND, W, "wong", duration_s=120.0, load_n=13000.0, seed=4)
@@ -449,7 +451,8 @@ def test_none_from_a_few_units_that_cannot_exclude_a_relevant_error_is_low():
     enough, at most medium."""
     from types import SimpleNamespace
 
-    from wheelsoil.model.diagnosis import MIN_REL, MIN_UNITS_HIGH, _confidence
+    from wheelsoil.model.diagnosis import MIN_UNITS_HIGH, _confidence
+    from wheelsoil.model.structure import MIN_REL
 
     def conf(n_units, upper_rel):
         tests = {"drawbar_pull_n": {"p": 0.5, "channel": "drawbar_pull_n", "level_upper_rel": upper_rel,
@@ -469,7 +472,8 @@ def test_none_counts_the_cycles_behind_a_loose_bound_and_follows_its_posterior()
     and, as for a named cause, a posterior of no effect under P_NAME makes it low."""
     from types import SimpleNamespace
 
-    from wheelsoil.model.diagnosis import MIN_REL, MIN_UNITS_HIGH, P_HIGH, P_NAME, _confidence
+    from wheelsoil.model.diagnosis import MIN_UNITS_HIGH, P_HIGH, P_NAME, _confidence
+    from wheelsoil.model.structure import MIN_REL
 
     def conf(cycles, upper_rel, p_none=1.0, key="drawbar_pull_n"):
         t = {"p": 0.5, "channel": "drawbar_pull_n", "units": 170 if key == "drawbar_pull_n" else cycles,
@@ -495,7 +499,8 @@ def test_none_is_high_only_when_the_run_bounds_an_error_of_every_tested_form():
     form below MIN_REL, and that bound covers the true RMS."""
     from types import SimpleNamespace
 
-    from wheelsoil.model.diagnosis import MIN_REL, MIN_UNITS_HIGH, _confidence, _structure_1d
+    from wheelsoil.model.diagnosis import MIN_UNITS_HIGH, _confidence
+    from wheelsoil.model.structure import MIN_REL, _structure_1d
 
     def conf(rms_rel):
         tests = {"drawbar_pull_n@x": {"p": 0.5, "channel": "drawbar_pull_n", "level_upper_rel": 0.2 * MIN_REL,
@@ -774,7 +779,8 @@ def test_none_is_not_high_when_the_cell_noise_reaches_the_relevance_floor():
     medium, with the reason; well under the floor nothing changes."""
     from types import SimpleNamespace
 
-    from wheelsoil.model.diagnosis import MIN_EFFECT, MIN_UNITS_HIGH, _confidence
+    from wheelsoil.model.diagnosis import MIN_UNITS_HIGH, _confidence
+    from wheelsoil.model.structure import MIN_EFFECT
 
     def conf(sigma_rel):
         tests = {"torque_nm": {"p": 0.5, "channel": "torque_nm", "level_upper_rel": 0.2 * MIN_REL,
@@ -838,7 +844,7 @@ def test_a_sinkage_trend_is_tested_with_one_degree_of_freedom():
     the straight-line trend test, one numerator degree of freedom, finds it with a smaller p than the
     quadratic and binned-means tests, which spend three and four; over ten noise draws its combined p is
     lower in every one. Without ``slope`` (the drawbar pull, the torque) the test is as before."""
-    from wheelsoil.model.diagnosis import _structure_1d
+    from wheelsoil.model.structure import _structure_1d
 
     s = np.linspace(0.15, 0.9, 12)
     for seed in range(10):

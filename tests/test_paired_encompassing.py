@@ -8,7 +8,8 @@ gains and prediction differences are then formed exactly as ``_paired`` forms th
 import numpy as np
 from scipy import stats
 
-from wheelsoil.model.diagnosis import ALPHA, _encompassing
+from wheelsoil.model.diagnosis import _encompassing
+from wheelsoil.model.structure import ALPHA
 
 
 def _folds(rng, delta_by_fold, lam, cells=12):

@@ -353,7 +353,7 @@ def test_structure_tests_are_told_in_words_with_the_p_the_verdict_used():
     """The summary named the tests by their keys ("drawbar_pull_n@x") with Holm-adjusted p-values while the
     structure statements quoted raw p-values against a Bonferroni level for the same tests; report.json now
     keeps p_holm, and both speak of "drawbar pull along the run"."""
-    from wheelsoil.model.diagnosis import structure_title
+    from wheelsoil.model.structure import structure_title
     from wheelsoil.model.report import structure_statements
 
     assert structure_title("drawbar_pull_n@x") == "drawbar pull along the run"
