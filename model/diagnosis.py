@@ -685,13 +685,20 @@ def _effect_of(f: HypFit, fits: dict, not_beaten: list = (), probs: dict | None 
         # terrain mismatch, and a phi and K mismatch was named)
         nested = f.hypothesis.nested
         if nested and nested[0] in fits:
-            if probs is not None and probs.get(f.name, 0.0) > BF_NESTED * probs.get(nested[0], 0.0):
-                return "unexplained"
-            return _effect_of(fits[nested[0]], fits)
+            return "unexplained" if _outweighs_nested(f, fits, probs) else _effect_of(fits[nested[0]], fits)
         return "terrain_mismatch" if nested and _effective_terrain(f) else "none"
     if len(not_beaten) == 1 and not_beaten[0] in fits:
         return _effect_of(fits[not_beaten[0]], fits)
     return f.effect
+
+
+def _outweighs_nested(f: HypFit, fits: dict, probs: dict | None) -> str | None:
+    """The smaller model ``f`` reduces to (``Hypothesis.nested[0]``) when ``f`` has more than ``BF_NESTED`` times its
+    posterior probability (``probs``, hypothesis -> probability), else None."""
+    nested = f.hypothesis.nested
+    if probs and nested and nested[0] in fits and probs.get(f.name, 0.0) > BF_NESTED * probs.get(nested[0], 0.0):
+        return nested[0]
+    return None
 
 
 def _gate_closed(data: FitData, fits: dict, whole: str, steps) -> str | None:
@@ -1217,6 +1224,11 @@ def diagnose(
             why_not[k] = "worsens the " + ", ".join(CHANNEL_TITLES[c] for c in worse) + " out of sample"
         elif not _effective(f):
             why_not[k] = "its effect parameters are not distinguishable from zero (it reduces to a simpler model)"
+            if n0 := _outweighs_nested(f, fits, probs):
+                less = f"has {_times(lp[k] - lp[n0])} times less evidence" if n0 in lp else "has no evidence to weigh"
+                why_not[k] = ("its effect parameters are not distinguishable from zero over the folds, yet the model "
+                              f"it reduces to, {TITLES[n0]}, {less}: it fits something that model does not, too "
+                              "unsteadily to say what")
         elif not_beaten[k]:
             held_back[k] = not_beaten[k]
             why_not[k] = ("does not predict better out of sample than "
@@ -1334,13 +1346,11 @@ def diagnose(
             one = _most_probable_narrower(fits, best, supported, probs)
             if one is not None:
                 o = fits[one]
-                bf = lp[best] - lp[one]  # ln Bayes factor of the catch-all over it
                 lead = (f"{TITLES[best]} explains the data best; the best re-fit of "
                         + ("fewer lab values" if isinstance(o.hypothesis, TerrainTest) else "a single lab value") + ", "
                         f"{TITLES[o.name]} (" + ", ".join(_param_text(q, v, o.stderr.get(q)) for q, v in o.params.items())
                         + f"), also lowers the {target_txt} error out of sample, but with "
-                        + (f"{math.exp(bf):.2g}" if bf < 700 else f"e^{bf:.0f}")
-                        + " times less evidence")
+                        + f"{_times(lp[best] - lp[one])} times less evidence")
             else:
                 lead = f"only {TITLES[best]} explains the data, no re-fit (or drift) of fewer lab values does"
             if fits[best].effect == "terrain_mismatch":  # what it found, against the lab's values
@@ -2062,6 +2072,11 @@ def _confidence(effect, model, fits, eprobs, consistency, data, tests_w, sink_ev
 
 
 # ----------------------------------------------------------------------------- summary
+
+
+def _times(ln_bf: float) -> str:
+    """A Bayes factor given by its natural log, in words: ``"1.5e+03"``, or ``"e^812"`` past a float's range."""
+    return f"{math.exp(ln_bf):.2g}" if ln_bf < 700 else f"e^{ln_bf:.0f}"
 
 
 #: SI -> field units of the parameters the summary quotes: name -> (factor, unit)

@@ -447,6 +447,7 @@ def test_evidence_the_smaller_model_cannot_produce_counts_for_no_listed_cause(tm
     d = json.loads((tmp_path / "rep_f13r2_11" / "report.json").read_text())["diagnosis"]
     assert row["effect"] not in NAMED and d["effect"] == "unexplained", d["summary"]
     m = d["models"]
-    assert "not distinguishable from zero" in m["ding_stress+terrain"]["not_supported_because"]
+    why = m["ding_stress+terrain"]["not_supported_because"]
+    assert "not distinguishable from zero" in why and "times less evidence" in why, why  # the report says so
     assert m["ding_stress+terrain"]["probability"] > BF_NESTED * m["terrain"]["probability"]
     assert d["effect_probabilities"]["terrain_mismatch"] < P_NAME
