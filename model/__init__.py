@@ -11,6 +11,7 @@ Fitting and diagnosis (import the submodules; they pull in scipy)::
 
     from wheelsoil.model.data import prepare_data            # selection, cells, model-free noise
     from wheelsoil.model.crossval import fit_hypothesis      # penalised Gauss-Newton, CV
+    from wheelsoil.model.structure import structure_test     # is a model's error systematic, and relevant?
     from wheelsoil.model.diagnosis import diagnose           # the verdict; .to_dict() = contract D
 
 Example::
