@@ -680,7 +680,7 @@ def _effect_of(f: HypFit, fits: dict, not_beaten: list = (), probs: dict | None 
         # Not when the smaller model falls far short of its evidence: the effect parameters then fit
         # something the smaller model cannot, in sample, but too unsteadily over the folds to be
         # told from zero, and that evidence is for neither the smaller model's cause nor its own
-        # (f13r2_11 of the thirteenth generator, the inner wheel of a curve: Ding's stress-only form
+        # (f13r2_11 of the fourteenth generator, the inner wheel of a curve: Ding's stress-only form
         # on a re-fitted soil had 1e57 times the five-value re-fit's evidence, which counted for a
         # terrain mismatch, and a phi and K mismatch was named)
         nested = f.hypothesis.nested
