@@ -10,7 +10,7 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
-from bench_foreign import (CASES, CASES2, GEN, GEN2, GEN3, GEN4, GEN5, GEN6, GEN7, GEN8, GEN9, GEN10, GEN11,  # noqa: E402
+from bench_foreign import (CASES, CASES2, CSV_GENERATORS, GEN, GEN2, GEN3, GEN4, GEN5, GEN6, GEN7, GEN8, GEN9, GEN10, GEN11,  # noqa: E402
                            GEN12, GEN13, GEN14,
                            NAMED, ROUND2, STRESS, _run_csv_case, generate, round_runs, run_case, run_case2, run_case6)
 
@@ -366,9 +366,11 @@ def test_a_latency_the_data_cannot_pin_down_is_not_claimed_reliable_and_names_no
         assert row["latency_reliable"] is False, row
 
 
-def _run14(name, tmp_path):
-    r = next(x for x in round_runs("foreign14", int(name[4])) if x["name"] == name)  # f14rK_NN: round K
-    return _run_csv_case(GEN14, r["name"], r["case"], r["seed"], r["params"], tmp_path)
+def _run_named(name, tmp_path):
+    """One run of a CSV generator's round, by its name: fNNrK_MM is run MM of round K of ``foreignNN``."""
+    gen, k = name[1:].split("_")[0].split("r")
+    r = next(x for x in round_runs(f"foreign{gen}", int(k)) if x["name"] == name)
+    return _run_csv_case(CSV_GENERATORS[f"foreign{gen}"], r["name"], r["case"], r["seed"], r["params"], tmp_path)
 
 
 def test_a_field_soil_within_the_lab_uncertainty_whose_correlated_values_moved_together_is_none(tmp_path):
@@ -379,7 +381,7 @@ def test_a_field_soil_within_the_lab_uncertainty_whose_correlated_values_moved_t
     lies within two lab sd and the verdict is `none` by the lab-uncertainty route."""
     import json
 
-    row = _run14("f14r1_16", tmp_path)
+    row = _run_named("f14r1_16", tmp_path)
     d = json.loads((tmp_path / "rep_f14r1_16" / "report.json").read_text())["diagnosis"]
     assert row["score"] == "right" and d["effect"] == "none" and d["lab_uncertainty"], d["summary"]
     est = {q: v["data_estimate"] for q, v in d["models"]["terrain"]["params"].items() if v.get("data_estimate")}
@@ -390,7 +392,7 @@ def test_a_transducer_channel_that_changes_sign_part_way_is_refused_with_the_fil
     """f14r1_08: the generator's Fx channel changes sign after 42 % of the run (a calibration reload). The
     in-plane forces then beat once per wheel revolution far beyond any bridge gain: the pipeline refuses the log
     with an error naming it, so no cause is named; the benchmark scores the run `refused`."""
-    row = _run14("f14r1_08", tmp_path)
+    row = _run_named("f14r1_08", tmp_path)
     assert row["effect"] == "refused" and row["score"] == "refused", row
     said = (tmp_path / "f14r1_08.fit.txt").read_text()
     assert "f14r1_08.asc" in said and "not physical" in said, said[-2000:]
@@ -407,8 +409,7 @@ def test_a_rival_weighed_against_the_cause_not_its_weakest_form(tmp_path):
     uncertainty)."""
     import json
 
-    r = next(x for x in round_runs("foreign12", 1) if x["name"] == "f12r1_14")
-    row = _run_csv_case(GEN12, r["name"], r["case"], r["seed"], r["params"], tmp_path)
+    row = _run_named("f12r1_14", tmp_path)
     d = json.loads((tmp_path / "rep_f12r1_14" / "report.json").read_text())["diagnosis"]
     assert row["score"] == "right" and d["effect"] == "stress_distribution", d["summary"]
     assert d["model"] == "wong_reece+terrain" and d["confidence"] == "low", d["summary"]
@@ -426,7 +427,7 @@ def test_a_wheel_out_of_round_is_fitted_with_its_ripple_said_not_refused_as_a_de
     moment with it. Processing refused the log as two force signals decoded with different factors, which beat
     at twice the wheel angle, not once. Now the once-per-revolution part is said and taken out, the run is
     fitted, and no cause is named; a channel changing sign part-way (f14r1_08) is still refused (test above)."""
-    row = _run14("f14r2_16", tmp_path)
+    row = _run_named("f14r2_16", tmp_path)
     assert row["effect"] not in ("refused", *NAMED), row
     said = (tmp_path / "rep_f14r2_16" / "report.json").read_text()
     assert "once per wheel revolution" in said and "out of round" in said
@@ -442,8 +443,7 @@ def test_evidence_the_smaller_model_cannot_produce_counts_for_no_listed_cause(tm
 
     from wheelsoil.model.diagnosis import BF_NESTED, P_NAME
 
-    r = next(x for x in round_runs("foreign13", 2) if x["name"] == "f13r2_11")
-    row = _run_csv_case(GEN13, r["name"], r["case"], r["seed"], r["params"], tmp_path)
+    row = _run_named("f13r2_11", tmp_path)
     d = json.loads((tmp_path / "rep_f13r2_11" / "report.json").read_text())["diagnosis"]
     assert row["effect"] not in NAMED and d["effect"] == "unexplained", d["summary"]
     m = d["models"]
